@@ -1,0 +1,7 @@
+"""``python -m fivid`` is the ``fivid`` command."""
+
+import sys
+
+from fivid.cli import main
+
+sys.exit(main())

@@ -1,0 +1,1 @@
+"""Sub-commands of ``fivid``: one module each, with ``register(subparsers)``."""

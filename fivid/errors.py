@@ -1,0 +1,98 @@
+"""Errors a person can act on.
+
+Every domain error subclasses :class:`ValueError` through :class:`FividError`. A message says what
+was wrong, where (file, line, column or config key), the value given, and what is allowed. The CLI
+prints ``str(error)`` on one line without a traceback and exits with status 2.
+"""
+
+from __future__ import annotations
+
+from os import PathLike
+
+__all__ = [
+    "FividError",
+    "SchemaError",
+    "ConfigError",
+    "DataQualityError",
+    "UnitError",
+    "OutputExistsError",
+]
+
+
+class FividError(ValueError):
+    """Base class of fivid's input errors (bad data, bad configuration, bad units).
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, the value given and what is allowed.
+    file : str or path-like, optional
+        The file the problem is in.
+    line : int, optional
+        1-based line number in ``file``.
+    column : str, optional
+        Column name (CSV) where the problem is.
+    key : str, optional
+        Config key path such as ``bodies[0].material.E``.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        file: str | PathLike | None = None,
+        line: int | None = None,
+        column: str | None = None,
+        key: str | None = None,
+    ):
+        self.message = message
+        self.file = None if file is None else str(file)
+        self.line = line
+        self.column = column
+        self.key = key
+        super().__init__(str(self))
+
+    def where(self) -> str:
+        """The location part of the message: ``file:line: column 'c': key 'k'`` (may be empty)."""
+        parts = []
+        if self.file is not None:
+            parts.append(self.file + (f":{self.line}" if self.line is not None else ""))
+        elif self.line is not None:
+            parts.append(f"line {self.line}")
+        if self.column is not None:
+            parts.append(f"column {self.column!r}")
+        if self.key is not None:
+            parts.append(f"key {self.key!r}")
+        return ": ".join(parts)
+
+    def __str__(self) -> str:
+        where = self.where()
+        return f"{where}: {self.message}" if where else self.message
+
+    def located(self, **where) -> "FividError":
+        """A copy of this error with location fields filled in where they are still empty."""
+        fields = {k: getattr(self, k) for k in ("file", "line", "column", "key")}
+        for k, v in where.items():
+            if fields.get(k) is None:
+                fields[k] = v
+        return type(self)(self.message, **fields)
+
+
+class SchemaError(FividError):
+    """A dataset or file does not follow fivid's schema (missing variable, wrong dims or units)."""
+
+
+class ConfigError(FividError):
+    """A configuration (YAML) is invalid; ``key`` names the key path."""
+
+
+class DataQualityError(FividError):
+    """Data are well-formed but unusable (NaN, non-uniform sampling, too short, no steady sliding)."""
+
+
+class UnitError(FividError):
+    """A unit is unknown, or not compatible with the quantity it is given for."""
+
+
+class OutputExistsError(FividError):
+    """An output file exists and overwriting was not asked for."""

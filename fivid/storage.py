@@ -1,0 +1,110 @@
+"""Atomic file output: write to a temporary file beside the target, then rename.
+
+A killed process leaves at most a ``.<name>.<random>.tmp`` file, never a partial target; a failed
+write removes its temporary file. Layer L1: used by every writer in fivid.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from fivid.errors import OutputExistsError
+
+__all__ = ["atomic_path", "write_netcdf", "write_text", "write_json", "dumps_json", "check_writable"]
+
+
+def check_writable(path: str | os.PathLike, *, overwrite: bool = False) -> Path:
+    """Check that ``path`` may be written: its folder exists and is writable; it exists only if ``overwrite``.
+
+    Raises :class:`~fivid.errors.OutputExistsError` or :class:`PermissionError`-derived
+    :class:`~fivid.errors.FividError` with a message naming the path.
+    """
+    from fivid.errors import FividError
+
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise FividError(f"output folder {str(folder)!r} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise FividError(f"output folder {str(folder)!r} is not writable")
+    if path.exists() and not overwrite:
+        raise OutputExistsError(f"output {str(path)!r} exists; pass --overwrite to replace it")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, *, overwrite: bool = True):
+    """Yield a temporary path in the target's folder; on success rename it onto ``path``.
+
+    On an exception the temporary file is removed and ``path`` is left as it was. With
+    ``overwrite=False`` the rename refuses to replace a file that appeared meanwhile.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        if overwrite:
+            os.replace(tmp, path)
+        else:
+            try:
+                os.link(tmp, path)  # fails if path exists: no race with a concurrent writer
+            except FileExistsError:
+                raise OutputExistsError(f"output {str(path)!r} exists; pass --overwrite to replace it") from None
+            tmp.unlink()
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_netcdf(ds, path: str | os.PathLike, *, overwrite: bool = True, encoding: dict | None = None) -> Path:
+    """Write an xarray Dataset to netCDF4 atomically; returns the path."""
+    path = Path(path)
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding)
+    return path
+
+
+def write_text(path: str | os.PathLike, text: str, *, overwrite: bool = True) -> Path:
+    """Write text (UTF-8) atomically; returns the path."""
+    path = Path(path)
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return path
+
+
+def write_json(path: str | os.PathLike, obj, *, overwrite: bool = True) -> Path:
+    """Write ``obj`` as indented JSON atomically (NaN written as null)."""
+    return write_text(path, dumps_json(obj) + "\n", overwrite=overwrite)
+
+
+def _clean(obj):
+    import math
+
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _clean(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def dumps_json(obj) -> str:
+    """JSON text of ``obj`` with numpy scalars/arrays converted and non-finite floats as ``null``."""
+    return json.dumps(_clean(obj), indent=2, allow_nan=False)

@@ -1,0 +1,104 @@
+"""Imports flow down the layers of DESIGN §1; kernels import nothing from fivid; import fivid is light."""
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "fivid"
+
+# DESIGN §1. A module may import from its own layer or below.
+LAYERS = {
+    "cli": 5,
+    "pipeline": 4,
+    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3,
+    "io": 2, "signal": 2, "friction": 2, "fe": 2, "surface": 2,
+    "schema": 1, "units": 1, "errors": 1, "storage": 1,
+    "__init__": 1, "__main__": 5,
+}
+
+
+def _layer(module_parts: tuple[str, ...]) -> int:
+    if module_parts[-1] == "_kernels" or module_parts[-1].endswith("_kernels"):
+        return 0
+    top = module_parts[0]
+    if top not in LAYERS:
+        raise AssertionError(f"fivid.{top} has no layer in tests/test_architecture.py: add it (DESIGN §1)")
+    return LAYERS[top]
+
+
+def _modules():
+    for path in sorted(PKG.rglob("*.py")):
+        rel = path.relative_to(PKG).with_suffix("")
+        parts = rel.parts
+        if parts[-1] == "__init__" and len(parts) > 1:
+            parts = parts[:-1]
+        yield path, parts
+
+
+def _fivid_imports(path: Path, parts: tuple[str, ...]):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name == "fivid" or alias.name.startswith("fivid."):
+                    yield node.lineno, tuple(alias.name.split(".")[1:])
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                raise AssertionError(f"{path}:{node.lineno}: relative import; use absolute imports (STYLE)")
+            mod = node.module or ""
+            if mod == "fivid":
+                for alias in node.names:
+                    yield node.lineno, (alias.name,)
+            elif mod.startswith("fivid."):
+                yield node.lineno, tuple(mod.split(".")[1:])
+
+
+def test_imports_flow_down_the_layers():
+    bad = []
+    for path, parts in _modules():
+        own = _layer(parts)
+        for lineno, target in _fivid_imports(path, parts):
+            if not target:
+                continue
+            if own == 0:
+                bad.append(f"{path.relative_to(PKG.parent)}:{lineno}: a kernel module imports fivid.{'.'.join(target)}")
+                continue
+            if target[0] == "__version__":
+                continue
+            if target[0] == parts[0]:
+                continue  # same package
+            their = _layer(target)
+            if their > own:
+                bad.append(
+                    f"{path.relative_to(PKG.parent)}:{lineno}: fivid.{'.'.join(parts)} (L{own}) imports "
+                    f"fivid.{'.'.join(target)} (L{their})"
+                )
+    assert not bad, "imports against the layers of DESIGN §1:\n" + "\n".join(bad)
+
+
+def test_kernels_import_only_numpy_and_numba():
+    bad = []
+    for path, parts in _modules():
+        if _layer(parts) != 0:
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [node.module or ""]
+            for n in names:
+                if n.split(".")[0] not in {"numpy", "numba", "math", "__future__"}:
+                    bad.append(f"{path}:{node.lineno}: imports {n}")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("heavy", ["numba", "dask", "distributed", "matplotlib", "pyfftw"])
+def test_import_fivid_is_light(heavy):
+    code = f"import sys, fivid, fivid.cli; fivid.cli.build_parser(); print({heavy!r} in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False", f"import fivid / fivid --help imports {heavy}"

@@ -1,0 +1,23 @@
+import subprocess
+import sys
+
+from fivid import __version__
+from fivid.cli import main
+
+
+def test_version(capsys):
+    try:
+        main(["--version"])
+    except SystemExit as e:
+        assert e.code == 0
+    assert __version__ in capsys.readouterr().out
+
+
+def test_help_lists_commands():
+    out = subprocess.run([sys.executable, "-m", "fivid", "--help"], capture_output=True, text=True)
+    assert out.returncode == 0
+    assert "exit status" in out.stdout
+
+
+def test_no_command_is_bad_input():
+    assert main([]) == 2
