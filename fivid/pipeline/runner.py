@@ -1,0 +1,253 @@
+"""The stage runner: plan → cached tasks → outputs, ``summary.json`` and an exit status.
+
+:func:`run_pipeline` takes a validated :class:`~fivid.pipeline.config.Plan`, locks the output folder,
+logs to ``<output>/fivid-run.log``, runs each stage's tasks that are not already in the cache (see
+:mod:`fivid.pipeline.cache`), evaluates the scores against the configured thresholds and writes
+``<output>/summary.json``. The exit status is for schedulers: 0 pass, 3 scores below thresholds,
+2 bad input or configuration, 1 unexpected failure.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import logging
+import platform
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from fivid import __version__
+from fivid.errors import FividError
+from fivid.pipeline.cache import Task, TaskCache
+from fivid.pipeline.config import Plan
+from fivid.pipeline.lock import OutputLock
+from fivid.storage import write_json
+
+__all__ = ["Context", "StageStats", "run_pipeline", "EXIT_PASS", "EXIT_FAILURE", "EXIT_BAD_INPUT",
+           "EXIT_BELOW_THRESHOLD"]
+
+EXIT_PASS, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_BELOW_THRESHOLD = 0, 1, 2, 3
+
+log = logging.getLogger("fivid")
+
+
+@dataclass
+class StageStats:
+    """What one stage did: task counts, cache hits and wall time [s]."""
+
+    name: str
+    tasks: int = 0
+    cached: int = 0
+    ran: int = 0
+    seconds: float = 0.0
+    note: str = ""
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "tasks": self.tasks, "cached": self.cached, "ran": self.ran,
+                "seconds": round(self.seconds, 3), "note": self.note}
+
+
+@dataclass
+class Context:
+    """State shared by the stages of one run.
+
+    ``digests[stage][task] = {label: sha256}`` of finished tasks' outputs; ``tasks[stage][task]`` the
+    Task objects; ``data`` holds what stages hand each other (runs, conditions, scores).
+    """
+
+    plan: Plan
+    out: Path
+    cache: TaskCache
+    workers: int = 2
+    scheduler: str | None = None
+    force: bool = False
+    dry_run: bool = False
+    progress: bool | None = None
+    digests: dict = field(default_factory=dict)
+    tasks: dict = field(default_factory=dict)
+    data: dict = field(default_factory=dict)
+    blocked: bool = False  # dry run: an upstream stage has work to do, so keys downstream are unknown
+
+    @property
+    def config(self):
+        return self.plan.config
+
+    def finish(self, task: Task, seconds: float) -> None:
+        """Record a task whose outputs are written (manifest last, atomically)."""
+        self.digests.setdefault(task.stage, {})[task.name] = self.cache.record(task, seconds=seconds)
+        log.info("%s/%s done in %.2f s", task.stage, task.name, seconds)
+
+    def output(self, stage: str, task: str, label: str) -> Path:
+        return Path(self.tasks[stage][task].outputs[label])
+
+
+def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
+    """Plan, look up and run one stage; returns dry-run lines."""
+    from fivid.pipeline.stages import STAGES
+
+    stage = STAGES[name]
+    t0 = time.perf_counter()
+    if ctx.blocked:
+        stats.note = "waits for upstream stages"
+        return [f"  {name:9s} runs after the stages above (its inputs are not computed yet)"]
+    tasks = stage.plan(ctx)
+    ctx.tasks[name] = {t.name: t for t in tasks}
+    todo = []
+    for task in tasks:
+        if ctx.force and not ctx.dry_run:
+            ctx.cache.forget(task)
+            hit = None
+        else:
+            hit = None if ctx.force else ctx.cache.lookup(task)
+        if hit is None:
+            todo.append(task)
+        else:
+            ctx.digests.setdefault(name, {})[task.name] = hit
+    stats.tasks, stats.cached, stats.ran = len(tasks), len(tasks) - len(todo), len(todo)
+    if ctx.dry_run:
+        lines = [f"  {name:9s} {len(tasks)} task(s): {len(tasks) - len(todo)} cached, {len(todo)} to run"]
+        lines += [f"      would run {t.name}" for t in todo]
+        if todo:
+            ctx.blocked = True
+        else:
+            stage.collect(ctx, tasks)
+        return lines
+    if todo:
+        log.info("stage %s: %d task(s), %d cached, running %d", name, len(tasks), len(tasks) - len(todo), len(todo))
+        stage.execute(ctx, todo)
+    else:
+        log.info("stage %s: %d task(s), all cached", name, len(tasks))
+    stage.collect(ctx, tasks)
+    stats.seconds = time.perf_counter() - t0
+    return []
+
+
+def _evaluate(ctx: Context) -> tuple[list[dict], bool]:
+    """Check every condition's scores against the thresholds; returns (checks, all passed)."""
+    from fivid.pipeline.stages import evaluate_thresholds
+
+    checks = evaluate_thresholds(ctx.data.get("scores", {}), ctx.config.thresholds)
+    return checks, all(c["pass"] for c in checks)
+
+
+def _file_handler(out: Path) -> logging.Handler:
+    handler = logging.FileHandler(out / "fivid-run.log", encoding="utf-8")
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(message)s"))
+    handler.setLevel(logging.INFO)
+    return handler
+
+
+def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, dry_run: bool = False,
+                 force: bool = False, progress: bool | None = None, echo=None) -> tuple[int, dict]:
+    """Run a validated plan; returns ``(exit status, summary)``.
+
+    Parameters
+    ----------
+    plan : Plan
+        From :func:`fivid.pipeline.config.load_plan`.
+    workers : int
+        Worker processes of the local dask cluster (ignored with ``scheduler``).
+    scheduler : str, optional
+        Address ``tcp://host:port`` of an existing dask scheduler.
+    dry_run : bool
+        Only report what would run (nothing is written, no lock is taken).
+    force : bool
+        Re-run every task, ignoring the cache.
+    progress : bool, optional
+        Progress bars (default: when stderr is a terminal).
+    echo : callable, optional
+        Receives the dry-run plan lines.
+
+    Returns
+    -------
+    status : int
+        0 pass, 3 scores below thresholds, 2 bad input, 1 failure.
+    summary : dict
+        The content of ``summary.json`` (empty for a dry run).
+    """
+    out = plan.config.output
+    ctx = Context(plan=plan, out=out, cache=TaskCache(out), workers=workers, scheduler=scheduler, force=force,
+                  dry_run=dry_run, progress=progress)
+    stats = [StageStats(name) for name in plan.stages]
+    if dry_run:
+        lines = [f"pipeline {plan.name!r} ({plan.path}) with {plan.config.path}", f"output folder: {out}",
+                 f"inputs: {len(plan.config.input_files)} file(s) in {plan.config.input_folder}"]
+        for name, st in zip(plan.stages, stats):
+            lines += _run_stage(ctx, name, st)
+        for line in lines:
+            (echo or log.warning)(line)
+        return EXIT_PASS, {}
+
+    lock = OutputLock(out)
+    lock.acquire()
+    flog = logging.getLogger("fivid")
+    handler = _file_handler(out)
+    old_level = flog.level
+    stream_levels = [(h, h.level) for h in flog.handlers]
+    for h, lvl in stream_levels:
+        if lvl == logging.NOTSET:
+            h.setLevel(old_level or logging.WARNING)
+    flog.addHandler(handler)
+    flog.setLevel(min(old_level or logging.WARNING, logging.INFO))
+    started = _dt.datetime.now(_dt.timezone.utc)
+    t0 = time.perf_counter()
+    status, error = EXIT_FAILURE, None
+    if lock.took_over:
+        log.warning("previous run (pid %s, started %s) did not finish; its completed tasks are reused",
+                    lock.took_over.get("pid"), lock.took_over.get("started"))
+    log.info("fivid %s: pipeline %s, config %s, output %s", __version__, plan.path, plan.config.path, out)
+    try:
+        for name, st in zip(plan.stages, stats):
+            _run_stage(ctx, name, st)
+        status = EXIT_PASS if _evaluate(ctx)[1] else EXIT_BELOW_THRESHOLD
+    except FividError as exc:
+        status, error = EXIT_BAD_INPUT, exc
+        log.error("%s", exc)
+        raise
+    except BaseException as exc:
+        status, error = EXIT_FAILURE, exc
+        log.exception("pipeline failed")
+        raise
+    finally:
+        checks, ok = _evaluate(ctx) if status in (EXIT_PASS, EXIT_BELOW_THRESHOLD) else ([], False)
+        summary = _summary(ctx, stats, checks, status, error, started, time.perf_counter() - t0, lock)
+        try:
+            write_json(out / "summary.json", summary)
+            log.info("summary: %s (exit %d), %.1f s", summary["status"], status, summary["seconds"])
+        finally:
+            flog.removeHandler(handler)
+            handler.close()
+            flog.setLevel(old_level)
+            for h, lvl in stream_levels:
+                h.setLevel(lvl)
+            lock.release()
+    return status, summary
+
+
+def _summary(ctx, stats, checks, status, error, started, seconds, lock) -> dict:
+    plan = ctx.plan
+    names = {EXIT_PASS: "pass", EXIT_BELOW_THRESHOLD: "below_threshold", EXIT_BAD_INPUT: "bad_input",
+             EXIT_FAILURE: "failure"}
+    return {
+        "status": names[status],
+        "exit_code": status,
+        "error": None if error is None else f"{type(error).__name__}: {error}",
+        "pipeline": {"name": plan.name, "path": str(plan.path), "sha256": plan.recipe_sha256, "stages": list(plan.stages)},
+        "config": {"path": str(plan.config.path), "sha256": plan.config.sha256},
+        "output": str(ctx.out),
+        "started": started.strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "seconds": round(seconds, 3),
+        "fivid_version": __version__,
+        "python": platform.python_version(),
+        "host": platform.node(),
+        "took_over_stale_lock": lock.took_over,
+        "stages": [s.as_dict() for s in stats],
+        "cache": {"tasks": sum(s.tasks for s in stats), "cached": sum(s.cached for s in stats),
+                  "ran": sum(s.ran for s in stats)},
+        "inputs": ctx.data.get("input_sha256", {}),
+        "law": ctx.data.get("law_summary"),
+        "scores": ctx.data.get("scores", {}),
+        "thresholds": [t.describe() for t in plan.config.thresholds],
+        "checks": checks,
+        "verdict": "pass" if status == EXIT_PASS else names[status],
+    }

@@ -1,0 +1,296 @@
+"""The pipeline's stages: each expands into cached tasks and runs the ones not in the cache.
+
+A stage has ``plan(ctx) -> list[Task]`` (names, parameters, input digests and output paths, without
+computing anything), ``execute(ctx, tasks)`` (run the given tasks, each ending with
+``ctx.finish(task, seconds)``) and ``collect(ctx, tasks)`` (read what later stages need).
+
+=========  ======================================  ==========================================
+stage      one task per                             inputs hashed into its key
+=========  ======================================  ==========================================
+ingest     input CSV                                CSV sha256, rig profile
+identify   pipeline run                             every ingested run, identify options
+modal      pipeline run                             model file, n_modes
+simulate   test condition × Monte-Carlo seed        model file, law file, condition, seed, settings
+score      test condition                           its measured runs and simulations, band
+report     pipeline run                             everything above, thresholds
+=========  ======================================  ==========================================
+
+A test condition is a distinct (sliding velocity, normal load, roughness Ra) among the ingested runs.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+
+from fivid.errors import FividError
+from fivid.pipeline.cache import Task, file_sha256
+
+__all__ = ["STAGES", "condition_name", "evaluate_thresholds"]
+
+log = logging.getLogger("fivid")
+
+HEADLINE_SCORES = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
+
+
+def condition_name(velocity: float, load: float, roughness: float) -> str:
+    """File-safe name of a test condition, e.g. ``v10mm_s-fn5N-ra0.8um`` (SI inputs)."""
+    return f"v{velocity * 1e3:.4g}mm_s-fn{load:.4g}N-ra{roughness * 1e6:.4g}um"
+
+
+def evaluate_thresholds(scores: dict, thresholds) -> list[dict]:
+    """Each condition's headline scores against each threshold, as check records."""
+    return [
+        {"condition": cond, "score": thr.score, "value": s.get(thr.score), "threshold": thr.describe(),
+         "pass": thr.passes(s.get(thr.score))}
+        for cond, s in sorted(scores.items()) for thr in thresholds
+    ]
+
+
+def _timed(ctx, task, fn) -> None:
+    t0 = time.perf_counter()
+    fn()
+    ctx.finish(task, time.perf_counter() - t0)
+
+
+def _progress(ctx, iterable, desc: str, total: int):
+    from tqdm.auto import tqdm
+
+    return tqdm(iterable, desc=desc, total=total, disable=None if ctx.progress is None else not ctx.progress,
+                leave=False, unit="task")
+
+
+class Ingest:
+    """One task per input CSV: read it (rig profile applied), validate, write ``runs/<stem>.nc``."""
+
+    name = "ingest"
+
+    def plan(self, ctx) -> list[Task]:
+        cfg = ctx.config
+        profile = None
+        if cfg.rig_profile is not None:
+            p = Path(cfg.rig_profile)
+            profile = {"profile": cfg.rig_profile, "sha256": file_sha256(p) if p.is_file() else None}
+        tasks, shas = [], {}
+        for path in cfg.input_files:
+            sha = file_sha256(path)
+            shas[path.name] = sha
+            tasks.append(Task("ingest", path.stem, {"profile": profile, "file": path.name}, {"csv": sha},
+                              {"run": str(ctx.out / "runs" / f"{path.stem}.nc")}))
+        ctx.data["input_sha256"] = shas
+        ctx.data["input_paths"] = {t.name: p for t, p in zip(tasks, cfg.input_files)}
+        return tasks
+
+    def execute(self, ctx, tasks) -> None:
+        from fivid.io import read_rig_csv, write_run
+
+        (ctx.out / "runs").mkdir(parents=True, exist_ok=True)
+        rejected = []
+        for task in _progress(ctx, tasks, "ingest", len(tasks)):
+            src = ctx.data["input_paths"][task.name]
+
+            def work(src=src, task=task):
+                ds = read_rig_csv(src, profile=ctx.config.rig_profile)
+                write_run(ds, task.outputs["run"], overwrite=True)
+            try:
+                _timed(ctx, task, work)
+            except FividError as exc:
+                log.error("rejected %s: %s", src, exc)
+                rejected.append(str(exc))
+        if rejected:
+            raise FividError(f"{len(rejected)} input file(s) rejected, nothing computed after ingest: "
+                             + " | ".join(rejected))
+
+    def collect(self, ctx, tasks) -> None:
+        import xarray as xr
+
+        runs = {}
+        for task in tasks:
+            with xr.open_dataset(task.outputs["run"], engine="netcdf4") as ds:
+                a = ds.attrs
+                runs[task.name] = {"path": task.outputs["run"], "run_id": a["run_id"],
+                                   "sliding_velocity": float(a["sliding_velocity"]),
+                                   "normal_load": float(a["normal_load"]), "roughness_ra": float(a["roughness_ra"]),
+                                   "sample_rate": float(a["sample_rate"]), "sha256": ctx.digests["ingest"][task.name]["run"]}
+        conditions: dict[str, dict] = {}
+        for name, r in sorted(runs.items()):
+            cond = condition_name(r["sliding_velocity"], r["normal_load"], r["roughness_ra"])
+            c = conditions.setdefault(cond, {"sliding_velocity": r["sliding_velocity"], "normal_load": r["normal_load"],
+                                             "roughness_ra": r["roughness_ra"], "runs": []})
+            c["runs"].append(name)
+        ctx.data["runs"], ctx.data["conditions"] = runs, conditions
+
+
+class Identify:
+    """Identify the friction law from every ingested run; writes ``law.nc`` and ``law.json``."""
+
+    name = "identify"
+
+    def plan(self, ctx) -> list[Task]:
+        inputs = {f"run:{k}": v["run"] for k, v in sorted(ctx.digests["ingest"].items())}
+        params = {k: (list(v) if isinstance(v, tuple) else v) for k, v in sorted(ctx.config.identify.items())}
+        return [Task("identify", "law", params, inputs,
+                     {"law": str(ctx.out / "law.nc"), "json": str(ctx.out / "law.json")})]
+
+    def execute(self, ctx, tasks) -> None:
+        from fivid.identify import identify_friction_law
+        from fivid.io import read_run
+        from fivid.storage import write_json, write_netcdf
+
+        task = tasks[0]
+
+        def work():
+            runs = [read_run(r["path"]) for _, r in sorted(ctx.data["runs"].items())]
+            result = identify_friction_law(runs, **ctx.config.identify)
+            write_netcdf(result.to_dataset(), task.outputs["law"])
+            write_json(task.outputs["json"], result.to_json())
+        _timed(ctx, task, work)
+
+    def collect(self, ctx, tasks) -> None:
+        text = Path(tasks[0].outputs["json"]).read_text(encoding="utf-8")
+        ctx.data["law_summary"] = json.loads(text)
+        ctx.data["law_path"] = tasks[0].outputs["law"]
+
+
+class Modal:
+    """Modal analysis of the model (frequencies [Hz] to compare with measured peaks); writes ``modal.nc``."""
+
+    name = "modal"
+
+    def plan(self, ctx) -> list[Task]:
+        cfg = ctx.config
+        return [Task("modal", "modes", {"n_modes": cfg.n_modes}, {"model": file_sha256(cfg.model)},
+                     {"modes": str(ctx.out / "modal.nc")})]
+
+    def execute(self, ctx, tasks) -> None:
+        from fivid.fe import load_model, modal_analysis
+        from fivid.storage import write_netcdf
+
+        task = tasks[0]
+        _timed(ctx, task, lambda: write_netcdf(
+            modal_analysis(load_model(ctx.config.model), n_modes=ctx.config.n_modes), task.outputs["modes"]))
+
+    def collect(self, ctx, tasks) -> None:
+        ctx.data["modal_path"] = tasks[0].outputs["modes"]
+
+
+class Simulate:
+    """One simulation per test condition and Monte-Carlo seed, spread over dask workers."""
+
+    name = "simulate"
+
+    def plan(self, ctx) -> list[Task]:
+        cfg = ctx.config
+        model_sha = file_sha256(cfg.model)
+        law_sha = ctx.digests["identify"]["law"]["law"]
+        tasks = []
+        for cond, c in sorted(ctx.data["conditions"].items()):
+            for seed in cfg.seeds:
+                params = {"sliding_velocity": c["sliding_velocity"], "normal_load": c["normal_load"],
+                          "roughness_ra": c["roughness_ra"], "seed": seed, "duration": cfg.duration,
+                          "sample_rate": cfg.sample_rate}
+                tasks.append(Task("simulate", f"{cond}-seed{seed}", params, {"model": model_sha, "law": law_sha},
+                                  {"sim": str(ctx.out / "sims" / f"{cond}-seed{seed}.nc")}))
+        return tasks
+
+    def execute(self, ctx, tasks) -> None:
+        from fivid.pipeline.sweep import run_simulations
+
+        (ctx.out / "sims").mkdir(parents=True, exist_ok=True)
+        run_simulations(ctx, tasks)
+
+    def collect(self, ctx, tasks) -> None:
+        sims: dict[str, list[str]] = {}
+        for task in tasks:
+            cond = task.name.rsplit("-seed", 1)[0]
+            sims.setdefault(cond, []).append(task.outputs["sim"])
+        ctx.data["sims"] = sims
+
+
+class Score:
+    """Per test condition: PSD scores of every simulation seed against every measured run."""
+
+    name = "score"
+
+    def plan(self, ctx) -> list[Task]:
+        cfg = ctx.config
+        tasks = []
+        for cond, c in sorted(ctx.data["conditions"].items()):
+            inputs = {f"run:{r}": ctx.digests["ingest"][r]["run"] for r in c["runs"]}
+            for t in ctx.tasks["simulate"].values():
+                if t.name.rsplit("-seed", 1)[0] == cond:
+                    inputs[f"sim:{t.name}"] = ctx.digests["simulate"][t.name]["sim"]
+            tasks.append(Task("score", cond, {"band": list(cfg.band), "nperseg": cfg.nperseg}, inputs,
+                              {"scores": str(ctx.out / "scores" / f"{cond}.json")}))
+        return tasks
+
+    def execute(self, ctx, tasks) -> None:
+        from fivid.pipeline.scoring import score_condition
+        from fivid.storage import write_json
+
+        (ctx.out / "scores").mkdir(parents=True, exist_ok=True)
+        for task in _progress(ctx, tasks, "score", len(tasks)):
+            c = ctx.data["conditions"][task.name]
+            measured = [ctx.data["runs"][r]["path"] for r in c["runs"]]
+            simulated = ctx.data["sims"][task.name]
+            _timed(ctx, task, lambda task=task, m=measured, s=simulated: write_json(
+                task.outputs["scores"], score_condition(m, s, band=ctx.config.band, nperseg=ctx.config.nperseg)))
+
+    def collect(self, ctx, tasks) -> None:
+        scores = {}
+        for task in tasks:
+            scores[task.name] = json.loads(Path(task.outputs["scores"]).read_text(encoding="utf-8"))["summary"]
+        ctx.data["scores"] = scores
+
+
+class Report:
+    """The validation report ``report.html`` (self-contained)."""
+
+    name = "report"
+
+    def plan(self, ctx) -> list[Task]:
+        inputs = {f"{stage}:{task}:{label}": sha for stage, d in sorted(ctx.digests.items())
+                  for task, outs in sorted(d.items()) for label, sha in sorted(outs.items())}
+        params = {"thresholds": [t.describe() for t in ctx.config.thresholds], "band": list(ctx.config.band),
+                  "nperseg": ctx.config.nperseg, "config_sha256": ctx.config.sha256}
+        return [Task("report", "report", params, inputs, {"html": str(ctx.out / "report.html")})]
+
+    def execute(self, ctx, tasks) -> None:
+        from fivid.report import render_report
+
+        task = tasks[0]
+        checks = evaluate_thresholds(ctx.data.get("scores", {}), ctx.config.thresholds)
+        _timed(ctx, task, lambda: render_report(task.outputs["html"], ctx_to_report_inputs(ctx, checks)))
+
+    def collect(self, ctx, tasks) -> None:
+        ctx.data["report_path"] = tasks[0].outputs["html"]
+
+
+def ctx_to_report_inputs(ctx, checks) -> dict:
+    """Everything the report shows, as plain data and file paths (the report layer knows no pipeline)."""
+    cfg = ctx.config
+    return {
+        "title": f"fivid validation report — {ctx.plan.name}",
+        "provenance": {
+            "pipeline": {"path": str(ctx.plan.path), "sha256": ctx.plan.recipe_sha256, "stages": list(ctx.plan.stages)},
+            "config": {"path": str(cfg.path), "sha256": cfg.sha256, "content": cfg.raw},
+            "model": {"path": str(cfg.model), "sha256": file_sha256(cfg.model)},
+            "inputs": ctx.data.get("input_sha256", {}),
+        },
+        "runs": ctx.data.get("runs", {}),
+        "conditions": ctx.data.get("conditions", {}),
+        "law_path": ctx.data.get("law_path"),
+        "law_summary": ctx.data.get("law_summary"),
+        "modal_path": ctx.data.get("modal_path"),
+        "sims": ctx.data.get("sims", {}),
+        "scores": ctx.data.get("scores", {}),
+        "score_files": {t.name: t.outputs["scores"] for t in ctx.tasks.get("score", {}).values()},
+        "band": cfg.band,
+        "nperseg": cfg.nperseg,
+        "checks": checks,
+    }
+
+
+STAGES = {s.name: s for s in (Ingest(), Identify(), Modal(), Simulate(), Score(), Report())}

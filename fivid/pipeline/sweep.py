@@ -1,0 +1,129 @@
+"""Simulations and Monte-Carlo seeds on dask.distributed.
+
+By default an embedded :class:`distributed.LocalCluster` (worker *processes*, one thread each, on the
+loopback interface, ``n_workers`` from ``--workers``) is started for the sweep and closed after it;
+with ``--scheduler tcp://host:port`` the tasks go to an existing cluster (``dask scheduler`` and
+``dask worker tcp://host:port`` started by hand, see docs/pipeline.md). Tasks are coarse: one whole
+simulation each. Workers receive the model and the law as Python objects and return the simulated
+RunDataset; the client writes each file (atomically) and records it in the cache as soon as it
+arrives, so a sweep interrupted half-way keeps the simulations already done and needs no shared
+file system between the workers and the client.
+
+dask is imported here only, when a sweep runs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import time
+
+__all__ = ["dask_client", "simulate_condition", "run_simulations", "map_tasks"]
+
+log = logging.getLogger("fivid")
+
+
+@contextlib.contextmanager
+def dask_client(*, workers: int = 2, scheduler: str | None = None):
+    """A :class:`distributed.Client`: connected to ``scheduler``, or to a new loopback LocalCluster.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes of the LocalCluster (one thread each).
+    scheduler : str, optional
+        ``tcp://host:port`` of a running ``dask scheduler``.
+    """
+    from distributed import Client, LocalCluster
+
+    from fivid.errors import FividError
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as exc:
+            raise FividError(f"cannot reach the dask scheduler at {scheduler!r} ({exc}); start one with "
+                             "'dask scheduler' and workers with 'dask worker <address>'") from None
+        log.info("dask: connected to %s (%d workers)", scheduler, len(client.scheduler_info().get("workers", {})))
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    # Each worker is a single-threaded process: numba/numpy threads inside are limited to 1 so that
+    # n workers use n cores (the solver's kernels are serial).
+    env = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=None, silence_logs=logging.WARNING)
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    log.info("dask: LocalCluster with %d worker process(es) at %s", workers, cluster.scheduler_address)
+    try:
+        with Client(cluster) as client:
+            yield client
+    finally:
+        cluster.close()
+
+
+def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = None):
+    """Run ``func(*args)`` for each ``name -> args`` on dask; yield ``(name, result, seconds)`` as they finish.
+
+    ``seconds`` is the wall time of the task on its worker.
+    """
+    from distributed import as_completed
+
+    with dask_client(workers=workers, scheduler=scheduler) as client:
+        futures = {client.submit(_timed_call, func, *args, key=f"fivid-{name}-{os.getpid()}-{time.time_ns()}",
+                                 pure=False): name for name, args in items.items()}
+        for fut in as_completed(futures):
+            result, seconds = fut.result()
+            yield futures[fut], result, seconds
+
+
+def _timed_call(func, *args):
+    t0 = time.perf_counter()
+    out = func(*args)
+    return out, time.perf_counter() - t0
+
+
+def simulate_condition(model, law, params: dict):
+    """One simulation (runs on a worker): ``fivid.solver.simulate(model, law=law, **params)``."""
+    from fivid.solver import simulate
+
+    return simulate(model, law=law, **params)
+
+
+def run_simulations(ctx, tasks) -> None:
+    """Run the simulate stage's tasks on dask, writing each result and its cache record as it arrives."""
+    from tqdm.auto import tqdm
+
+    from fivid.fe import load_model
+    from fivid.friction import load_law
+    from fivid.io import write_run
+
+    model = load_model(ctx.config.model)
+    law = load_law(ctx.data["law_path"])
+    by_name = {t.name: t for t in tasks}
+    items = {t.name: (simulate_condition, model, law, dict(t.params)) for t in tasks}
+    bar = tqdm(total=len(tasks), desc="simulate", unit="sim", leave=False,
+               disable=None if ctx.progress is None else not ctx.progress)
+    try:
+        for name, ds, seconds in map_tasks(_apply, items, workers=ctx.workers, scheduler=ctx.scheduler):
+            task = by_name[name]
+            write_run(ds, task.outputs["sim"], overwrite=True)
+            ctx.finish(task, seconds)
+            bar.update(1)
+    finally:
+        bar.close()
+
+
+def _apply(func, *args):
+    return func(*args)

@@ -1,0 +1,105 @@
+"""The plan (recipe + run config) is validated whole, with file and key path, before any work."""
+
+import textwrap
+
+import pytest
+
+from fivid.errors import ConfigError
+from fivid.pipeline.config import load_recipe, load_run_config
+
+
+def _write(path, text):
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def folder(tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "R1.csv").write_text("x\n")
+    (tmp_path / "model.yaml").write_text("name: m\n")
+    return tmp_path
+
+
+def _config(folder, extra=""):
+    return _write(folder / "run.yaml", f"""\
+        fivid-run: 1
+        inputs: {{folder: data}}
+        model: model.yaml
+        output: out
+        analysis: {{band: [500 Hz, 20 kHz], nperseg: 1024}}
+        simulate: {{duration: 0.1 s, sample_rate: 51.2 kHz, seeds: 3}}
+        thresholds: {{lsd_db: {{max: 6}}, shape_correlation: {{min: 0.5}}}}
+        """ + textwrap.dedent(extra))
+
+
+def test_good_config_in_si_units_with_paths_relative_to_the_file(folder):
+    cfg = load_run_config(_config(folder))
+    assert cfg.band == (500.0, 20000.0)
+    assert cfg.duration == pytest.approx(0.1) and cfg.sample_rate == pytest.approx(51200.0)
+    assert cfg.seeds == (0, 1, 2)
+    assert [f.name for f in cfg.input_files] == ["R1.csv"]
+    assert cfg.output == folder / "out" and cfg.model == folder / "model.yaml"
+    assert cfg.thresholds[0].passes(5.9) and not cfg.thresholds[0].passes(6.1)
+    assert cfg.thresholds[1].passes(0.5) and not cfg.thresholds[1].passes(float("nan"))
+
+
+@pytest.mark.parametrize("bad, key", [
+    ("simulate: {duration: 0.1 m}\n", "simulate.duration"),
+    ("simulate: {duration: -1 s}\n", "simulate.duration"),
+    ("analysis: {band: [20 kHz, 500 Hz]}\n", "analysis.band"),
+    ("analysis: {nperseg: 12}\n", "analysis.nperseg"),
+    ("thresholds: {lsd_db: {min: 3}}\n", "thresholds.lsd_db"),
+    ("thresholds: {lsd: {max: 3}}\n", "thresholds.lsd"),
+    ("simulate: {seeds: [1, 1]}\n", "simulate.seeds"),
+    ("simulat: {}\n", "simulat"),
+    ("inputs: {folder: nowhere}\n", "inputs.folder"),
+    ("inputs: {folder: data, pattern: '*.txt'}\n", "inputs.pattern"),
+    ("model: missing.yaml\n", "model"),
+])
+def test_bad_values_name_file_and_key(folder, bad, key):
+    base = _config(folder).read_text()
+    top = bad.split(":")[0]
+    lines = [ln for ln in base.splitlines() if not ln.startswith(top + ":")]
+    path = _write(folder / "bad.yaml", "\n".join(lines) + "\n" + bad)
+    with pytest.raises(ConfigError) as err:
+        load_run_config(path)
+    assert err.value.key == key, str(err.value)
+    assert str(path) in str(err.value)
+
+
+def test_every_problem_is_reported_at_once(folder):
+    path = _write(folder / "bad.yaml", """\
+        inputs: {folder: data}
+        model: model.yaml
+        output: out
+        simulate: {duration: 2 kg, seeds: 0}
+        """)
+    with pytest.raises(ConfigError) as err:
+        load_run_config(path)
+    assert "simulate.seeds" in str(err.value) and err.value.key == "simulate.duration"
+
+
+@pytest.mark.parametrize("stages, key, words", [
+    ("[identify, ingest]", "stages[0]", "needs ingest"),
+    ("[ingest, fit]", "stages[1]", "unknown stage"),
+    ("[ingest, ingest]", "stages[1]", "twice"),
+])
+def test_recipe_order_and_names_are_checked(tmp_path, stages, key, words):
+    path = _write(tmp_path / "p.yaml", f"fivid-pipeline: 1\nstages: {stages}\n")
+    with pytest.raises(ConfigError) as err:
+        load_recipe(path)
+    assert err.value.key == key and words in str(err.value)
+
+
+def test_shipped_recipe_is_valid(root):
+    name, stages, _, _ = load_recipe(root / "pipelines" / "calibration.yaml")
+    assert stages[0] == "ingest" and stages[-1] == "report" and name == "calibration"
+
+
+def test_invalid_yaml_names_line(tmp_path):
+    path = _write(tmp_path / "p.yaml", "stages: [ingest\nname: x\n")
+    with pytest.raises(ConfigError) as err:
+        load_recipe(path)
+    assert err.value.line is not None
