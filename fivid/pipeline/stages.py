@@ -223,20 +223,25 @@ class Score:
                 if t.name.rsplit("-seed", 1)[0] == cond:
                     inputs[f"sim:{t.name}"] = ctx.digests["simulate"][t.name]["sim"]
             tasks.append(Task("score", cond, {"band": list(cfg.band), "nperseg": cfg.nperseg}, inputs,
-                              {"scores": str(ctx.out / "scores" / f"{cond}.json")}))
+                              {"scores": str(ctx.out / "scores" / f"{cond}.json"),
+                               "psd": str(ctx.out / "scores" / f"{cond}-psd.nc")}))
         return tasks
 
     def execute(self, ctx, tasks) -> None:
         from fivid.pipeline.scoring import score_condition
-        from fivid.storage import write_json
+        from fivid.storage import write_json, write_netcdf
 
         (ctx.out / "scores").mkdir(parents=True, exist_ok=True)
         for task in _progress(ctx, tasks, "score", len(tasks)):
             c = ctx.data["conditions"][task.name]
             measured = [ctx.data["runs"][r]["path"] for r in c["runs"]]
             simulated = ctx.data["sims"][task.name]
-            _timed(ctx, task, lambda task=task, m=measured, s=simulated: write_json(
-                task.outputs["scores"], score_condition(m, s, band=ctx.config.band, nperseg=ctx.config.nperseg)))
+
+            def work(task=task, measured=measured, simulated=simulated):
+                scores, psd = score_condition(measured, simulated, band=ctx.config.band, nperseg=ctx.config.nperseg)
+                write_netcdf(psd, task.outputs["psd"])
+                write_json(task.outputs["scores"], scores)
+            _timed(ctx, task, work)
 
     def collect(self, ctx, tasks) -> None:
         scores = {}
@@ -287,6 +292,7 @@ def ctx_to_report_inputs(ctx, checks) -> dict:
         "sims": ctx.data.get("sims", {}),
         "scores": ctx.data.get("scores", {}),
         "score_files": {t.name: t.outputs["scores"] for t in ctx.tasks.get("score", {}).values()},
+        "psd_files": {t.name: t.outputs["psd"] for t in ctx.tasks.get("score", {}).values()},
         "band": cfg.band,
         "nperseg": cfg.nperseg,
         "checks": checks,

@@ -1,0 +1,115 @@
+"""Scoring one test condition: every simulation seed against every measured run at that condition.
+
+The scores themselves come from :func:`fivid.score.score_runs` (DESIGN §6). This module picks the
+steady-sliding part of each record, pairs runs with seeds, averages the headline scores over the
+pairs (the Monte-Carlo seeds give their spread) and keeps the Welch PSDs with their χ² bounds for the
+report, on one common frequency grid.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from fivid.errors import DataQualityError
+
+__all__ = ["score_condition", "steady_part", "acceleration_psd"]
+
+log = logging.getLogger("fivid")
+
+HEADLINE = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
+
+
+def steady_part(ds, *, label: str):
+    """The steady-sliding part of a run (the whole record when it has no encoder signal)."""
+    from fivid.signal import steady_sliding_window
+
+    try:
+        t0, t1 = steady_sliding_window(ds)
+    except DataQualityError as exc:
+        log.info("%s: no steady-sliding window found (%s); the whole record is used", label, exc.message)
+        return ds
+    return ds.sel(time=slice(t0, t1))
+
+
+def _acceleration(ds):
+    da = ds["acceleration"]
+    if "sensor" in da.dims:
+        da = da.isel(sensor=0)
+    return da
+
+
+def acceleration_psd(ds, *, nperseg: int):
+    """Welch PSD of the acceleration (first sensor) with χ² 95 % bounds."""
+    from fivid.signal import welch_psd
+
+    return welch_psd(_acceleration(ds), nperseg=nperseg, window="hann", detrend="constant", confidence=0.95)
+
+
+def score_condition(measured: list, simulated: list, *, band, nperseg: int):
+    """Scores of every (measured run, simulation) pair and their mean; the PSDs for the report.
+
+    Parameters
+    ----------
+    measured, simulated : list of path-like
+        RunDataset netCDF files of one test condition.
+    band : (float, float)
+        Scoring band [Hz].
+    nperseg : int
+        Welch segment length [samples].
+
+    Returns
+    -------
+    scores : dict
+        ``pairs`` (per pair: names and :func:`fivid.score.scores_to_json` content) and ``summary``
+        (mean and min/max over pairs of each headline score).
+    psd : xarray.Dataset
+        ``psd_measured(measured_run, frequency)``, ``psd_simulated(simulated_seed, frequency)`` and
+        their ``_lower``/``_upper`` bounds [m2 s-4 Hz-1].
+    """
+    from pathlib import Path
+
+    import xarray as xr
+
+    from fivid.io import read_run
+    from fivid.score import score_runs, scores_to_json
+
+    meas = {Path(p).stem: steady_part(read_run(p), label=Path(p).name) for p in measured}
+    sims = {Path(p).stem: steady_part(read_run(p), label=Path(p).name) for p in simulated}
+    pairs = []
+    for mname, m in meas.items():
+        for sname, s in sims.items():
+            sc = score_runs(m, s, variable="acceleration", band=tuple(band), nperseg=nperseg)
+            pairs.append({"measured": mname, "simulated": sname, "scores": scores_to_json(sc)})
+    summary = {}
+    for key in HEADLINE:
+        vals = np.array([p["scores"].get(key) for p in pairs if p["scores"].get(key) is not None], float)
+        summary[key] = float(np.mean(vals)) if vals.size else None
+        summary[f"{key}_min"] = float(np.min(vals)) if vals.size else None
+        summary[f"{key}_max"] = float(np.max(vals)) if vals.size else None
+    summary["n_pairs"] = len(pairs)
+
+    pm = [acceleration_psd(m, nperseg=nperseg) for m in meas.values()]
+    ps = [acceleration_psd(s, nperseg=nperseg) for s in sims.values()]
+    f = pm[0]["frequency"].values
+    for p in ps:
+        if p.sizes["frequency"] != f.size or not np.allclose(p["frequency"].values, f):
+            raise DataQualityError(
+                f"simulated sample rate {p.attrs['sample_rate']:g} Hz differs from the measured "
+                f"{pm[0].attrs['sample_rate']:g} Hz: set simulate.sample_rate to the rig's rate")
+    units = pm[0].attrs["units"]
+
+    def stack(spectra, name, dim):
+        return {f"{name}{suffix}": ((dim, "frequency"), np.array([p.values if not suffix else p[f"psd{suffix}"].values
+                                                                   for p in spectra]), {"units": units})
+                for suffix in ("", "_lower", "_upper")}
+
+    psd = xr.Dataset(
+        {**stack(pm, "psd_measured", "measured_run"), **stack(ps, "psd_simulated", "simulated_seed")},
+        coords={"frequency": ("frequency", f, {"units": "Hz"}), "measured_run": list(meas),
+                "simulated_seed": list(sims)},
+        attrs={k: pm[0].attrs[k] for k in ("nperseg", "noverlap", "window", "detrend", "equivalent_averages",
+                                           "sample_rate", "confidence")},
+    )
+    return {"band": list(band), "nperseg": nperseg, "pairs": pairs, "summary": summary}, psd

@@ -1,0 +1,278 @@
+"""The validation report: provenance, identified law, PSD overlays and scores, modes vs peaks, verdict.
+
+:func:`render_report` takes plain data and file paths (what the pipeline produced) and writes one
+self-contained ``report.html`` (figures embedded as PNG data URIs, no script, no external resource).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from fivid import __version__
+from fivid.report.figures import amplitude_figure, law_shape_figure, modal_figure, psd_overlay_figure
+from fivid.report.html import Page, table
+from fivid.storage import write_text
+
+__all__ = ["render_report", "measured_peaks", "amplitude_interval"]
+
+# Two-sided 95 % normal quantile for the amplitude-law interval (coefficients ~ normal with the
+# fitted covariance; the identify step reports the same level).
+_Z95 = 1.959963984540054
+
+
+def _versions() -> list[list[str]]:
+    rows = [["fivid", __version__], ["python", platform.python_version()]]
+    for pkg in ("numpy", "scipy", "xarray", "pandas", "netCDF4", "statsmodels", "numba", "dask", "distributed",
+                "matplotlib", "pint"):
+        try:
+            rows.append([pkg, metadata.version(pkg)])
+        except metadata.PackageNotFoundError:
+            rows.append([pkg, "not installed"])
+    return rows
+
+
+def amplitude_interval(model, velocity, roughness, normal_load=None, z: float = _Z95):
+    """Fitted amplitude and its pointwise interval ``(A, lower, upper)`` from the coefficient covariance.
+
+    The linear predictor η = Xβ has variance diag(X Σ Xᵀ); the interval η ± z·σ is mapped through
+    the form's link (identity, clipped at 0, for linear forms; exp for power laws).
+    """
+    from fivid.friction.amplitude import amplitude_design_matrix
+
+    X, _ = amplitude_design_matrix(model.form, model.terms, velocity, roughness, normal_load, model.roughness_levels)
+    beta = np.asarray(model.coefficients, float)
+    cov = np.asarray(model.covariance, float).reshape(beta.size, beta.size)
+    eta = X @ beta
+    sigma = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", X, np.nan_to_num(cov), X), 0.0))
+    lo, hi = eta - z * sigma, eta + z * sigma
+    if model.is_log_form:
+        return np.exp(eta), np.exp(lo), np.exp(hi)
+    return np.maximum(eta, 0.0), np.maximum(lo, 0.0), np.maximum(hi, 0.0)
+
+
+def measured_peaks(frequency, psd, band, *, prominence_db: float = 6.0, max_peaks: int = 12) -> np.ndarray:
+    """Frequencies [Hz] of the clearest peaks of a PSD inside ``band``.
+
+    A peak must stand ``prominence_db`` above its surroundings in 10·log10(PSD): 6 dB is well above
+    the scatter of a Welch estimate with tens of averages (its χ² 95 % band is about ±1.5 dB at
+    40 averages), so noise ripples are not taken for resonances. The ``max_peaks`` most prominent
+    are returned, sorted by frequency.
+    """
+    from scipy.signal import find_peaks
+
+    f = np.asarray(frequency, float)
+    level = 10 * np.log10(np.maximum(np.asarray(psd, float), np.finfo(float).tiny))
+    inside = (f >= band[0]) & (f <= band[1])
+    idx, props = find_peaks(np.where(inside, level, -np.inf), prominence=prominence_db)
+    idx = idx[inside[idx]]
+    prom = props["prominences"][: idx.size] if idx.size else np.array([])
+    order = np.argsort(prom)[::-1][:max_peaks]
+    return np.sort(f[idx[order]])
+
+
+def _law_section(page: Page, inputs: dict) -> None:
+    import xarray as xr
+
+    from fivid.friction import law_from_dataset
+
+    page.heading("Identified friction law")
+    path = inputs.get("law_path")
+    if not path:
+        page.paragraph("No law was identified in this run.")
+        return
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        ds = ds.load()
+    law = law_from_dataset(ds, source=str(path))
+    mu0 = ds["mu0"]
+    ci = (mu0.attrs.get("ci_lower"), mu0.attrs.get("ci_upper"))
+    text = f"μ0 = {float(mu0):.4f}"
+    if ci[0] is not None:
+        text += f" (95 % interval {ci[0]:.4f} – {ci[1]:.4f})"
+    page.paragraph(text + f"; {law.describe()}")
+    if ds.attrs.get("law") != "perturbed_coulomb":
+        return
+    band = (float(ds.attrs["band_lower"]), float(ds.attrs["band_upper"]))
+    page.figure(law_shape_figure(ds["frequency"].values, ds["shape"].values, band),
+                "Normalised spectrum s(f) of the friction perturbation μp (∫ s df = 1 over the valid band).",
+                "perturbation spectrum")
+    model = law.amplitude_model
+    runs = inputs.get("runs", {})
+    table_rows = _per_run_amplitudes(ds)
+    loads = sorted({r["normal_load"] for r in runs.values()}) or [1.0]
+    load = float(np.median(loads))
+    rough = sorted({round(r["roughness_ra"], 12) for r in runs.values()})
+    vel = [r["sliding_velocity"] for r in runs.values()]
+    curves, points = [], []
+    if rough and vel:
+        v = np.linspace(min(vel) * 0.8, max(vel) * 1.1, 60)
+        for ra in rough:
+            label = f"Ra {ra * 1e6:.3g} µm"
+            a, lo, hi = amplitude_interval(model, v, np.full_like(v, ra), np.full_like(v, load))
+            curves.append({"label": label, "velocity": v, "amplitude": a, "lower": lo, "upper": hi})
+            sel = [r for r in table_rows if abs(r["roughness_ra"] - ra) <= 0.01 * ra]
+            if sel:
+                points.append({"label": label, "velocity": [r["sliding_velocity"] for r in sel],
+                               "amplitude": [r["amplitude"] for r in sel]})
+        page.figure(amplitude_figure(curves, points),
+                    f"Amplitude A (RMS of μp in the valid band) against sliding velocity, per roughness: "
+                    f"fitted {model.form} law (lines) with its pointwise 95 % interval (bands, from the "
+                    f"coefficient covariance) and the per-run estimates (circles); normal load {load:g} N.",
+                    "amplitude against velocity")
+    rows = [[n, float(c), float(s)] for n, c, s in zip(model.names, model.coefficients, model.stderr)]
+    page.raw(table(["coefficient", "value", "standard error"], rows))
+    if "form" in ds.dims:
+        cols = [v for v in ds.data_vars if ds[v].dims == ("form",)]
+        rows = [[str(ds["form"].values[i])] + [_py(ds[c].values[i]) for c in cols] for i in range(ds.sizes["form"])]
+        page.paragraph("Candidate amplitude forms (the selected one is named above):")
+        page.raw(table(["form"] + cols, rows))
+
+
+def _py(x):
+    x = x.item() if hasattr(x, "item") else x
+    return float(x) if isinstance(x, (float, np.floating)) else x
+
+
+def _per_run_amplitudes(ds) -> list[dict]:
+    """Per-run (V, Ra, A) from the identify per-run table (dim ``run``), if the law file has one."""
+    if "run" not in ds.dims:
+        return []
+    names = {"amplitude": None, "sliding_velocity": None, "roughness_ra": None}
+    for key in names:
+        for cand in (key, f"run_{key}"):
+            if cand in ds and ds[cand].dims == ("run",):
+                names[key] = cand
+                break
+    if None in names.values():
+        return []
+    return [{k: float(ds[v].values[i]) for k, v in names.items()} for i in range(ds.sizes["run"])]
+
+
+def _condition_sections(page: Page, inputs: dict) -> tuple[list, list]:
+    import xarray as xr
+
+    page.heading("Measured against simulated, per test condition")
+    band = inputs["band"]
+    all_f, all_psd = None, []
+    checks = inputs.get("checks", [])
+    for cond, c in sorted(inputs.get("conditions", {}).items()):
+        page.heading(f"{c['sliding_velocity'] * 1e3:g} mm/s, {c['normal_load']:g} N, Ra {c['roughness_ra'] * 1e6:g} µm",
+                     level=3)
+        psd_file = inputs.get("psd_files", {}).get(cond)
+        if psd_file and Path(psd_file).is_file():
+            with xr.open_dataset(psd_file, engine="netcdf4") as ds:
+                ds = ds.load()
+            f = ds["frequency"].values
+            meas = [{"label": f"measured {r}", "psd": ds["psd_measured"].values[i],
+                     "lower": ds["psd_measured_lower"].values[i], "upper": ds["psd_measured_upper"].values[i]}
+                    for i, r in enumerate(ds["measured_run"].values)]
+            sims = [{"label": f"simulated, {s}", "psd": ds["psd_simulated"].values[i],
+                     "lower": ds["psd_simulated_lower"].values[i], "upper": ds["psd_simulated_upper"].values[i]}
+                    for i, s in enumerate(ds["simulated_seed"].values)]
+            units = ds["psd_measured"].attrs.get("units", "")
+            page.figure(psd_overlay_figure(f, meas, sims, band, units),
+                        f"Acceleration PSD, measured (black) and simulated (colours), with χ² 95 % confidence bands "
+                        f"(Welch, nperseg {ds.attrs.get('nperseg')}, {ds.attrs.get('equivalent_averages', 0):.3g} "
+                        f"equivalent averages). Shaded: scoring band {band[0]:g}–{band[1]:g} Hz.",
+                        f"PSD overlay {cond}")
+            all_f = f
+            all_psd.extend(m["psd"] for m in meas)
+        score_file = inputs.get("score_files", {}).get(cond)
+        if score_file and Path(score_file).is_file():
+            sc = json.loads(Path(score_file).read_text(encoding="utf-8"))
+            rows = [[p["measured"], p["simulated"]] + [p["scores"].get(k) for k in _SCORE_COLUMNS]
+                    for p in sc.get("pairs", [])]
+            rows.append(["mean", ""] + [sc["summary"].get(k) for k in _SCORE_COLUMNS])
+            page.raw(table(["measured run", "simulation"] + list(_SCORE_COLUMNS), rows))
+        mine = [k for k in checks if k["condition"] == cond]
+        if mine:
+            page.raw(table(["score", "value (mean)", "threshold", "result"],
+                           [[k["score"], k["value"], k["threshold"], bool(k["pass"])] for k in mine]))
+    return all_f, all_psd
+
+
+_SCORE_COLUMNS = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
+
+
+def _modal_section(page: Page, inputs: dict, frequency, psds) -> None:
+    import xarray as xr
+
+    page.heading("Modal frequencies against measured peaks")
+    path = inputs.get("modal_path")
+    if not path or frequency is None or not psds:
+        page.paragraph("No modal analysis or no measured spectrum in this run.")
+        return
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        modal_f = np.asarray(ds["frequency"].values, float)
+    band = inputs["band"]
+    mean_psd = np.mean(np.asarray(psds), axis=0)
+    peaks = measured_peaks(frequency, mean_psd, band)
+    in_band = modal_f[(modal_f >= band[0]) & (modal_f <= band[1])]
+    page.figure(modal_figure(frequency, mean_psd, in_band, peaks, band, ""),
+                "Mean measured acceleration PSD with the model's modal frequencies (dashed) and the measured "
+                "peaks (triangles, ≥ 6 dB prominence).", "modes against peaks")
+    rows = []
+    for i, fm in enumerate(modal_f):
+        if peaks.size:
+            j = int(np.argmin(np.abs(peaks - fm)))
+            rows.append([i + 1, float(fm), float(peaks[j]), float((fm - peaks[j]) / peaks[j] * 100)])
+        else:
+            rows.append([i + 1, float(fm), None, None])
+    page.raw(table(["mode", "model frequency [Hz]", "nearest measured peak [Hz]", "difference [%]"], rows))
+
+
+def _provenance(page: Page, inputs: dict) -> None:
+    import yaml
+
+    prov = inputs.get("provenance", {})
+    page.heading("Provenance")
+    page.raw(table(["software", "version"], _versions()))
+    rows = []
+    for what in ("pipeline", "config", "model"):
+        if what in prov:
+            rows.append([what, prov[what].get("path"), prov[what].get("sha256")])
+    page.raw(table(["file", "path", "sha256"], rows))
+    if prov.get("inputs"):
+        page.paragraph("Input files:")
+        page.raw(table(["input file", "sha256"], [[k, v] for k, v in sorted(prov["inputs"].items())]))
+    if "config" in prov and "content" in prov["config"]:
+        page.paragraph("Run configuration:")
+        page.pre(yaml.safe_dump(prov["config"]["content"], sort_keys=False))
+
+
+def render_report(path: str | os.PathLike, inputs: dict) -> Path:
+    """Write the validation report to ``path`` (atomically); returns the path.
+
+    Parameters
+    ----------
+    path : path-like
+        ``report.html``.
+    inputs : dict
+        ``title``; ``provenance`` (pipeline/config/model path+sha256, config content, input sha256s);
+        ``runs`` and ``conditions`` (as built by the pipeline's ingest stage); ``law_path``;
+        ``modal_path``; ``psd_files`` and ``score_files`` per condition; ``band`` [Hz];
+        ``checks`` (threshold checks); optional ``synthetic_note``.
+    """
+    page = Page(inputs.get("title", "fivid validation report"))
+    checks = inputs.get("checks", [])
+    ok = bool(checks) and all(c["pass"] for c in checks)
+    page.heading("Verdict")
+    n_fail = sum(not c["pass"] for c in checks)
+    verdict = ("PASS: every score is within its threshold" if ok else
+               f"FAIL: {n_fail} of {len(checks)} threshold checks fail" if checks else "NO VERDICT: nothing was scored")
+    page.raw(f'<p class="verdict {"pass" if ok else "fail"}">{verdict}</p>')
+    if checks:
+        page.raw(table(["condition", "score", "value", "threshold", "result"],
+                       [[c["condition"], c["score"], c["value"], c["threshold"], bool(c["pass"])] for c in checks]))
+    if inputs.get("synthetic_note"):
+        page.raw(f'<p class="synthetic">{inputs["synthetic_note"]}</p>')
+    _law_section(page, inputs)
+    f, psds = _condition_sections(page, inputs)
+    _modal_section(page, inputs, f, psds)
+    _provenance(page, inputs)
+    return write_text(path, page.render())

@@ -1,0 +1,104 @@
+"""The report's figures (matplotlib, Agg backend), each returned as a ``data:`` URI.
+
+Pure plotting: the caller passes arrays in SI units; axes are labelled in the units people read
+(Hz, mm/s, µm, dB).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fivid.report.html import figure_data_uri
+
+__all__ = ["law_shape_figure", "amplitude_figure", "psd_overlay_figure", "modal_figure"]
+
+
+def _figure(width: float = 7.0, height: float = 4.0):
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(width, height), layout="constrained")
+    return fig, ax
+
+
+def law_shape_figure(frequency, shape, band) -> str:
+    """Normalised perturbation spectrum s(f) [Hz-1] (∫ s df = 1) on log axes, valid band shaded."""
+    fig, ax = _figure()
+    ax.loglog(frequency, shape, color="C0", lw=1.5, label="identified shape s(f)")
+    ax.axvspan(band[0], band[1], color="C2", alpha=0.08, label="valid band")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("s(f) [Hz$^{-1}$]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    return figure_data_uri(fig)
+
+
+def amplitude_figure(curves: list[dict], points: list[dict]) -> str:
+    """Amplitude A [-] (RMS of μp) against sliding velocity per roughness.
+
+    Parameters
+    ----------
+    curves : list of dict
+        ``label, velocity [m s-1], amplitude, lower, upper`` — the fitted law and its interval.
+    points : list of dict
+        ``label, velocity [m s-1], amplitude`` — per-run estimates.
+    """
+    fig, ax = _figure()
+    for i, c in enumerate(curves):
+        color = f"C{i}"
+        v = np.asarray(c["velocity"]) * 1e3
+        ax.plot(v, c["amplitude"], color=color, lw=1.5, label=f"fit, {c['label']}")
+        ax.fill_between(v, c["lower"], c["upper"], color=color, alpha=0.2, lw=0)
+        for p in points:
+            if p["label"] == c["label"]:
+                ax.plot(np.asarray(p["velocity"]) * 1e3, p["amplitude"], "o", color=color, ms=5,
+                        mfc="none", label=f"runs, {p['label']}")
+    ax.set_xlabel("sliding velocity [mm/s]")
+    ax.set_ylabel("amplitude A = RMS of $\\mu_p$ [-]")
+    ax.set_ylim(bottom=0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    return figure_data_uri(fig)
+
+
+def psd_overlay_figure(frequency, measured: list[dict], simulated: list[dict], band, units: str) -> str:
+    """Measured and simulated acceleration PSDs with their χ² confidence bands.
+
+    ``measured``/``simulated``: dicts with ``label, psd, lower, upper`` on the common ``frequency`` [Hz].
+    """
+    fig, ax = _figure(7.5, 4.2)
+    f = np.asarray(frequency)
+    for i, m in enumerate(measured):
+        ax.fill_between(f, m["lower"], m["upper"], color="k", alpha=0.15, lw=0)
+        ax.semilogy(f, m["psd"], color="k", lw=1.0, label=m["label"] if i < 3 else None)
+    for i, s in enumerate(simulated):
+        color = f"C{3 + i % 6}"
+        ax.fill_between(f, s["lower"], s["upper"], color=color, alpha=0.2, lw=0)
+        ax.semilogy(f, s["psd"], color=color, lw=1.0, label=s["label"])
+    ax.axvspan(band[0], band[1], color="C2", alpha=0.05)
+    ax.set_xlim(max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(f"acceleration PSD [{units}]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return figure_data_uri(fig)
+
+
+def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, units: str) -> str:
+    """A measured PSD with the model's modal frequencies (dashed) and the detected peaks (markers)."""
+    fig, ax = _figure(7.5, 4.0)
+    f = np.asarray(frequency)
+    ax.semilogy(f, psd, color="k", lw=1.0, label="measured (mean over runs)")
+    for i, fm in enumerate(modal_frequencies):
+        ax.axvline(fm, color="C1", ls="--", lw=1.0, label="model modes" if i == 0 else None)
+    if len(peak_frequencies):
+        idx = np.searchsorted(f, peak_frequencies).clip(0, f.size - 1)
+        ax.plot(f[idx], np.asarray(psd)[idx], "v", color="C3", ms=7, label="measured peaks")
+    ax.set_xlim(max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(f"acceleration PSD [{units}]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return figure_data_uri(fig)
