@@ -1,0 +1,27 @@
+"""Friction laws used by the solver, and the synthesis of the friction perturbation μp(t).
+
+- :class:`CoulombLaw` — μ = μ0.
+- :class:`PerturbedCoulombLaw` — μ = μ0 + μp(t), μp with one-sided PSD A(V, Ra, Fn)^2 s(f) (DESIGN §3).
+- :func:`load_law` / :func:`write_law` — the law file written by ``fivid identify``.
+- :func:`synthesise_perturbation` — random-phase / Gaussian spectral synthesis (pyfftw, seeded).
+- :class:`AmplitudeModel` — the amplitude forms A(V, Ra, Fn).
+"""
+
+from fivid.friction.amplitude import AMPLITUDE_FORMS, AmplitudeModel, amplitude_design_matrix
+from fivid.friction.lawfile import law_dataset, law_from_dataset, load_law, write_law
+from fivid.friction.laws import INJECTION_MODES, CoulombLaw, PerturbedCoulombLaw
+from fivid.friction.synthesis import synthesise_perturbation
+
+__all__ = [
+    "AMPLITUDE_FORMS",
+    "AmplitudeModel",
+    "amplitude_design_matrix",
+    "CoulombLaw",
+    "PerturbedCoulombLaw",
+    "INJECTION_MODES",
+    "load_law",
+    "write_law",
+    "law_dataset",
+    "law_from_dataset",
+    "synthesise_perturbation",
+]
