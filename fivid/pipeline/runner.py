@@ -202,7 +202,7 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         status = EXIT_PASS if _evaluate(ctx)[1] else EXIT_BELOW_THRESHOLD
     except FividError as exc:
         status, error = EXIT_BAD_INPUT, exc
-        log.error("%s", exc)
+        log.info("stopped on bad input: %s", exc)  # the CLI prints it on stderr; this goes to the log file
         raise
     except BaseException as exc:
         status, error = EXIT_FAILURE, exc

@@ -97,7 +97,7 @@ class Ingest:
             try:
                 _timed(ctx, task, work)
             except FividError as exc:
-                log.error("rejected %s: %s", src, exc)
+                log.info("rejected %s: %s", src, exc)
                 rejected.append(str(exc))
         if rejected:
             raise FividError(f"{len(rejected)} input file(s) rejected, nothing computed after ingest: "
@@ -165,12 +165,13 @@ class Modal:
                      {"modes": str(ctx.out / "modal.nc")})]
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.fe import load_model, modal_analysis
+        from fivid.fe import load_model
+        from fivid.fe.modal import modal_analysis
         from fivid.storage import write_netcdf
 
         task = tasks[0]
         _timed(ctx, task, lambda: write_netcdf(
-            modal_analysis(load_model(ctx.config.model), n_modes=ctx.config.n_modes), task.outputs["modes"]))
+            modal_analysis(load_model(ctx.config.model), n_modes=ctx.config.n_modes, include_contact=True), task.outputs["modes"]))
 
     def collect(self, ctx, tasks) -> None:
         ctx.data["modal_path"] = tasks[0].outputs["modes"]
