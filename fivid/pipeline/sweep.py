@@ -25,7 +25,7 @@ log = logging.getLogger("fivid")
 
 
 @contextlib.contextmanager
-def dask_client(*, workers: int = 2, scheduler: str | None = None):
+def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeout: float = 10.0):
     """A :class:`distributed.Client`: connected to ``scheduler``, or to a new loopback LocalCluster.
 
     Parameters
@@ -34,6 +34,8 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None):
         Worker processes of the LocalCluster (one thread each).
     scheduler : str, optional
         ``tcp://host:port`` of a running ``dask scheduler``.
+    connect_timeout : float
+        How long to try reaching ``scheduler`` [s].
     """
     from distributed import Client, LocalCluster
 
@@ -41,7 +43,7 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None):
 
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout="10s")
+            client = Client(scheduler, timeout=f"{connect_timeout}s")
         except (OSError, TimeoutError) as exc:
             raise FividError(f"cannot reach the dask scheduler at {scheduler!r} ({exc}); start one with "
                              "'dask scheduler' and workers with 'dask worker <address>'") from None
@@ -73,25 +75,25 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None):
         cluster.close()
 
 
-def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = None):
-    """Run ``func(*args)`` for each ``name -> args`` on dask; yield ``(name, result, seconds)`` as they finish.
+def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = None, connect_timeout: float = 10.0):
+    """Run ``func(*args)`` for each ``name -> args`` on dask; yield ``(name, result, seconds, pid)`` as they finish.
 
-    ``seconds`` is the wall time of the task on its worker.
+    ``seconds`` is the wall time of the task on its worker, ``pid`` the worker's process id.
     """
     from distributed import as_completed
 
-    with dask_client(workers=workers, scheduler=scheduler) as client:
+    with dask_client(workers=workers, scheduler=scheduler, connect_timeout=connect_timeout) as client:
         futures = {client.submit(_timed_call, func, *args, key=f"fivid-{name}-{os.getpid()}-{time.time_ns()}",
                                  pure=False): name for name, args in items.items()}
         for fut in as_completed(futures):
-            result, seconds = fut.result()
-            yield futures[fut], result, seconds
+            result, seconds, pid = fut.result()
+            yield futures[fut], result, seconds, pid
 
 
 def _timed_call(func, *args):
     t0 = time.perf_counter()
     out = func(*args)
-    return out, time.perf_counter() - t0
+    return out, time.perf_counter() - t0, os.getpid()
 
 
 def simulate_condition(model, law, params: dict):
@@ -116,8 +118,9 @@ def run_simulations(ctx, tasks) -> None:
     bar = tqdm(total=len(tasks), desc="simulate", unit="sim", leave=False,
                disable=None if ctx.progress is None else not ctx.progress)
     try:
-        for name, ds, seconds in map_tasks(_apply, items, workers=ctx.workers, scheduler=ctx.scheduler):
+        for name, ds, seconds, pid in map_tasks(_apply, items, workers=ctx.workers, scheduler=ctx.scheduler):
             task = by_name[name]
+            log.info("simulate/%s computed by worker pid %d", name, pid)
             write_run(ds, task.outputs["sim"], overwrite=True)
             ctx.finish(task, seconds)
             bar.update(1)
