@@ -7,6 +7,7 @@ functions here wrap DataArrays/Datasets and record units and settings in attrs.
 """
 
 from fivid.signal.steady import steady_sliding_window
-from fivid.signal.welch import csd, power_units, welch_psd
+from fivid.signal.unit_strings import power_units
+from fivid.signal.welch import csd, welch_psd
 
 __all__ = ["welch_psd", "csd", "power_units", "steady_sliding_window"]

@@ -31,6 +31,7 @@ __all__ = [
     "averaged_spectra",
     "equivalent_degrees_of_freedom",
     "bin_correlation",
+    "bin_degrees_of_freedom",
     "chi2_interval",
 ]
 
@@ -219,6 +220,16 @@ def equivalent_degrees_of_freedom(window: np.ndarray, nsegments: int, step: int)
         rho = np.dot(w[: n - lag], w[lag:]) / norm
         total += (1.0 - m / k) * rho * rho
     return 2.0 * k / (1.0 + 2.0 * total)
+
+
+def bin_degrees_of_freedom(nu: float, nperseg: int) -> np.ndarray:
+    """Degrees of freedom per one-sided bin: ν inside; ν/2 at 0 Hz and (even ``nperseg``) at Nyquist,
+    where a real signal's DFT ordinate is real (one χ² degree of freedom per segment instead of two)."""
+    dof = np.full(nperseg // 2 + 1, float(nu))
+    dof[0] = nu / 2.0
+    if nperseg % 2 == 0:
+        dof[-1] = nu / 2.0
+    return dof
 
 
 def bin_correlation(window: np.ndarray, max_shift: int | None = None) -> np.ndarray:

@@ -8,14 +8,14 @@ coordinate, checks the data (uniform time, finite, long enough), and returns Dat
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError, UnitError
 from fivid.signal.fft import check_backend
 from fivid.signal.sampling import check_finite, run_label, sample_rate_of
+from fivid.signal.unit_strings import power_units, product_units
 from fivid.signal.spectral import (
+    bin_degrees_of_freedom,
     SpectralSettings,
     averaged_spectra,
     chi2_interval,
@@ -23,49 +23,7 @@ from fivid.signal.spectral import (
     segment_window,
 )
 
-__all__ = ["welch_psd", "csd", "power_units", "product_units", "spectral_settings"]
-
-_TOKEN = re.compile(r"([A-Za-z%µμ]+)(-?\d+)?")
-
-
-def _exponents(units: str) -> dict[str, int] | None:
-    """UDUNITS product string (``"m s-2"``) → {symbol: exponent}; None when not of that form."""
-    out: dict[str, int] = {}
-    text = units.strip()
-    if text in ("1", ""):
-        return out
-    for token in text.split():
-        m = _TOKEN.fullmatch(token)
-        if m is None:
-            return None
-        out[m.group(1)] = out.get(m.group(1), 0) + int(m.group(2) or 1)
-    return out
-
-
-def _format(exps: dict[str, int]) -> str:
-    return " ".join(s if e == 1 else f"{s}{e}" for s, e in exps.items() if e != 0)
-
-
-def product_units(*units: str) -> str:
-    """UDUNITS string of a product of quantities per hertz: ``product_units("N", "m s-2") == "N m s-2 Hz-1"``.
-
-    Units not written as a product of powers (``"m/s"``) are bracketed: ``"(m/s) Hz-1"``.
-    """
-    total: dict[str, int] = {}
-    for u in units:
-        exps = _exponents(u)
-        if exps is None:
-            exps = {f"({u})": 1}
-        for s, e in exps.items():
-            total[s] = total.get(s, 0) + e
-    total["Hz"] = total.get("Hz", 0) - 1
-    return _format(total)
-
-
-def power_units(units: str) -> str:
-    """Units of the spectral density of a signal in ``units``: ``"m s-2"`` → ``"m2 s-4 Hz-1"``."""
-    return product_units(units, units)
-
+__all__ = ["welch_psd", "csd", "spectral_settings"]
 
 def _units_of(da, label: str) -> str:
     units = da.attrs.get("units")
@@ -141,18 +99,8 @@ def _settings_attrs(settings: SpectralSettings, w: np.ndarray, k: int, nu: float
     }
 
 
-def _bin_dof(nu: float, nperseg: int) -> np.ndarray:
-    """Degrees of freedom per bin: ν inside; ν/2 at 0 Hz and (even nperseg) Nyquist, where a real
-    signal's DFT ordinate is real (one χ² degree of freedom per segment instead of two)."""
-    dof = np.full(nperseg // 2 + 1, nu)
-    dof[0] = nu / 2.0
-    if nperseg % 2 == 0:
-        dof[-1] = nu / 2.0
-    return dof
-
-
 def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", fs=None, confidence=0.95,
-              backend=None):
+              backend=None, label=None):
     """One-sided power spectral density by Welch's method, with χ² confidence bounds.
 
     Parameters
@@ -174,6 +122,8 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
         Level of the two-sided χ² interval ``psd_lower``/``psd_upper``.
     backend : {"pyfftw", "numpy"}, optional
         FFT implementation; both give the same numbers to round-off.
+    label : str, optional
+        How to name the signal in error messages (default: its ``run_id`` attr or name).
 
     Returns
     -------
@@ -203,9 +153,10 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
     """
     import xarray as xr
 
+    label = label or run_label(da, default=f"variable {da.name!r}")
     settings, values = spectral_settings(da, nperseg=nperseg, noverlap=noverlap, window=window, detrend=detrend,
-                                         fs=fs, backend=backend)
-    units = _units_of(da, run_label(da, default=f"variable {da.name!r}"))
+                                         fs=fs, backend=backend, label=label)
+    units = _units_of(da, label)
     lead = values.shape[:-1]
     rows = values.reshape(-1, values.shape[-1])
     psd = np.empty((rows.shape[0], settings.nperseg // 2 + 1))
@@ -214,7 +165,7 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
     psd = psd.reshape(*lead, -1)
     w = segment_window(settings.window, settings.nperseg)
     nu = equivalent_degrees_of_freedom(w, k, settings.step)
-    lower, upper = chi2_interval(psd, _bin_dof(nu, settings.nperseg), confidence)
+    lower, upper = chi2_interval(psd, bin_degrees_of_freedom(nu, settings.nperseg), confidence)
     dims = tuple(d for d in da.dims if d != "time") + ("frequency",)
     coords = {d: da.coords[d] for d in dims[:-1] if d in da.coords}
     coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
