@@ -222,6 +222,55 @@ def _resolve(base: Path, value) -> Path:
     return p if p.is_absolute() else (base / p)
 
 
+_IDENTIFY_CHOICES = {"shape_method": ("smoothed", "rolloff"), "weighting": ("none", "estimator"),
+                     "injection": ("uniform", "per_node", "convected")}
+
+
+def _identify_options(chk: _Checker, raw: dict) -> dict:
+    """The ``identify`` section as keyword arguments of :func:`fivid.identify.identify_friction_law` (SI)."""
+    node = chk.section(raw, "identify", {"band", "nperseg", "tolerance", "min_normal_force", "mains_frequency",
+                                         "shape_method", "smoothing_octaves", "forms", "weighting", "injection",
+                                         "confidence"})
+    out: dict = {}
+    for name in ("band",):
+        if name in node:
+            b = node[name]
+            if not isinstance(b, (list, tuple)) or len(b) != 2:
+                chk.add(f"identify.{name}", f"must be [f_lo, f_hi] with units, e.g. [100 Hz, 5 kHz], got {b!r}")
+                continue
+            q = [chk.quantity({"v": v}, f"identify.{name}[{i}]", "v", "Hz") for i, v in enumerate(b)]
+            if None not in q:
+                out[name] = (q[0], q[1])
+    if "nperseg" in node:
+        out["nperseg"] = chk.integer(node, "identify.nperseg", "nperseg", 4096, 64, 2**22)
+    for name, units in (("min_normal_force", "N"), ("mains_frequency", "Hz")):
+        if name in node:
+            out[name] = chk.quantity(node, f"identify.{name}", name, units) if node[name] is not None else None
+    for name, lo, hi in (("tolerance", 0.0, 1.0), ("smoothing_octaves", 0.0, 4.0), ("confidence", 0.5, 0.9999)):
+        if name in node:
+            v = node[name]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
+                chk.add(f"identify.{name}", f"must be a number in ({lo:g}, {hi:g}), got {v!r}")
+            else:
+                out[name] = float(v)
+    for name, choices in _IDENTIFY_CHOICES.items():
+        if name in node:
+            if node[name] not in choices:
+                chk.add(f"identify.{name}", f"must be one of {', '.join(choices)}, got {node[name]!r}")
+            else:
+                out[name] = node[name]
+    if "forms" in node:
+        from fivid.friction.amplitude import AMPLITUDE_FORMS
+
+        forms = node["forms"]
+        if not isinstance(forms, list) or not forms or any(f not in AMPLITUDE_FORMS for f in forms):
+            chk.add("identify.forms", f"must be a list of amplitude forms from {', '.join(AMPLITUDE_FORMS)}, "
+                    f"got {forms!r}")
+        else:
+            out["forms"] = tuple(forms)
+    return out
+
+
 def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike | None = None) -> RunConfig:
     """Read and check a run configuration (every problem at once, with key paths).
 
@@ -282,15 +331,7 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
             band = (lo, hi)
     nperseg = chk.integer(analysis, "analysis.nperseg", "nperseg", 4096, 64, 2**22)
 
-    identify = chk.section(raw, "identify", {"band", "smoothing", "forms", "tolerance"})
-    identify = dict(identify)
-    if "band" in identify:
-        b = identify["band"]
-        if not isinstance(b, (list, tuple)) or len(b) != 2:
-            chk.add("identify.band", f"must be [f_lo, f_hi] with units, got {b!r}")
-        else:
-            q = [chk.quantity({"v": v}, f"identify.band[{i}]", "v", "Hz") for i, v in enumerate(b)]
-            identify["band"] = tuple(q) if None not in q else None
+    identify = _identify_options(chk, raw)
 
     modal = chk.section(raw, "modal", {"n_modes"})
     n_modes = chk.integer(modal, "modal.n_modes", "n_modes", 8, 1, 200)

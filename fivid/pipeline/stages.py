@@ -137,14 +137,14 @@ class Identify:
     def execute(self, ctx, tasks) -> None:
         from fivid.identify import identify_friction_law
         from fivid.io import read_run
-        from fivid.storage import write_json, write_netcdf
+        from fivid.storage import write_json
 
         task = tasks[0]
 
         def work():
             runs = [read_run(r["path"]) for _, r in sorted(ctx.data["runs"].items())]
             result = identify_friction_law(runs, **ctx.config.identify)
-            write_netcdf(result.to_dataset(), task.outputs["law"])
+            result.write(task.outputs["law"], overwrite=True)
             write_json(task.outputs["json"], result.to_json())
         _timed(ctx, task, work)
 

@@ -118,11 +118,12 @@ def _law_section(page: Page, inputs: dict) -> None:
             sel = [r for r in table_rows if abs(r["roughness_ra"] - ra) <= 0.01 * ra]
             if sel:
                 points.append({"label": label, "velocity": [r["sliding_velocity"] for r in sel],
-                               "amplitude": [r["amplitude"] for r in sel]})
+                               "amplitude": [r["amplitude"] for r in sel],
+                               "error": [_Z95 * r["stderr"] for r in sel]})
         page.figure(amplitude_figure(curves, points),
                     f"Amplitude A (RMS of μp in the valid band) against sliding velocity, per roughness: "
                     f"fitted {model.form} law (lines) with its pointwise 95 % interval (bands, from the "
-                    f"coefficient covariance) and the per-run estimates (circles); normal load {load:g} N.",
+                    f"coefficient covariance) and the per-run estimates (circles, ±1.96 standard errors); normal load {load:g} N.",
                     "amplitude against velocity")
     rows = [[n, float(c), float(s)] for n, c, s in zip(model.names, model.coefficients, model.stderr)]
     page.raw(table(["coefficient", "value", "standard error"], rows))
@@ -139,18 +140,16 @@ def _py(x):
 
 
 def _per_run_amplitudes(ds) -> list[dict]:
-    """Per-run (V, Ra, A) from the identify per-run table (dim ``run``), if the law file has one."""
-    if "run" not in ds.dims:
+    """Per-run (V, Ra, A ± stderr) of the runs the law was fitted on (identify's table, dim ``run``)."""
+    need = ("run_mu_rms", "run_sliding_velocity", "run_roughness_ra")
+    if "run" not in ds.dims or any(v not in ds for v in need):
         return []
-    names = {"amplitude": None, "sliding_velocity": None, "roughness_ra": None}
-    for key in names:
-        for cand in (key, f"run_{key}"):
-            if cand in ds and ds[cand].dims == ("run",):
-                names[key] = cand
-                break
-    if None in names.values():
-        return []
-    return [{k: float(ds[v].values[i]) for k, v in names.items()} for i in range(ds.sizes["run"])]
+    used = ds["run_used"].values.astype(bool) if "run_used" in ds else np.ones(ds.sizes["run"], bool)
+    err = ds["run_mu_rms_stderr"].values if "run_mu_rms_stderr" in ds else np.full(ds.sizes["run"], np.nan)
+    return [{"amplitude": float(ds["run_mu_rms"].values[i]), "stderr": float(err[i]),
+             "sliding_velocity": float(ds["run_sliding_velocity"].values[i]),
+             "roughness_ra": float(ds["run_roughness_ra"].values[i])}
+            for i in range(ds.sizes["run"]) if used[i]]
 
 
 def _condition_sections(page: Page, inputs: dict) -> tuple[list, list]:

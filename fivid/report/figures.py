@@ -43,7 +43,7 @@ def amplitude_figure(curves: list[dict], points: list[dict]) -> str:
     curves : list of dict
         ``label, velocity [m s-1], amplitude, lower, upper`` — the fitted law and its interval.
     points : list of dict
-        ``label, velocity [m s-1], amplitude`` — per-run estimates.
+        ``label, velocity [m s-1], amplitude`` and optional ``error`` (half-width) — per-run estimates.
     """
     fig, ax = _figure()
     for i, c in enumerate(curves):
@@ -53,8 +53,10 @@ def amplitude_figure(curves: list[dict], points: list[dict]) -> str:
         ax.fill_between(v, c["lower"], c["upper"], color=color, alpha=0.2, lw=0)
         for p in points:
             if p["label"] == c["label"]:
-                ax.plot(np.asarray(p["velocity"]) * 1e3, p["amplitude"], "o", color=color, ms=5,
-                        mfc="none", label=f"runs, {p['label']}")
+                err = p.get("error")
+                err = None if err is None or not np.all(np.isfinite(err)) else err
+                ax.errorbar(np.asarray(p["velocity"]) * 1e3, p["amplitude"], yerr=err, fmt="o", color=color, ms=5,
+                            mfc="none", capsize=3, label=f"runs, {p['label']}")
     ax.set_xlabel("sliding velocity [mm/s]")
     ax.set_ylabel("amplitude A = RMS of $\\mu_p$ [-]")
     ax.set_ylim(bottom=0)
