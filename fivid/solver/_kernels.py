@@ -427,8 +427,20 @@ def run_steps(
                     fr = x - i0
                     for k in range(ns):
                         mu_now[k] = max(0.0, (1.0 - fr) * mu_tab[i0, k] + fr * mu_tab[i0 + 1, k])
+                for q in range(cnodes.shape[0]):
+                    nd = cnodes[q]
+                    vold_c[q, 2] = v[nd]
+                    vold_c[q, 3] = v[nd + npd]
                 contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes,
                               pair_sign, seg, geo, lam, cstate, mu_now, gs_max_iter, gs_tol)
+                # the contact correction changed the mid-step velocity of the contact nodes: complete the
+                # internal-force and alpha-damping work with it (f and alpha m v_old times the velocity change)
+                for q in range(cnodes.shape[0]):
+                    nd = cnodes[q]
+                    dvx = v[nd] - vold_c[q, 2]
+                    dvy = v[nd + npd] - vold_c[q, 3]
+                    wint += 0.5 * (f[nd] * dvx + f[nd + npd] * dvy)
+                    dal += 0.5 * alpha * (mass[nd] * vold_c[q, 0] * dvx + mass[nd + npd] * vold_c[q, 1] * dvy)
                 for k in range(ns):
                     p = slave_pair[k]
                     if cstate[k] == 0:
