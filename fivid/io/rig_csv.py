@@ -131,6 +131,8 @@ def _parse_columns(buffer, head: RigHead, lines: _Lines) -> dict:
         table = pcsv.read_csv(pa.BufferReader(buffer.slice(head.data_offset)), read_options=read,
                               parse_options=parse, convert_options=convert)
     except pa.ArrowInvalid as exc:
+        if "Empty CSV file" in str(exc):
+            raise SchemaError("no data rows after the header", file=head.path, line=head.header_line) from None
         raise _locate_parse_error(buffer, head, names, include, lines, str(exc)) from None
     return {spec.variable: table.column(names[i]) for i, spec in head.columns}
 

@@ -176,11 +176,6 @@ def _file_metadata(path: Path, profile: RigProfile, lines: list[tuple[int, str]]
         for number, text in lines:
             if not text.strip():
                 continue
-            if not text.startswith(profile.comment):
-                raise SchemaError(
-                    f"line {text[:40]!r} is neither a '# key: value' metadata line nor the column header",
-                    file=path, line=number,
-                )
             m = _RIG_META.match(text[len(profile.comment):])
             if m is None:
                 continue  # a comment
