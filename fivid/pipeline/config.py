@@ -228,19 +228,22 @@ _IDENTIFY_CHOICES = {"shape_method": ("smoothed", "rolloff"), "weighting": ("non
 
 def _identify_options(chk: _Checker, raw: dict) -> dict:
     """The ``identify`` section as keyword arguments of :func:`fivid.identify.identify_friction_law` (SI)."""
-    node = chk.section(raw, "identify", {"band", "nperseg", "tolerance", "min_normal_force", "mains_frequency",
+    node = chk.section(raw, "identify", {"band", "tare", "nperseg", "tolerance", "min_normal_force", "mains_frequency",
                                          "shape_method", "smoothing_octaves", "forms", "weighting", "injection",
                                          "confidence"})
     out: dict = {}
-    for name in ("band",):
+    for name, units, example in (("band", "Hz", "[100 Hz, 5 kHz]"), ("tare", "s", "[0 s, 15 ms]")):
         if name in node:
             b = node[name]
             if not isinstance(b, (list, tuple)) or len(b) != 2:
-                chk.add(f"identify.{name}", f"must be [f_lo, f_hi] with units, e.g. [100 Hz, 5 kHz], got {b!r}")
+                chk.add(f"identify.{name}", f"must be a pair with units, e.g. {example}, got {b!r}")
                 continue
-            q = [chk.quantity({"v": v}, f"identify.{name}[{i}]", "v", "Hz") for i, v in enumerate(b)]
+            q = [chk.quantity({"v": v}, f"identify.{name}[{i}]", "v", units, positive=False) for i, v in enumerate(b)]
             if None not in q:
-                out[name] = (q[0], q[1])
+                if not 0 <= q[0] < q[1]:
+                    chk.add(f"identify.{name}", f"must be increasing and non-negative, got {b!r}")
+                else:
+                    out[name] = (q[0], q[1])
     if "nperseg" in node:
         out["nperseg"] = chk.integer(node, "identify.nperseg", "nperseg", 4096, 64, 2**22)
     for name, units in (("min_normal_force", "N"), ("mains_frequency", "Hz")):

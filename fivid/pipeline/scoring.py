@@ -22,9 +22,16 @@ HEADLINE = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correla
 
 
 def steady_part(ds, *, label: str):
-    """The steady-sliding part of a run (the whole record when it has no encoder signal)."""
+    """The steady-sliding part of a run.
+
+    A simulation says where its transient (preload, settling, base ramp) ends (attribute
+    ``transient_end`` [s]); a measured run's window is found from its encoder signal
+    (:func:`fivid.signal.steady_sliding_window`); without either the whole record is used.
+    """
     from fivid.signal import steady_sliding_window
 
+    if "transient_end" in ds.attrs:
+        return ds.sel(time=slice(float(ds.attrs["transient_end"]), None))
     try:
         t0, t1 = steady_sliding_window(ds)
     except DataQualityError as exc:

@@ -191,7 +191,7 @@ class Simulate:
             for seed in cfg.seeds:
                 params = {"sliding_velocity": c["sliding_velocity"], "normal_load": c["normal_load"],
                           "roughness_ra": c["roughness_ra"], "seed": seed, "duration": cfg.duration,
-                          "sample_rate": cfg.sample_rate}
+                          "sample_rate": cfg.sample_rate, "run_id": f"{cond}-seed{seed}"}
                 tasks.append(Task("simulate", f"{cond}-seed{seed}", params, {"model": model_sha, "law": law_sha},
                                   {"sim": str(ctx.out / "sims" / f"{cond}-seed{seed}.nc")}))
         return tasks

@@ -100,7 +100,7 @@ def simulate_condition(model, law, params: dict):
     """One simulation (runs on a worker): ``fivid.solver.simulate(model, law=law, **params)``."""
     from fivid.solver import simulate
 
-    return simulate(model, law=law, **params)
+    return simulate(model, law=law, progress=False, **params)
 
 
 def run_simulations(ctx, tasks) -> None:
