@@ -279,6 +279,7 @@ def ctx_to_report_inputs(ctx, checks) -> dict:
     cfg = ctx.config
     return {
         "title": f"fivid validation report — {ctx.plan.name}",
+        "synthetic_note": cfg.raw.get("description"),
         "provenance": {
             "pipeline": {"path": str(ctx.plan.path), "sha256": ctx.plan.recipe_sha256, "stages": list(ctx.plan.stages)},
             "config": {"path": str(cfg.path), "sha256": cfg.sha256, "content": cfg.raw},

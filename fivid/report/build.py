@@ -152,12 +152,12 @@ def _per_run_amplitudes(ds) -> list[dict]:
             for i in range(ds.sizes["run"]) if used[i]]
 
 
-def _condition_sections(page: Page, inputs: dict) -> tuple[list, list]:
+def _condition_sections(page: Page, inputs: dict) -> tuple:
     import xarray as xr
 
     page.heading("Measured against simulated, per test condition")
     band = inputs["band"]
-    all_f, all_psd = None, []
+    all_f, all_psd, units = None, [], ""
     checks = inputs.get("checks", [])
     for cond, c in sorted(inputs.get("conditions", {}).items()):
         page.heading(f"{c['sliding_velocity'] * 1e3:g} mm/s, {c['normal_load']:g} N, Ra {c['roughness_ra'] * 1e6:g} µm",
@@ -192,13 +192,13 @@ def _condition_sections(page: Page, inputs: dict) -> tuple[list, list]:
         if mine:
             page.raw(table(["score", "value (mean)", "threshold", "result"],
                            [[k["score"], k["value"], k["threshold"], bool(k["pass"])] for k in mine]))
-    return all_f, all_psd
+    return all_f, all_psd, units
 
 
 _SCORE_COLUMNS = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
 
 
-def _modal_section(page: Page, inputs: dict, frequency, psds) -> None:
+def _modal_section(page: Page, inputs: dict, frequency, psds, units: str) -> None:
     import xarray as xr
 
     page.heading("Modal frequencies against measured peaks")
@@ -212,7 +212,7 @@ def _modal_section(page: Page, inputs: dict, frequency, psds) -> None:
     mean_psd = np.mean(np.asarray(psds), axis=0)
     peaks = measured_peaks(frequency, mean_psd, band)
     in_band = modal_f[(modal_f >= band[0]) & (modal_f <= band[1])]
-    page.figure(modal_figure(frequency, mean_psd, in_band, peaks, band, ""),
+    page.figure(modal_figure(frequency, mean_psd, in_band, peaks, band, units),
                 "Mean measured acceleration PSD with the model's modal frequencies (dashed) and the measured "
                 "peaks (triangles, ≥ 6 dB prominence).", "modes against peaks")
     rows = []
@@ -255,7 +255,8 @@ def render_report(path: str | os.PathLike, inputs: dict) -> Path:
         ``title``; ``provenance`` (pipeline/config/model path+sha256, config content, input sha256s);
         ``runs`` and ``conditions`` (as built by the pipeline's ingest stage); ``law_path``;
         ``modal_path``; ``psd_files`` and ``score_files`` per condition; ``band`` [Hz];
-        ``checks`` (threshold checks); optional ``synthetic_note``.
+        ``checks`` (threshold checks); optional ``synthetic_note`` (the run's description, shown
+        highlighted: say there when the inputs are synthetic).
     """
     page = Page(inputs.get("title", "fivid validation report"))
     checks = inputs.get("checks", [])
@@ -269,9 +270,9 @@ def render_report(path: str | os.PathLike, inputs: dict) -> Path:
         page.raw(table(["condition", "score", "value", "threshold", "result"],
                        [[c["condition"], c["score"], c["value"], c["threshold"], bool(c["pass"])] for c in checks]))
     if inputs.get("synthetic_note"):
-        page.raw(f'<p class="synthetic">{inputs["synthetic_note"]}</p>')
+        page.paragraph(str(inputs["synthetic_note"]), cls="synthetic")
     _law_section(page, inputs)
-    f, psds = _condition_sections(page, inputs)
-    _modal_section(page, inputs, f, psds)
+    f, psds, units = _condition_sections(page, inputs)
+    _modal_section(page, inputs, f, psds, units)
     _provenance(page, inputs)
     return write_text(path, page.render())

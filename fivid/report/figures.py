@@ -65,6 +65,16 @@ def amplitude_figure(curves: list[dict], points: list[dict]) -> str:
     return figure_data_uri(fig)
 
 
+def _finish_psd(fig, ax, f, band, units: str) -> str:
+    """Common axes of the PSD figures: the band (with margins), labels, grid, legend; the data URI."""
+    ax.set_xlim(max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel(f"acceleration PSD [{units}]")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return figure_data_uri(fig)
+
+
 def psd_overlay_figure(frequency, measured: list[dict], simulated: list[dict], band, units: str) -> str:
     """Measured and simulated acceleration PSDs with their χ² confidence bands.
 
@@ -80,12 +90,7 @@ def psd_overlay_figure(frequency, measured: list[dict], simulated: list[dict], b
         ax.fill_between(f, s["lower"], s["upper"], color=color, alpha=0.2, lw=0)
         ax.semilogy(f, s["psd"], color=color, lw=1.0, label=s["label"])
     ax.axvspan(band[0], band[1], color="C2", alpha=0.05)
-    ax.set_xlim(max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel(f"acceleration PSD [{units}]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return figure_data_uri(fig)
+    return _finish_psd(fig, ax, f, band, units)
 
 
 def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, units: str) -> str:
@@ -98,9 +103,4 @@ def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, unit
     if len(peak_frequencies):
         idx = np.searchsorted(f, peak_frequencies).clip(0, f.size - 1)
         ax.plot(f[idx], np.asarray(psd)[idx], "v", color="C3", ms=7, label="measured peaks")
-    ax.set_xlim(max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel(f"acceleration PSD [{units}]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return figure_data_uri(fig)
+    return _finish_psd(fig, ax, f, band, units)
