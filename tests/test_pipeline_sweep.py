@@ -37,3 +37,18 @@ def test_unreachable_scheduler_is_a_clear_input_error():
 
     with pytest.raises(FividError, match="cannot reach the dask scheduler"):
         list(map_tasks(len, {"a": ("x",)}, scheduler="tcp://127.0.0.1:9", connect_timeout=1.0))
+
+
+def test_sweep_on_an_existing_scheduler_by_address():
+    """``--scheduler tcp://...``: the tasks go to a cluster started elsewhere (here: a loopback LocalCluster)."""
+    from distributed import LocalCluster
+
+    from fivid.pipeline.sweep import map_tasks
+
+    law = _law()
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        out = list(map_tasks(law.sample, {"s3": (0.02, 51200.0, 0.01, 1e-6, 3)}, scheduler=cluster.scheduler_address))
+    (name, mu_p, _, pid), = out
+    assert name == "s3" and pid != os.getpid()  # computed in the cluster's worker process
+    np.testing.assert_array_equal(mu_p, law.sample(0.02, 51200.0, 0.01, 1e-6, 3))
