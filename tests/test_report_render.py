@@ -2,6 +2,7 @@
 
 import base64
 import json
+import os
 import re
 import shutil
 
@@ -152,9 +153,16 @@ def browser_check(html_path, user_data_dir) -> dict:
     Returns the page's JavaScript errors, console errors, failed requests and, per <img>, whether it
     decoded (complete and naturalWidth > 0).
     """
-    sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright (the 'test' extra)")
+    missing = None
+    try:
+        from playwright import sync_api
+    except ImportError:
+        missing = "playwright is not installed (pip install -e '.[test]')"
     if shutil.which(CHROMIUM) is None:
-        pytest.skip(f"{CHROMIUM} is not installed (apt-get install -y chromium)")
+        missing = f"{CHROMIUM} is not installed (apt-get install -y chromium)"
+    if missing:
+        # In CI (CI=true) the browser test must run: a missing browser is a failure, not a skip.
+        (pytest.fail if os.environ.get("CI") else pytest.skip)(missing)
     errors, console, failed = [], [], []
     with sync_api.sync_playwright() as pw:
         ctx = pw.chromium.launch_persistent_context(
