@@ -70,9 +70,11 @@ class Ingest:
     def plan(self, ctx) -> list[Task]:
         cfg = ctx.config
         profile = None
-        if cfg.rig_profile is not None:
-            p = Path(cfg.rig_profile)
-            profile = {"profile": cfg.rig_profile, "sha256": file_sha256(p) if p.is_file() else None}
+        if cfg.rig_profile is not None:  # keyed by the profile file's content, found by name or path
+            from fivid.io import load_rig_profile
+
+            found = load_rig_profile(cfg.rig_profile).path
+            profile = {"profile": cfg.rig_profile, "sha256": file_sha256(found) if found else None}
         tasks, shas = [], {}
         for path in cfg.input_files:
             sha = file_sha256(path)
