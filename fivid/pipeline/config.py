@@ -219,7 +219,7 @@ def load_recipe(path: str | os.PathLike) -> tuple[str, tuple[str, ...], str, dic
 
 def _resolve(base: Path, value) -> Path:
     p = Path(os.path.expanduser(str(value)))
-    return p if p.is_absolute() else (base / p)
+    return Path(os.path.normpath(p if p.is_absolute() else (base / p)))
 
 
 _IDENTIFY_CHOICES = {"shape_method": ("smoothed", "rolloff"), "weighting": ("none", "estimator"),
