@@ -161,7 +161,7 @@ class FrictionIdentification:
             ds["form_n_params"] = ("form", np.array([f.n_params for f in self.form_fits], np.int32))
             ds["form_fitted"] = ("form", np.array([f.fitted for f in self.form_fits], np.int8))
             ds["form_reason"] = ("form", np.array([f.reason for f in self.form_fits], dtype=object))
-        return xr.Dataset(ds)
+        return ds
 
     def write(self, path, *, overwrite: bool = False):
         """Write the law file atomically (:func:`fivid.friction.write_law`); returns the path."""
