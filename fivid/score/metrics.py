@@ -18,6 +18,7 @@ __all__ = [
     "shape_correlation",
     "spectral_peaks",
     "match_peaks",
+    "refine_peak",
 ]
 
 
@@ -97,3 +98,39 @@ def match_peaks(frequency: np.ndarray, peaks_m: np.ndarray, peaks_s: np.ndarray,
                 best = free.pop(k)
         pairs.append((int(i), best))
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+
+
+def refine_peak(frequency: np.ndarray, log_psd: np.ndarray, index: int, sigma_db: float,
+                inflation: float = 1.0, drop_db: float = 3.0) -> tuple[float, float]:
+    """Peak frequency [Hz] refined by a least-squares parabola through the peak's top, and its standard error.
+
+    The top is the contiguous run of bins within ``max(drop_db, 4 sigma_db)`` of the maximum (at
+    least 2 bins each side). With independent errors of ``sigma_db`` on the log-PSD the fit's
+    covariance is ``σ² (XᵀX)⁻¹``, times ``inflation`` for correlated bins; the vertex
+    ``f0 = f_k − b / (2c)`` has its variance by the delta method. Returns ``(f_k, nan)`` when the top
+    is not concave (a plateau or an edge).
+    """
+    f = np.asarray(frequency, dtype=np.float64)
+    lp = np.asarray(log_psd, dtype=np.float64)
+    floor = lp[index] - max(drop_db, 4.0 * sigma_db)
+    lo, hi = index, index
+    while lo > 0 and (lp[lo - 1] >= floor or index - lo < 2):
+        lo -= 1
+    while hi < lp.size - 1 and (lp[hi + 1] >= floor or hi - index < 2):
+        hi += 1
+    if hi - lo < 2:
+        return float(f[index]), float("nan")
+    df = f[1] - f[0]
+    x = (f[lo:hi + 1] - f[index]) / df
+    design = np.stack([np.ones_like(x), x, x**2], axis=1)
+    coef, *_ = np.linalg.lstsq(design, lp[lo:hi + 1], rcond=None)
+    _, b, c = coef
+    if not c < 0:
+        return float(f[index]), float("nan")
+    vertex = -b / (2.0 * c)
+    if abs(vertex) > (hi - lo) / 2.0:
+        return float(f[index]), float("nan")
+    cov = sigma_db**2 * inflation * np.linalg.inv(design.T @ design)
+    grad = np.array([0.0, -1.0 / (2.0 * c), b / (2.0 * c * c)])
+    return float(f[index] + vertex * df), float(np.sqrt(grad @ cov @ grad) * df)
