@@ -171,7 +171,8 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     of ``f_k`` (the main lobe; 2.5 bins away the leakage is below −31 dB). For each harmonic in the
     band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the median of the
     bins 5 to 15 bins away on either side. A line is declared when the largest of them exceeds the
-    floor by more than a broadband bin would with probability ``p_false`` over the whole band:
+    floor by more than a broadband bin would with probability ``p_false`` over the whole band
+    (near 0 Hz the floor window is clipped to the bins above 0 Hz):
     the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
     has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``).
@@ -191,23 +192,25 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
         return mask
     k_lo = max(1, int(np.ceil((band[0] - 2 * df) / mains_frequency)))
     k_hi = int(np.floor((band[1] + 2 * df) / mains_frequency))
-    tests = []
-    for k in range(k_lo, k_hi + 1):
-        near = np.nonzero(np.abs(f - k * mains_frequency) <= 2 * df)[0]
-        near = near[near >= 1]
-        if near.size == 0 or near[-1] + 16 > f.size:
-            continue
-        lo, hi = near[0], near[-1]
-        around = np.r_[p[max(lo - 15, 1):max(lo - 4, 1)], p[hi + 5:hi + 16]]
-        if around.size >= 5:
-            tests.append((near, around))
-    n_tested = max(1, sum(near.size for near, _ in tests))
+    fk = np.arange(k_lo, k_hi + 1) * mains_frequency
+    centre = np.rint(fk / df).astype(int)
+    offsets = np.arange(-3, 4)
+    near = centre[:, None] + offsets[None, :]  # candidate bins; kept where |f - f_k| <= 2 df
+    floor_off = np.r_[np.arange(-17, -6), np.arange(7, 18)]  # 5 to 15 bins beyond the +-2-bin lobe
+    # near 0 Hz and Nyquist the floor window is clipped to the spectrum (repeating its end bins)
+    around = np.clip(centre[:, None] + floor_off[None, :], 1, f.size - 1)
+    ok = (near.min(axis=1) >= 1) & (near.max(axis=1) < f.size)
+    if not ok.any():
+        return mask
+    fk, near, around = fk[ok], near[ok], around[ok]
+    in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
+    n_tested = int(in_lobe.sum())
     chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
-    for near, around in tests:
-        floor = np.median(around)
-        threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.size))
-        if floor > 0 and p[near].max() > threshold * floor:
-            mask[near] = True
+    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
+    floor = np.median(p[around], axis=1)
+    peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
+    for i in np.nonzero((floor > 0) & (peak > threshold * floor))[0]:
+        mask[near[i][in_lobe[i]]] = True
     return mask
 
 
