@@ -5,12 +5,17 @@
 - :func:`identify_damping` — modal damping ratios from PSD/FRF peaks and a Rayleigh (α, β) fit.
 """
 
+from fivid.identify.damping import DampingIdentification, RayleighFit, fit_rayleigh, identify_damping
 from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, choose_form, fit_amplitude_forms
 from fivid.identify.friction import FrictionIdentification, identify_friction_law
 from fivid.identify.runs import RunAnalysis, RunSettings, analyse_run
 
 __all__ = [
     "identify_friction_law",
+    "identify_damping",
+    "DampingIdentification",
+    "RayleighFit",
+    "fit_rayleigh",
     "FrictionIdentification",
     "fit_amplitude_forms",
     "choose_form",
