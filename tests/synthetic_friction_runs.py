@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from fivid.friction import AmplitudeModel, PerturbedCoulombLaw
+from fivid.friction import AmplitudeModel, PerturbedCoulombLaw, synthesise_perturbation
 from fivid.schema import apply_cf_attrs, new_history, validate_run
 
 __all__ = ["true_law", "synthetic_run", "run_grid", "band_fraction", "band_amplitude", "FS", "ANALYSIS_BAND", "MU0"]
@@ -71,7 +71,7 @@ def _smoothstep(x):
 
 
 def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", duration=3.2, fs=FS,
-                  noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02):
+                  noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02, acceleration_psd=None):
     """A SYNTHETIC RunDataset from ``law`` (see the module docstring).
 
     Parameters
@@ -86,6 +86,8 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
         Offsets of the friction and normal force sensors [N].
     hum : sequence of float
         Amplitudes [N] of the mains hum at the 1st, 3rd, 5th... harmonics of ``mains`` [Hz].
+    acceleration_psd : callable, optional
+        One-sided PSD [m2 s-4 Hz-1] of the acceleration (default: white, 0.5 m s-2 RMS).
     """
     rng = np.random.default_rng(seed + 1_000_003)
     n = int(round(duration * fs))
@@ -105,7 +107,8 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
     v_m = v + 0.01 * velocity * rng.standard_normal(n)
     ds = xr.Dataset(
         {
-            "acceleration": ("time", 0.5 * rng.standard_normal(n)),
+            "acceleration": ("time", 0.5 * rng.standard_normal(n) if acceleration_psd is None else
+                             synthesise_perturbation(acceleration_psd, duration, fs, seed=seed + 7)[0]),
             "friction_force": ("time", ft_m),
             "normal_force": ("time", fn_m),
             "velocity": ("time", v_m),

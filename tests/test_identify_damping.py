@@ -52,8 +52,10 @@ def test_curve_fit_is_exact_on_an_exact_accelerance():
     frf = xr.DataArray(h, dims="frequency", coords={"frequency": f}, attrs={"units": "m s-2 N-1"})
     res = identify_damping(frf, band=(300.0, 4000.0), n_peaks=2)
     got = np.array([p.zeta_fit for p in res.peaks])
-    # the two-mode sum departs from a single mode by the other mode's tail (~ (ζ)(f1/f2)^2 relative)
-    np.testing.assert_allclose(got, ZETA[:2], rtol=0.02)
+    # the two-mode sum departs from a single mode by the other mode's tail: at f1 the second mode's
+    # accelerance is (f1/f2)^2/(1 - (f1/f2)^2) ≈ 0.15 against 1/(2ζ1) ≈ 90 of the first, a 0.2 % relative
+    # perturbation of the peak (measured: 0.2-0.3 % in ζ); 1 % bounds it with margin
+    np.testing.assert_allclose(got, ZETA[:2], rtol=0.01)
     np.testing.assert_allclose([p.frequency_fit for p in res.peaks], FN[:2], rtol=1e-3)
 
 

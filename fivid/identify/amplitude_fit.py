@@ -260,6 +260,8 @@ def fit_amplitude_forms(velocity, roughness, load, amplitude, stderr=None, *, fo
     if unknown:
         raise FividError(f"unknown amplitude form(s) {', '.join(unknown)}; choose from {', '.join(AMPLITUDE_FORMS)}")
     v, r, fn, a = (np.asarray(x, float) for x in (velocity, roughness, load, amplitude))
+    if stderr is None and weighting == "estimator":
+        raise FividError("weighting='estimator' needs the per-run standard errors: pass stderr= or weighting='none'")
     se = np.full(a.shape, np.nan) if stderr is None else np.asarray(stderr, float)
     return [_fit_one(form, v, r, fn, a, se, weighting, confidence) for form in forms]
 
