@@ -352,7 +352,7 @@ def run_steps(
 
     Layout: dof vectors have length ``2*npd`` (x part, y part); nodes are given by x-index; springs and
     constraints by flat dof index. Every ``n_sub`` steps one output row is written: ``rec[r]`` (see
-    ``R_*``), sensor velocities ``rec_sens[r, s]`` at the interval end (the driver differences them into
+    ``R_*``), sensor velocity and displacement ``rec_sens[r, s, :]`` at the interval end (the driver differences them into
     interval-averaged accelerations), per-pair interval averages ``rec_contact[r, p] = (normal force,
     tangential force, stick, slip, open fractions)``. Returns ``(status, rows_written)``; on NaN or runaway
     energy ``diag = (step, x-index)`` of the node with the largest speed.
@@ -493,7 +493,8 @@ def run_steps(
         rec[r, R_WCT] = acc[W_CT]
         for s in range(sens_node.shape[0]):
             nd = sens_node[s]
-            rec_sens[r, s] = v[nd] * sens_dir[s, 0] + v[nd + npd] * sens_dir[s, 1]
+            rec_sens[r, s, 0] = v[nd] * sens_dir[s, 0] + v[nd + npd] * sens_dir[s, 1]
+            rec_sens[r, s, 1] = u[nd] * sens_dir[s, 0] + u[nd + npd] * sens_dir[s, 1]
         for p in range(n_pairs):
             cnt = rec_contact[r, p, 2] + rec_contact[r, p, 3] + rec_contact[r, p, 4]
             rec_contact[r, p, 0] /= n_sub

@@ -60,7 +60,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     vold_c = np.zeros((ka.cnodes.size, 4))
     diag = np.zeros(2, dtype=np.int64)
     rec = np.full((n_int, K.N_REC), np.nan)
-    sens_v = np.full((n_int, ka.sens_node.size), np.nan)
+    sens_v = np.full((n_int, ka.sens_node.size, 2), np.nan)
     contact = np.full((n_int, n_pairs, 5), np.nan)
     sens_v0 = ka.sens_dir[:, 0] * v[ka.sens_node] + ka.sens_dir[:, 1] * v[ka.sens_node + st.npd]
     ke0 = float(0.5 * np.sum(ka.mass * v * v))
