@@ -218,7 +218,10 @@ def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
     L = math.sqrt(ex * ex + ey * ey)
     tx = ex / L
     ty = ey / L
-    inside = 0.0 <= xi <= 1.0
+    # a slave node at the very end of the master edge (edges meeting corner to corner) must not flicker
+    # in and out of contact through round-off: accept 1e-6 of a segment beyond the ends, then clamp
+    inside = -1e-6 <= xi <= 1.0 + 1e-6
+    xi = min(max(xi, 0.0), 1.0)
     return s, xi, sign * ty, -sign * tx, tx, ty, inside
 
 
