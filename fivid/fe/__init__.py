@@ -1,0 +1,46 @@
+"""Finite-element model of a rig: config -> structured Q4 blocks, assembly, modal analysis, CEA.
+
+Heavy dependencies (scipy.sparse, xarray) are imported inside the functions that use them.
+"""
+
+from fivid.fe.assembly import (
+    consistent_mass,
+    damping_matrix,
+    element_mass_q4,
+    element_stiffness_q4,
+    lumped_mass,
+    rayleigh_from_damping_ratios,
+    stiffness_matrix,
+)
+from fivid.fe.model import (
+    Block,
+    ContactPair,
+    Material,
+    Model,
+    Motion,
+    PointMass,
+    Reaction,
+    Sensor,
+    Spring,
+    load_model,
+)
+
+__all__ = [
+    "Block",
+    "ContactPair",
+    "Material",
+    "Model",
+    "Motion",
+    "PointMass",
+    "Reaction",
+    "Sensor",
+    "Spring",
+    "load_model",
+    "element_stiffness_q4",
+    "element_mass_q4",
+    "stiffness_matrix",
+    "lumped_mass",
+    "consistent_mass",
+    "damping_matrix",
+    "rayleigh_from_damping_ratios",
+]

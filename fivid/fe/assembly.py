@@ -1,0 +1,308 @@
+"""Q4 element matrices (2x2 Gauss) and global sparse assembly: stiffness, lumped/consistent mass, Rayleigh damping.
+
+Element functions are vectorised: ``xy`` may be one element ``(4, 2)`` or a stack ``(..., 4, 2)``
+(e.g. ``Block.element_corners()``, shape ``(ny, nx, 4, 2)``), and they return ``(..., 8, 8)``.
+Element dofs are ordered ``x0, y0, x1, y1, x2, y2, x3, y3`` for nodes counter-clockwise from the
+element's lower-left node, i.e. natural coordinates ``(-1,-1), (1,-1), (1,1), (-1,1)``.
+
+The explicit solver builds its per-block stencils from :func:`element_stiffness_q4` (and
+:func:`block_element_stiffness`); the sparse matrices here serve modal analysis, CEA and reference checks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "GAUSS_POINTS_2X2",
+    "shape_functions_q4",
+    "shape_gradients_q4",
+    "strain_displacement_q4",
+    "element_stiffness_q4",
+    "element_mass_q4",
+    "block_element_stiffness",
+    "block_element_mass",
+    "stiffness_matrix",
+    "consistent_mass",
+    "lumped_mass",
+    "damping_matrix",
+    "rayleigh_from_damping_ratios",
+]
+
+_G = 1.0 / np.sqrt(3.0)
+#: 2x2 Gauss points (xi, eta) in [-1, 1]^2, weights all 1.
+GAUSS_POINTS_2X2 = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])
+_XI_NODES = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+
+
+def shape_functions_q4(xi: float, eta: float) -> np.ndarray:
+    """Bilinear shape functions ``N_a = (1 + xi_a xi)(1 + eta_a eta)/4`` at ``(xi, eta)``, shape (4,)."""
+    return 0.25 * (1.0 + _XI_NODES[:, 0] * xi) * (1.0 + _XI_NODES[:, 1] * eta)
+
+
+def _natural_gradients(xi: float, eta: float) -> np.ndarray:
+    """dN_a/dxi, dN_a/deta, shape (4, 2)."""
+    return 0.25 * np.stack(
+        [_XI_NODES[:, 0] * (1.0 + _XI_NODES[:, 1] * eta), _XI_NODES[:, 1] * (1.0 + _XI_NODES[:, 0] * xi)], axis=-1
+    )
+
+
+def shape_gradients_q4(xy: np.ndarray, xi: float, eta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Cartesian shape-function gradients and Jacobian determinant at ``(xi, eta)``.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (..., 4, 2)
+        Element node coordinates [m].
+
+    Returns
+    -------
+    dN : ndarray, shape (..., 4, 2)
+        dN_a/dx, dN_a/dy [m-1].
+    detJ : ndarray, shape (...)
+        Jacobian determinant [m2] (positive for counter-clockwise elements).
+    """
+    dn = _natural_gradients(xi, eta)  # (4, 2)
+    J = np.einsum("ak,...ai->...ki", dn, xy)  # J[k, i] = d x_i / d xi_k
+    det = J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
+    inv = np.stack(
+        [np.stack([J[..., 1, 1], -J[..., 0, 1]], -1), np.stack([-J[..., 1, 0], J[..., 0, 0]], -1)], -2
+    ) / det[..., None, None]  # inv[i, k] = d xi_k / d x_i
+    dN = np.einsum("ak,...ik->...ai", dn, inv)
+    return dN, det
+
+
+def strain_displacement_q4(dN: np.ndarray) -> np.ndarray:
+    """The 3x8 matrix B with ``(eps_xx, eps_yy, gamma_xy) = B u_e``, from gradients of shape (..., 4, 2)."""
+    shape = dN.shape[:-2]
+    B = np.zeros(shape + (3, 8))
+    B[..., 0, 0::2] = dN[..., 0]
+    B[..., 1, 1::2] = dN[..., 1]
+    B[..., 2, 0::2] = dN[..., 1]
+    B[..., 2, 1::2] = dN[..., 0]
+    return B
+
+
+def _elasticity(E: float, nu: float, plane: str) -> np.ndarray:
+    from fivid.fe.model import Material
+
+    return Material(E, nu, 1.0).elasticity_matrix(plane)
+
+
+def element_stiffness_q4(xy: np.ndarray, E: float, nu: float, thickness: float, plane: str) -> np.ndarray:
+    """Q4 element stiffness by 2x2 Gauss integration (full integration).
+
+    ``K_e = t * sum_g B_g^T D B_g det J_g`` [N m-1].
+
+    Parameters
+    ----------
+    xy : ndarray, shape (..., 4, 2)
+        Node coordinates [m], counter-clockwise.
+    E : float
+        Young's modulus [Pa].
+    nu : float
+        Poisson's ratio [-].
+    thickness : float
+        Out-of-plane thickness [m].
+    plane : {"stress", "strain"}
+
+    Returns
+    -------
+    ndarray, shape (..., 8, 8)
+        Symmetric positive semi-definite with 3 rigid-body zero modes [N m-1].
+    """
+    xy = np.asarray(xy, dtype=float)
+    D = _elasticity(E, nu, plane)
+    K = np.zeros(xy.shape[:-2] + (8, 8))
+    for xi, eta in GAUSS_POINTS_2X2:
+        dN, det = shape_gradients_q4(xy, xi, eta)
+        B = strain_displacement_q4(dN)
+        K += np.einsum("...ki,kl,...lj->...ij", B, D, B) * det[..., None, None]
+    return thickness * K
+
+
+def element_mass_q4(xy: np.ndarray, rho: float, thickness: float, *, lumped: bool = False) -> np.ndarray:
+    """Q4 element mass, consistent (2x2 Gauss, exact for parallelograms) or lumped by row sums.
+
+    ``M_e = rho t sum_g N_g^T N_g det J_g`` [kg]. Row-sum lumping keeps the element mass exactly and
+    gives positive masses for any convex quadrilateral.
+
+    Parameters
+    ----------
+    xy : ndarray, shape (..., 4, 2)
+        Node coordinates [m].
+    rho : float
+        Density [kg m-3].
+    thickness : float
+        [m].
+    lumped : bool
+        Return the row-sum lumped (diagonal) matrix.
+
+    Returns
+    -------
+    ndarray, shape (..., 8, 8) [kg]
+    """
+    xy = np.asarray(xy, dtype=float)
+    m = np.zeros(xy.shape[:-2] + (4, 4))
+    for xi, eta in GAUSS_POINTS_2X2:
+        N = shape_functions_q4(xi, eta)
+        _, det = shape_gradients_q4(xy, xi, eta)
+        m += np.outer(N, N) * det[..., None, None]
+    m *= rho * thickness
+    if lumped:
+        m = np.eye(4) * m.sum(axis=-1)[..., None, :]
+    M = np.zeros(xy.shape[:-2] + (8, 8))
+    M[..., 0::2, 0::2] = m
+    M[..., 1::2, 1::2] = m
+    return M
+
+
+def block_element_stiffness(block) -> np.ndarray:
+    """Element stiffness of every element of a block, shape (ny, nx, 8, 8) [N m-1]."""
+    mat = block.material
+    return element_stiffness_q4(block.element_corners(), mat.E, mat.nu, block.thickness, block.plane)
+
+
+def block_element_mass(block, *, lumped: bool = False) -> np.ndarray:
+    """Element mass of every element of a block, shape (ny, nx, 8, 8) [kg]."""
+    return element_mass_q4(block.element_corners(), block.material.rho, block.thickness, lumped=lumped)
+
+
+def _assemble(model, element_matrices) -> "scipy.sparse.csr_matrix":  # noqa: F821
+    import scipy.sparse as sp
+
+    rows, cols, vals = [], [], []
+    for block in model.blocks:
+        ke = element_matrices(block).reshape(-1, 8, 8)
+        dofs = block.element_dofs().reshape(-1, 8)
+        rows.append(np.repeat(dofs, 8, axis=1).ravel())
+        cols.append(np.tile(dofs, (1, 8)).ravel())
+        vals.append(ke.ravel())
+    n = model.n_dofs
+    return sp.coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    ).tocsr()
+
+
+def _springs_coo(model, attribute: str):
+    rows, cols, vals = [], [], []
+    for s in model.springs:
+        k = float(getattr(s, attribute))
+        if k == 0.0:
+            continue
+        a = 2 * s.node_a + s.component
+        rows.append(a), cols.append(a), vals.append(k)
+        if s.node_b >= 0:
+            b = 2 * s.node_b + s.component
+            rows += [b, a, b]
+            cols += [b, b, a]
+            vals += [k, -k, -k]
+    return rows, cols, vals
+
+
+def _discrete_matrix(model, attribute: str):
+    import scipy.sparse as sp
+
+    rows, cols, vals = _springs_coo(model, attribute)
+    n = model.n_dofs
+    return sp.coo_matrix((vals, (rows, cols)), shape=(n, n)).tocsr()
+
+
+def stiffness_matrix(model, *, include_springs: bool = True):
+    """Global stiffness K [N m-1] (scipy.sparse CSR, ``n_dofs x n_dofs``), constraints not applied.
+
+    Parameters
+    ----------
+    model : Model
+    include_springs : bool
+        Add the discrete springs (node-node and node-ground).
+    """
+    K = _assemble(model, block_element_stiffness)
+    if include_springs and model.springs:
+        K = (K + _discrete_matrix(model, "stiffness")).tocsr()
+    return K
+
+
+def consistent_mass(model):
+    """Global consistent mass M [kg] (scipy.sparse CSR), point masses added on the diagonal."""
+    import scipy.sparse as sp
+
+    M = _assemble(model, block_element_mass)
+    pm = _point_mass_vector(model)
+    if pm.any():
+        M = (M + sp.diags(pm)).tocsr()
+    return M
+
+
+def _point_mass_vector(model) -> np.ndarray:
+    pm = np.zeros(model.n_dofs)
+    for p in model.point_masses:
+        pm[2 * p.node] += p.mass
+        pm[2 * p.node + 1] += p.mass
+    return pm
+
+
+def lumped_mass(model) -> np.ndarray:
+    """Row-sum lumped mass per dof [kg], shape (n_dofs,), point masses included."""
+    m = np.zeros(model.n_dofs)
+    for block in model.blocks:
+        me = block_element_mass(block, lumped=True).reshape(-1, 8, 8)
+        dofs = block.element_dofs().reshape(-1, 8)
+        np.add.at(m, dofs.ravel(), np.diagonal(me, axis1=1, axis2=2).ravel())
+    return m + _point_mass_vector(model)
+
+
+def damping_matrix(model, *, mass: str = "lumped", stiffness=None):
+    """Viscous damping C = alpha M + beta K + dashpots [N s m-1] (scipy.sparse CSR).
+
+    Parameters
+    ----------
+    model : Model
+    mass : {"lumped", "consistent"}
+        Which mass matrix the alpha term uses.
+    stiffness : sparse matrix, optional
+        K to reuse (assembled if not given).
+    """
+    import scipy.sparse as sp
+
+    if mass not in ("lumped", "consistent"):
+        raise ValueError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
+    M = sp.diags(lumped_mass(model)) if mass == "lumped" else consistent_mass(model)
+    K = stiffness_matrix(model) if stiffness is None else stiffness
+    C = model.rayleigh_alpha * M + model.rayleigh_beta * K
+    if model.springs:
+        C = C + _discrete_matrix(model, "damping")
+    return sp.csr_matrix(C)
+
+
+def rayleigh_from_damping_ratios(f1: float, zeta1: float, f2: float, zeta2: float) -> tuple[float, float]:
+    """Rayleigh coefficients giving modal damping ratios ``zeta1`` at ``f1`` and ``zeta2`` at ``f2``.
+
+    Solves ``zeta_i = alpha/(2 omega_i) + beta omega_i / 2`` with ``omega_i = 2 pi f_i``.
+
+    Parameters
+    ----------
+    f1, f2 : float
+        Frequencies [Hz], distinct and positive.
+    zeta1, zeta2 : float
+        Damping ratios [-].
+
+    Returns
+    -------
+    alpha : float
+        [s-1]
+    beta : float
+        [s]
+
+    Examples
+    --------
+    >>> a, b = rayleigh_from_damping_ratios(1e3, 0.005, 1e4, 0.01)
+    >>> round(a, 1), round(b * 1e7, 2)
+    (50.8, 3.05)
+    """
+    w1, w2 = 2.0 * np.pi * float(f1), 2.0 * np.pi * float(f2)
+    if not (w1 > 0 and w2 > 0) or w1 == w2:
+        raise ValueError(f"need two distinct positive frequencies, got {f1} and {f2} Hz")
+    A = np.array([[1.0 / (2.0 * w1), w1 / 2.0], [1.0 / (2.0 * w2), w2 / 2.0]])
+    alpha, beta = np.linalg.solve(A, [zeta1, zeta2])
+    return float(alpha), float(beta)

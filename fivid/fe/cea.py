@@ -1,0 +1,305 @@
+"""Complex eigenvalue analysis (CEA) of frictional contact: eigenvalues against the friction coefficient.
+
+The model is linearised about steady sliding (seed 002, Massi et al.; DESIGN §4): contact pairs
+become penalty normal springs ``K_n`` and the friction force ``mu p`` adds the non-symmetric
+``mu K_f`` (:mod:`fivid.fe.contact`), so
+
+    M u'' + C u' + (K + K_n + mu K_f) u = 0.
+
+The equation is projected on the ``m`` lowest mass-normalised modes ``Phi`` of the frictionless
+system ``(K + K_n, M)`` (``q = Phi^T M u``), which turns it into an ``m``-dof dense problem with
+``M_r = I``; the state-space eigenvalues ``lambda = sigma + i omega`` are computed at each μ.
+A mode is unstable when ``sigma > 0`` (negative modal damping). Each mode is followed along the μ
+sweep by matching eigenvectors (MAC) between consecutive μ; its critical μ is the first crossing of
+``sigma = 0``, refined by bisection; its partner is the mode it coalesces with (closest frequency at
+the crossing).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+__all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "complex_eigenvalue_analysis",
+           "cea_to_json"]
+
+log = logging.getLogger("fivid")
+
+
+class ModalProjection:
+    """A second-order system ``q'' + C_r q' + (K_r + mu Kf_r) q = 0`` in mass-normalised coordinates.
+
+    Parameters
+    ----------
+    K_r, C_r, Kf_r : ndarray, shape (m, m)
+        Reduced stiffness [s-2], damping [s-1] and friction coupling [s-2] (per unit μ).
+    basis : ndarray, shape (n, m), optional
+        The modes ``Phi`` used (kept for expanding shapes).
+    """
+
+    def __init__(self, K_r, C_r, Kf_r, basis=None):
+        self.K_r = np.asarray(K_r, dtype=float)
+        self.C_r = np.asarray(C_r, dtype=float)
+        self.Kf_r = np.asarray(Kf_r, dtype=float)
+        self.basis = basis
+        w = np.sqrt(np.clip(np.diag(self.K_r), 0.0, None))
+        # Diagonal similarity scaling z = [S q, q'] with S ~ omega: A's blocks become O(omega) instead of
+        # O(omega^2) and O(1), which keeps the dense eigen solver's backward error eps*||A|| small.
+        self._s = np.maximum(w, 1e-3 * max(w.max(), 1.0))
+
+    @property
+    def n(self) -> int:
+        """Number of reduced dofs."""
+        return self.K_r.shape[0]
+
+    def state_matrix(self, mu: float) -> np.ndarray:
+        """The first-order matrix A (scaled) whose eigenvalues are the system's ``lambda`` [s-1]."""
+        m, s = self.n, self._s
+        A = np.zeros((2 * m, 2 * m))
+        A[:m, m:] = np.diag(s)
+        A[m:, :m] = -(self.K_r + mu * self.Kf_r) / s[None, :]
+        A[m:, m:] = -self.C_r
+        return A
+
+    def eigen(self, mu: float) -> tuple[np.ndarray, np.ndarray]:
+        """The ``m`` eigenvalues with the largest imaginary parts and their displacement vectors ``q`` (columns).
+
+        For an under-damped system these are the upper-half-plane member of every complex pair.
+        """
+        import scipy.linalg
+
+        lam, vec = scipy.linalg.eig(self.state_matrix(mu))
+        keep = np.argsort(-lam.imag, kind="stable")[: self.n]
+        q = vec[: self.n, keep] / self._s[:, None]
+        q /= np.linalg.norm(q, axis=0)
+        return lam[keep], q
+
+
+def project_on_modes(K, M, C, K_f, n_basis: int | None = None, *, sigma: float | None = None) -> ModalProjection:
+    """Project ``M u'' + C u' + (K + mu K_f) u = 0`` on the ``n_basis`` lowest modes of ``(K, M)``.
+
+    Parameters
+    ----------
+    K, M, C, K_f : sparse or dense, shape (n, n)
+        Symmetric stiffness (contact normal springs included) [N m-1], mass [kg], damping [N s m-1],
+        friction coupling per unit μ [N m-1].
+    n_basis : int, optional
+        Number of modes (default: all ``n``; dense solution for small systems).
+    """
+    from fivid.fe.modal import lowest_modes
+
+    n = K.shape[0]
+    Phi = lowest_modes(K, M, n if n_basis is None else min(n_basis, n), sigma=sigma)[1]
+    K_r = Phi.T @ (K @ Phi)
+    C_r = Phi.T @ (C @ Phi)
+    Kf_r = Phi.T @ (K_f @ Phi)
+    return ModalProjection(0.5 * (K_r + K_r.T), C_r, Kf_r, Phi)
+
+
+def _mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Modal assurance criterion between the columns of two complex matrices (unit-norm columns)."""
+    return np.abs(a.conj().T @ b) ** 2
+
+
+def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, refine: bool = True) -> dict:
+    """Eigenvalues of a projected system along a μ sweep, each mode followed by eigenvector continuity.
+
+    Parameters
+    ----------
+    projection : ModalProjection
+    mu : array_like, shape (n_mu,)
+        Friction coefficients [-], increasing.
+    refine : bool
+        Refine each critical μ by bisection between the sweep points that bracket it.
+
+    Returns
+    -------
+    dict
+        ``eigenvalues`` (n_mu, m) complex [s-1], modes ordered by frequency at ``mu[0]``;
+        ``critical_mu`` (m,) [-], NaN when ``Re(lambda) <= tol`` over the whole sweep;
+        ``partner`` (m,) int, the mode closest in frequency at the crossing (-1 if stable);
+        ``tolerance`` [s-1], the threshold on ``Re(lambda)`` (see below).
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    mu = np.asarray(mu, dtype=float)
+    if mu.ndim != 1 or mu.size < 1 or np.any(np.diff(mu) <= 0):
+        raise ValueError(f"mu must be a non-empty increasing 1-D array, got {mu!r}")
+    m = projection.n
+    lam = np.zeros((mu.size, m), dtype=complex)
+    vecs = []
+    l0, q0 = projection.eigen(mu[0])
+    order = np.argsort(l0.imag)
+    lam[0], q_prev = l0[order], q0[:, order]
+    vecs.append(q_prev)
+    for k in range(1, mu.size):
+        lk, qk = projection.eigen(mu[k])
+        cost = 1.0 - _mac(q_prev, qk)
+        rows, cols = linear_sum_assignment(cost)
+        lam[k, rows] = lk[cols]
+        q_prev = qk[:, cols]
+        vecs.append(q_prev)
+    # Threshold on Re(lambda): the dense eigen solver's backward error is ~eps*||A||, and near a
+    # coalescence (a defective double eigenvalue) the eigenvalue error grows to ~sqrt(eps)*||A||;
+    # ||A|| ~ omega_max of the scaled state matrix. Real parts above this are instability, not noise.
+    tol = np.sqrt(np.finfo(float).eps) * float(np.abs(lam).max())
+    critical = np.full(m, np.nan)
+    partner = np.full(m, -1)
+    for i in range(m):
+        up = np.flatnonzero(lam[:, i].real > tol)
+        if up.size == 0:
+            continue
+        k = int(up[0])
+        others = np.delete(np.arange(m), i)
+        if others.size:
+            partner[i] = int(others[np.argmin(np.abs(lam[k, others].imag - lam[k, i].imag))])
+        if k == 0:
+            critical[i] = mu[0]
+            continue
+        if not refine:
+            r0, r1 = lam[k - 1, i].real, lam[k, i].real
+            critical[i] = mu[k - 1] + (mu[k] - mu[k - 1]) * (tol - r0) / (r1 - r0)
+            continue
+        critical[i] = _bisect_critical(projection, mu[k - 1], mu[k], lam[k - 1, i], lam[k, i], tol)
+    return {"mu": mu, "eigenvalues": lam, "critical_mu": critical, "partner": partner, "tolerance": tol}
+
+
+def _bisect_critical(projection, a, b, lam_a, lam_b, tol, iterations: int = 60) -> float:
+    """Bisection on ``Re(lambda) > tol`` of the eigenvalue nearest the linear path lam_a -> lam_b."""
+    for _ in range(iterations):
+        c = 0.5 * (a + b)
+        lc, _ = projection.eigen(c)
+        target = lam_a + (lam_b - lam_a) * (c - a) / (b - a)
+        lam_c = lc[np.argmin(np.abs(lc - target))]
+        if lam_c.real > tol:
+            b, lam_b = c, lam_c
+        else:
+            a, lam_a = c, lam_c
+        if b - a <= 4 * np.finfo(float).eps * max(abs(b), 1.0):
+            break
+    return 0.5 * (a + b)
+
+
+def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | None = None,
+                                damping: bool = True, velocities: dict | None = None, refine: bool = True):
+    """CEA of ``model`` over the friction coefficients ``mu``.
+
+    Parameters
+    ----------
+    model : Model
+        Needs at least one contact pair and a sliding direction (a base motion, or ``velocities``).
+    mu : array_like
+        Increasing friction coefficients [-].
+    n_modes : int
+        Number of lowest modes reported.
+    n_basis : int, optional
+        Size of the modal basis (default ``max(3 * n_modes, 40)``); modes near the top of the basis
+        are affected by truncation, so it is larger than ``n_modes``.
+    damping : bool
+        Include Rayleigh damping and dashpots (``False``: the conservative system, pure mode coupling).
+    velocities : dict, optional
+        Body name -> rigid velocity [m s-1] overriding the base motion for the sliding direction.
+    refine : bool
+        Bisect each critical μ to machine precision (otherwise linear interpolation on the sweep).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``frequency(mu, mode)`` [Hz], ``real_part(mu, mode)`` [s-1], ``damping_ratio(mu, mode)`` [1],
+        ``critical_mu(mode)`` [1] (NaN when stable over the range), ``partner(mode)`` (-1 if none).
+    """
+    import xarray as xr
+
+    from fivid.errors import FividError
+    from fivid.fe.assembly import damping_matrix
+    from fivid.fe.contact import linearise_contact
+    from fivid.fe.modal import constrained_matrices
+    from fivid.schema import apply_cf_attrs, new_history
+
+    if not model.contacts:
+        raise FividError("CEA needs a contact pair: the model config has no 'contacts'")
+    contact = linearise_contact(model, velocities=velocities)
+    if not np.any(contact.direction):
+        raise FividError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
+                         "motion with role 'base' to the config)")
+    K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact)
+    Kf = contact.friction_stiffness_matrix()[free][:, free]
+    if damping:
+        from fivid.fe.assembly import consistent_mass, stiffness_matrix
+
+        C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))
+        C = C[free][:, free]
+    else:
+        import scipy.sparse as sp
+
+        C = sp.csr_matrix(K.shape)
+    n_basis = max(3 * n_modes, 40) if n_basis is None else int(n_basis)
+    if n_basis < n_modes:
+        raise ValueError(f"n_basis ({n_basis}) must be >= n_modes ({n_modes})")
+    proj = project_on_modes(K, M, C, Kf, n_basis)
+    res = complex_eigenvalue_sweep(proj, mu, refine=refine)
+    n = min(n_modes, proj.n)
+    lam = res["eigenvalues"][:, :n]
+    partner = np.where(res["partner"][:n] < n, res["partner"][:n], -1)
+    ds = xr.Dataset(
+        {
+            "frequency": (("mu", "mode"), lam.imag / (2 * np.pi), {"units": "Hz", "long_name": "damped frequency Im(lambda)/(2 pi)"}),
+            "real_part": (("mu", "mode"), lam.real, {"units": "s-1", "long_name": "real part of the eigenvalue (> 0: unstable)"}),
+            "damping_ratio": (("mu", "mode"), -lam.real / np.abs(lam), {"units": "1", "long_name": "modal damping ratio -Re/|lambda|"}),
+            "critical_mu": ("mode", res["critical_mu"][:n], {"units": "1", "long_name": "friction coefficient at which Re(lambda) crosses 0 (NaN: stable over the sweep)"}),
+            "partner": ("mode", partner + np.where(partner >= 0, 1, 0), {"long_name": "mode number of the coalescing partner (-1: none)"}),
+        },
+        coords={
+            "mu": ("mu", res["mu"], {"units": "1", "long_name": "friction coefficient"}),
+            "mode": ("mode", np.arange(1, n + 1), {"long_name": "mode number, by frequency at the first mu"}),
+        },
+        attrs={
+            "title": "fivid complex eigenvalue analysis",
+            "model_source": model.source,
+            "model": model.describe(),
+            "n_dofs": model.n_dofs,
+            "n_basis": proj.n,
+            "damping": int(bool(damping)),
+            "rayleigh_alpha": model.rayleigh_alpha,
+            "rayleigh_beta": model.rayleigh_beta,
+            "instability_tolerance": res["tolerance"],
+            "contact_nodes": int(contact.stiffness.size),
+            "history": new_history(f"complex_eigenvalue_analysis(n_modes={n_modes}, n_basis={proj.n}, "
+                                   f"damping={bool(damping)}, refine={bool(refine)})"),
+        },
+    )
+    log.info("CEA: %s, basis %d, %d of %d modes unstable in [%g, %g]", model.describe(), proj.n,
+             int(np.isfinite(res['critical_mu'][:n]).sum()), n, res["mu"][0], res["mu"][-1])
+    return apply_cf_attrs(ds)
+
+
+def cea_to_json(ds) -> dict:
+    """JSON summary of a CEA: ``{"mu": [...], "modes": [{"mode", "frequency_hz", "real_part", "critical_mu", "partner"}]}``."""
+    modes = []
+    for i, m in enumerate(ds["mode"].values):
+        crit = float(ds["critical_mu"].values[i])
+        p = int(ds["partner"].values[i])
+        modes.append({
+            "mode": int(m),
+            "frequency_hz": ds["frequency"].values[:, i].tolist(),
+            "real_part": ds["real_part"].values[:, i].tolist(),
+            "critical_mu": crit if np.isfinite(crit) else None,
+            "partner": p if p > 0 else None,
+        })
+    crit = ds["critical_mu"].values
+    unstable = [
+        {"mode": int(ds["mode"].values[i]), "partner": (int(ds["partner"].values[i]) if ds["partner"].values[i] > 0 else None),
+         "critical_mu": float(crit[i]), "frequency_hz": float(np.interp(crit[i], ds["mu"].values, ds["frequency"].values[:, i]))}
+        for i in np.argsort(np.where(np.isfinite(crit), crit, np.inf)) if np.isfinite(crit[i])
+    ]
+    return {
+        "mu": ds["mu"].values.tolist(),
+        "modes": modes,
+        "unstable": unstable,
+        "n_dofs": int(ds.attrs["n_dofs"]),
+        "n_basis": int(ds.attrs["n_basis"]),
+        "damping": bool(ds.attrs["damping"]),
+        "model": ds.attrs["model"],
+        "model_source": ds.attrs["model_source"],
+    }

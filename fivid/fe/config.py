@@ -1,0 +1,431 @@
+"""Model configuration (YAML) -> validated :class:`~fivid.fe.model.Model`.
+
+The format is documented in ``docs/model-config.md``. Quantities may carry units (``210 GPa``,
+``10 mm``); a bare number is SI. Every problem raises :class:`~fivid.errors.ConfigError` with the
+file, the line (when read from a file) and the key path, e.g. ``bodies.upper.material.nu``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from os import PathLike
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from fivid.errors import ConfigError, UnitError
+from fivid.fe.model import (
+    EDGES,
+    Block,
+    ContactPair,
+    Material,
+    Model,
+    Motion,
+    PointMass,
+    Reaction,
+    Sensor,
+    Spring,
+)
+from fivid.units import parse_quantity
+
+__all__ = ["build_model", "read_config"]
+
+_TOP_KEYS = {
+    "name": "optional", "description": "optional", "plane": "optional", "materials": "optional",
+    "bodies": "required", "damping": "optional", "contacts": "optional", "motions": "optional",
+    "point_masses": "optional", "springs": "optional", "sensors": "optional", "reactions": "optional",
+}
+_BODY_KEYS = {"corners": "required", "divisions": "required", "material": "required", "thickness": "required",
+              "clamp": "optional", "initial_velocity": "optional"}
+_MATERIAL_KEYS = {"E": "required", "nu": "required", "rho": "required"}
+_COMPONENTS = {"x": 0, "y": 1}
+
+
+class _Context:
+    """Where the config came from, and the line of every key path (from the YAML node marks)."""
+
+    def __init__(self, file: str | None, lines: dict[str, int]):
+        self.file = file
+        self.lines = lines
+
+    def error(self, key: str, message: str) -> ConfigError:
+        line = None
+        k = key
+        while k and line is None:  # the line of the key, or of its nearest parent
+            line = self.lines.get(k)
+            k = k.rsplit(".", 1)[0] if "." in k else (k.split("[")[0] if "[" in k else "")
+        return ConfigError(message, file=self.file, line=line, key=key)
+
+
+def _compose_lines(node, path: str, lines: dict[str, int]) -> None:
+    import yaml
+
+    lines.setdefault(path, node.start_mark.line + 1)
+    if isinstance(node, yaml.MappingNode):
+        for k, v in node.value:
+            sub = f"{path}.{k.value}" if path else str(k.value)
+            lines[sub] = k.start_mark.line + 1
+            _compose_lines(v, sub, lines)
+    elif isinstance(node, yaml.SequenceNode):
+        for i, v in enumerate(node.value):
+            _compose_lines(v, f"{path}[{i}]", lines)
+
+
+def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, _Context, str]:
+    """Parse a config file (or take a mapping): ``(mapping, context, source string with sha256)``."""
+    import yaml
+
+    if isinstance(source, Mapping):
+        text = json.dumps(source, sort_keys=True, default=str)
+        digest = hashlib.sha256(text.encode()).hexdigest()
+        return dict(source), _Context(None, {}), f"<mapping> sha256:{digest}"
+    path = Path(source)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(f"cannot read the model config: {exc.strerror}", file=str(path)) from None
+    text = raw.decode("utf-8", errors="replace")
+    try:
+        data = yaml.safe_load(text)
+        root = yaml.compose(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise ConfigError(
+            f"not valid YAML: {getattr(exc, 'problem', exc)}", file=str(path),
+            line=None if mark is None else mark.line + 1,
+        ) from None
+    if not isinstance(data, dict):
+        raise ConfigError("a model config is a mapping with at least 'bodies'", file=str(path))
+    lines: dict[str, int] = {}
+    if root is not None:
+        _compose_lines(root, "", lines)
+    return data, _Context(str(path), lines), f"{path} sha256:{hashlib.sha256(raw).hexdigest()}"
+
+
+# ---------------------------------------------------------------------------------------------- readers
+
+
+def _mapping(ctx, value, key, allowed: dict[str, str]) -> dict:
+    if not isinstance(value, Mapping):
+        raise ctx.error(key, f"expected a mapping with keys {sorted(allowed)}, got {type(value).__name__} {value!r}")
+    unknown = [k for k in value if k not in allowed]
+    if unknown:
+        raise ctx.error(f"{key}.{unknown[0]}" if key else str(unknown[0]),
+                        f"unknown key {unknown[0]!r}; allowed here: {', '.join(sorted(allowed))}")
+    missing = [k for k, need in allowed.items() if need == "required" and k not in value]
+    if missing:
+        raise ctx.error(key, f"missing required key {missing[0]!r} (required here: "
+                             f"{', '.join(k for k, n in allowed.items() if n == 'required')})")
+    return dict(value)
+
+
+def _quantity(ctx, value, key, units: str, *, positive=False, nonnegative=False) -> float:
+    try:
+        q = parse_quantity(value, units, default_units=units)
+    except UnitError as exc:
+        raise ctx.error(key, f"{exc.message} (expected a quantity in {units!r})") from None
+    if not np.isfinite(q):
+        raise ctx.error(key, f"{value!r} is not finite")
+    if positive and not q > 0:
+        raise ctx.error(key, f"must be > 0, got {value!r}")
+    if nonnegative and not q >= 0:
+        raise ctx.error(key, f"must be >= 0, got {value!r}")
+    return float(q)
+
+
+def _list(ctx, value, key, length=None) -> list:
+    if not isinstance(value, (list, tuple)):
+        raise ctx.error(key, f"expected a list, got {value!r}")
+    if length is not None and len(value) != length:
+        raise ctx.error(key, f"expected a list of {length} items, got {len(value)}: {value!r}")
+    return list(value)
+
+
+def _choice(ctx, value, key, choices):
+    if value not in choices:
+        raise ctx.error(key, f"{value!r} is not allowed; choose one of {', '.join(map(str, choices))}")
+    return value
+
+
+def _name(ctx, value, key) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ctx.error(key, f"expected a non-empty name, got {value!r}")
+    return value
+
+
+def _material(ctx, value, key, materials: dict) -> Material:
+    if isinstance(value, str):
+        if value not in materials:
+            raise ctx.error(key, f"material {value!r} is not defined under 'materials' "
+                                 f"(defined: {', '.join(materials) or 'none'})")
+        return materials[value]
+    if value is None:
+        raise ctx.error(key, "missing material: give {E, nu, rho} or the name of an entry of 'materials'")
+    m = _mapping(ctx, value, key, _MATERIAL_KEYS)
+    E = _quantity(ctx, m["E"], f"{key}.E", "Pa", positive=True)
+    nu = _quantity(ctx, m["nu"], f"{key}.nu", "dimensionless")
+    if not -1.0 < nu < 0.5:
+        raise ctx.error(f"{key}.nu", f"Poisson's ratio {nu!r} is not allowed; need -1 < nu < 0.5 "
+                                     "(nu >= 0.5 is incompressible: the elasticity matrix is singular)")
+    rho = _quantity(ctx, m["rho"], f"{key}.rho", "kg m-3", positive=True)
+    return Material(E, nu, rho)
+
+
+def _check_corners(ctx, corners: np.ndarray, key: str) -> None:
+    """Strictly convex and counter-clockwise: every turn c_{k-1} -> c_k -> c_{k+1} is to the left."""
+    scale = float(np.ptp(corners, axis=0).max())
+    for k in range(4):
+        a = corners[k] - corners[k - 1]
+        b = corners[(k + 1) % 4] - corners[k]
+        cross = a[0] * b[1] - a[1] * b[0]
+        if not cross > 1e-12 * scale * scale:
+            area2 = sum(corners[i, 0] * corners[(i + 1) % 4, 1] - corners[(i + 1) % 4, 0] * corners[i, 1]
+                        for i in range(4))
+            why = "clockwise" if area2 < 0 else "not convex (or degenerate)"
+            raise ctx.error(key, f"corners {corners.tolist()} are {why} at corner {k}; give 4 corners of a "
+                                 "convex quadrilateral counter-clockwise from bottom-left")
+
+
+def _block_coords(corners: np.ndarray, nx: int, ny: int) -> np.ndarray:
+    """Bilinear map of the corners onto an (ny+1, nx+1) grid [m]."""
+    s = np.linspace(0.0, 1.0, nx + 1)[None, :, None]
+    t = np.linspace(0.0, 1.0, ny + 1)[:, None, None]
+    c0, c1, c2, c3 = corners
+    return (1 - s) * (1 - t) * c0 + s * (1 - t) * c1 + s * t * c2 + (1 - s) * t * c3
+
+
+def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ...]]]:
+    bodies = data["bodies"]
+    if not isinstance(bodies, Mapping) or not bodies:
+        raise ctx.error("bodies", "expected a non-empty mapping of body name -> {corners, divisions, material, thickness}")
+    blocks, clamps, offset = [], {}, 0
+    for name, spec in bodies.items():
+        key = f"bodies.{name}"
+        b = _mapping(ctx, spec, key, _BODY_KEYS)
+        corners = np.array([[_quantity(ctx, v, f"{key}.corners[{i}][{j}]", "m") for j, v in
+                             enumerate(_list(ctx, c, f"{key}.corners[{i}]", 2))]
+                            for i, c in enumerate(_list(ctx, b["corners"], f"{key}.corners", 4))])
+        _check_corners(ctx, corners, f"{key}.corners")
+        div = _list(ctx, b["divisions"], f"{key}.divisions", 2)
+        for i, d in enumerate(div):
+            if isinstance(d, bool) or not isinstance(d, int) or d < 1:
+                raise ctx.error(f"{key}.divisions[{i}]", f"divisions must be integers >= 1, got {d!r}")
+        material = _material(ctx, b["material"], f"{key}.material", materials)
+        thickness = _quantity(ctx, b["thickness"], f"{key}.thickness", "m", positive=True)
+        v0 = np.zeros(2)
+        if "initial_velocity" in b:
+            v0 = np.array([_quantity(ctx, v, f"{key}.initial_velocity[{i}]", "m s-1") for i, v in
+                           enumerate(_list(ctx, b["initial_velocity"], f"{key}.initial_velocity", 2))])
+        clamp = b.get("clamp", [])
+        clamp = [clamp] if isinstance(clamp, str) else _list(ctx, clamp, f"{key}.clamp")
+        for i, e in enumerate(clamp):
+            _choice(ctx, e, f"{key}.clamp[{i}]", EDGES)
+        clamps[name] = tuple(clamp)
+        nx, ny = div
+        blocks.append(Block(name=str(name), corners=corners, nx=nx, ny=ny, material=material, thickness=thickness,
+                            plane=plane, node_offset=offset, coords=_block_coords(corners, nx, ny),
+                            initial_velocity=v0))
+        offset += (nx + 1) * (ny + 1)
+    return tuple(blocks), clamps
+
+
+def _block_ref(ctx, blocks, value, key) -> Block:
+    for b in blocks:
+        if b.name == value:
+            return b
+    raise ctx.error(key, f"body {value!r} does not exist; bodies are: {', '.join(b.name for b in blocks)}")
+
+
+def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[Block, np.ndarray, dict]:
+    """``{body, edge, x: [lo, hi] | y: [lo, hi]}`` -> (block, nodes in edge order, the other keys)."""
+    allowed = {"body": "required", "edge": "required", "x": "optional", "y": "optional", **extra}
+    m = _mapping(ctx, spec, key, allowed)
+    block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
+    _choice(ctx, m["edge"], f"{key}.edge", EDGES)
+    nodes = block.edge_nodes(m["edge"])
+    coords = block.coords.reshape(-1, 2)[nodes - block.node_offset]
+    for axis, c in (("x", 0), ("y", 1)):
+        if axis in m:
+            lo, hi = (_quantity(ctx, v, f"{key}.{axis}[{i}]", "m") for i, v in
+                      enumerate(_list(ctx, m[axis], f"{key}.{axis}", 2)))
+            tol = 1e-9 * float(np.ptp(block.corners, axis=0).max())
+            keep = (coords[:, c] >= min(lo, hi) - tol) & (coords[:, c] <= max(lo, hi) + tol)
+            nodes, coords = nodes[keep], coords[keep]
+            if nodes.size == 0:
+                raise ctx.error(f"{key}.{axis}", f"no node of edge {m['edge']!r} of body {block.name!r} has "
+                                                 f"{axis} in [{lo}, {hi}] m")
+    return block, nodes, m
+
+
+def _point_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[int, dict]:
+    """``{body, at: [x, y]}`` -> the nearest node of the body (must lie within one element of the point)."""
+    m = _mapping(ctx, spec, key, {"body": "required", "at": "required", **extra})
+    block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
+    at = np.array([_quantity(ctx, v, f"{key}.at[{i}]", "m") for i, v in
+                   enumerate(_list(ctx, m["at"], f"{key}.at", 2))])
+    xy = block.coords.reshape(-1, 2)
+    d = np.hypot(*(xy - at).T)
+    k = int(np.argmin(d))
+    size = max(np.hypot(*(block.coords[0, 1] - block.coords[0, 0])), np.hypot(*(block.coords[1, 0] - block.coords[0, 0])))
+    if d[k] > size:
+        raise ctx.error(f"{key}.at", f"point {at.tolist()} m is not on body {block.name!r} (nearest node "
+                                     f"{xy[k].tolist()} is {d[k]:.3g} m away)")
+    return int(block.node_offset + k), m
+
+
+def _items(ctx, data, section) -> list:
+    value = data.get(section, []) or []
+    return _list(ctx, value, section)
+
+
+def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
+    """Validate a config (path or mapping) and build the :class:`Model` (see :func:`fivid.fe.load_model`)."""
+    data, ctx, origin = read_config(source)
+    _mapping(ctx, data, "", _TOP_KEYS)
+    plane = _choice(ctx, data.get("plane", "stress"), "plane", ("stress", "strain"))
+    materials = {}
+    for name, spec in (data.get("materials") or {}).items():
+        materials[name] = _material(ctx, spec, f"materials.{name}", {})
+    blocks, clamps = _bodies(ctx, data, plane, materials)
+    n_nodes = sum(b.n_nodes for b in blocks)
+    coords = np.concatenate([b.coords.reshape(-1, 2) for b in blocks])
+
+    fixed = []
+    for b in blocks:
+        for edge in clamps[b.name]:
+            nodes = b.edge_nodes(edge)
+            fixed += [2 * nodes, 2 * nodes + 1]
+
+    motions = []
+    for i, spec in enumerate(_items(ctx, data, "motions")):
+        key = f"motions[{i}]"
+        extra = {"name": "required", "component": "required", "kind": "required", "amplitude": "required",
+                 "ramp_time": "optional", "role": "optional"}
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, extra)
+        kind = _choice(ctx, m["kind"], f"{key}.kind", ("velocity", "displacement"))
+        comp = _COMPONENTS[_choice(ctx, m["component"], f"{key}.component", tuple(_COMPONENTS))]
+        amp = _quantity(ctx, m["amplitude"], f"{key}.amplitude", "m s-1" if kind == "velocity" else "m")
+        ramp = _quantity(ctx, m.get("ramp_time", 0.0), f"{key}.ramp_time", "s", nonnegative=True)
+        role = m.get("role")
+        if role is not None:
+            _choice(ctx, role, f"{key}.role", ("base", "load"))
+            if any(mo.role == role for mo in motions):
+                raise ctx.error(f"{key}.role", f"a second motion with role {role!r}; only one is allowed")
+        motions.append(Motion(_name(ctx, m["name"], f"{key}.name"), nodes, comp, kind, amp, ramp, role))
+        fixed.append(2 * nodes + comp)
+    fixed_dofs = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
+
+    point_masses = []
+    for i, spec in enumerate(_items(ctx, data, "point_masses")):
+        key = f"point_masses[{i}]"
+        node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "mass": "required"})
+        point_masses.append(PointMass(_name(ctx, m["name"], f"{key}.name"), node,
+                                      _quantity(ctx, m["mass"], f"{key}.mass", "kg", positive=True)))
+
+    springs = []
+    for i, spec in enumerate(_items(ctx, data, "springs")):
+        key = f"springs[{i}]"
+        m = _mapping(ctx, spec, key, {"name": "required", "a": "required", "b": "required", "component": "required",
+                                      "stiffness": "required", "damping": "optional"})
+        a, _ = _point_ref(ctx, blocks, m["a"], f"{key}.a", {})
+        b = -1 if m["b"] == "ground" else _point_ref(ctx, blocks, m["b"], f"{key}.b", {})[0]
+        if a == b:
+            raise ctx.error(f"{key}.b", "both ends of the spring are the same node")
+        comp = _COMPONENTS[_choice(ctx, m["component"], f"{key}.component", tuple(_COMPONENTS))]
+        springs.append(Spring(_name(ctx, m["name"], f"{key}.name"), a, b, comp,
+                              _quantity(ctx, m["stiffness"], f"{key}.stiffness", "N m-1", nonnegative=True),
+                              _quantity(ctx, m.get("damping", 0.0), f"{key}.damping", "N s m-1", nonnegative=True)))
+
+    contacts = []
+    for i, spec in enumerate(_items(ctx, data, "contacts")):
+        key = f"contacts[{i}]"
+        m = _mapping(ctx, spec, key, {"name": "required", "slave": "required", "master": "required",
+                                      "mu": "required", "normal_stiffness": "optional"})
+        sb, snodes, _ = _edge_ref(ctx, blocks, m["slave"], f"{key}.slave", {})
+        mb, mnodes, _ = _edge_ref(ctx, blocks, m["master"], f"{key}.master", {})
+        if sb is mb:
+            raise ctx.error(f"{key}.master", "slave and master must be edges of different bodies")
+        if mnodes.size < 2:
+            raise ctx.error(f"{key}.master", "the master edge needs at least 2 nodes (one segment)")
+        mu = _quantity(ctx, m["mu"], f"{key}.mu", "dimensionless", nonnegative=True)
+        if "normal_stiffness" in m:
+            kn = _quantity(ctx, m["normal_stiffness"], f"{key}.normal_stiffness", "N m-3", positive=True)
+        else:  # one slave element's normal stiffness per unit area: E / (element size normal to the edge)
+            edge = m["slave"]["edge"]
+            h = sb.coords[1, 0] - sb.coords[0, 0] if edge in ("bottom", "top") else sb.coords[0, 1] - sb.coords[0, 0]
+            kn = sb.material.E / float(np.hypot(*h))
+        contacts.append(ContactPair(_name(ctx, m["name"], f"{key}.name"), sb.name, snodes, mb.name, mnodes, mu, kn))
+
+    sensors = []
+    for i, spec in enumerate(_items(ctx, data, "sensors")):
+        key = f"sensors[{i}]"
+        node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "direction": "required",
+                                                      "quantity": "optional"})
+        d = m["direction"]
+        if isinstance(d, str):
+            sign = -1.0 if d.startswith("-") else 1.0
+            comp = _COMPONENTS[_choice(ctx, d.lstrip("+-"), f"{key}.direction", tuple(_COMPONENTS))]
+            direction = np.zeros(2)
+            direction[comp] = sign
+        else:
+            direction = np.array([_quantity(ctx, v, f"{key}.direction[{j}]", "dimensionless")
+                                  for j, v in enumerate(_list(ctx, d, f"{key}.direction", 2))])
+            norm = float(np.hypot(*direction))
+            if norm == 0.0:
+                raise ctx.error(f"{key}.direction", "the direction is the zero vector")
+            direction = direction / norm
+        quantity = _choice(ctx, m.get("quantity", "acceleration"), f"{key}.quantity", ("acceleration",))
+        sensors.append(Sensor(_name(ctx, m["name"], f"{key}.name"), node, direction, quantity))
+
+    reactions = []
+    for i, spec in enumerate(_items(ctx, data, "reactions")):
+        key = f"reactions[{i}]"
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "tangential": "required",
+                                                               "normal": "required"})
+        t = _COMPONENTS[_choice(ctx, m["tangential"], f"{key}.tangential", tuple(_COMPONENTS))]
+        n = _COMPONENTS[_choice(ctx, m["normal"], f"{key}.normal", tuple(_COMPONENTS))]
+        if t == n:
+            raise ctx.error(f"{key}.normal", "tangential and normal must be different components")
+        free = np.setdiff1d(np.concatenate([2 * nodes + t, 2 * nodes + n]), fixed_dofs)
+        if free.size:
+            raise ctx.error(key, f"a reaction needs constrained nodes (a clamp or a motion), but "
+                                 f"{free.size} of its dofs are free; clamp edge {m['edge']!r} of {block.name!r}")
+        reactions.append(Reaction(_name(ctx, m["name"], f"{key}.name"), nodes, t, n))
+
+    alpha, beta = _damping(ctx, data.get("damping"))
+    for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),
+                           ("contacts", contacts), ("sensors", sensors), ("reactions", reactions)):
+        names = [x.name for x in items]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ctx.error(section, f"duplicate name(s) {sorted(dup)}; names must be unique within '{section}'")
+    return Model(plane=plane, blocks=blocks, n_nodes=n_nodes, coords=coords, fixed_dofs=fixed_dofs,
+                 motions=tuple(motions), point_masses=tuple(point_masses), springs=tuple(springs),
+                 contacts=tuple(contacts), sensors=tuple(sensors), reactions=tuple(reactions),
+                 rayleigh_alpha=alpha, rayleigh_beta=beta, source=origin, config=data)
+
+
+def _damping(ctx, spec) -> tuple[float, float]:
+    from fivid.fe.assembly import rayleigh_from_damping_ratios
+
+    if spec is None:
+        return 0.0, 0.0
+    m = _mapping(ctx, spec, "damping", {"alpha": "optional", "beta": "optional", "ratios": "optional"})
+    if "ratios" in m:
+        if "alpha" in m or "beta" in m:
+            raise ctx.error("damping", "give either {alpha, beta} or ratios, not both")
+        pts = _list(ctx, m["ratios"], "damping.ratios", 2)
+        fz = []
+        for i, p in enumerate(pts):
+            k = f"damping.ratios[{i}]"
+            q = _mapping(ctx, p, k, {"frequency": "required", "ratio": "required"})
+            fz += [_quantity(ctx, q["frequency"], f"{k}.frequency", "Hz", positive=True),
+                   _quantity(ctx, q["ratio"], f"{k}.ratio", "dimensionless", nonnegative=True)]
+        if fz[0] == fz[2]:
+            raise ctx.error("damping.ratios", "the two frequencies must differ")
+        return rayleigh_from_damping_ratios(*fz)
+    alpha = _quantity(ctx, m.get("alpha", 0.0), "damping.alpha", "s-1", nonnegative=True)
+    beta = _quantity(ctx, m.get("beta", 0.0), "damping.beta", "s", nonnegative=True)
+    return alpha, beta

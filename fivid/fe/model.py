@@ -1,0 +1,404 @@
+"""The finite-element model of a rig: structured Q4 blocks, constraints, discrete elements, contact, sensors.
+
+A :class:`Model` is built from a YAML configuration by :func:`load_model` (validation in
+:mod:`fivid.fe.config`) and is plain data: numpy arrays and frozen dataclasses, no behaviour beyond
+index arithmetic. Assembly (:mod:`fivid.fe.assembly`), modal analysis (:mod:`fivid.fe.modal`), CEA
+(:mod:`fivid.fe.cea`) and the explicit solver (:mod:`fivid.solver`) read it.
+
+Numbering
+---------
+A block is a quadrilateral with corners ``c0..c3`` counter-clockwise from bottom-left, meshed
+``nx x ny`` with bilinear Q4 elements by the bilinear map of the corners. Local node ``(i, j)``,
+``i = 0..nx`` along ``c0 -> c1``, ``j = 0..ny`` along ``c0 -> c3``, has the global number
+``node_offset + j*(nx+1) + i``; its dofs are ``2*node`` (x) and ``2*node + 1`` (y). Blocks do not
+share nodes; contact pairs couple them. Edges: ``bottom`` (c0 -> c1), ``right`` (c1 -> c2),
+``top`` (c2 -> c3), ``left`` (c3 -> c0); :meth:`Block.edge_nodes` lists an edge's nodes in that
+direction (so the outward normal of a segment ``(a, b)`` is the tangent ``b - a`` turned clockwise).
+
+Constraints
+-----------
+``fixed_dofs`` is every constrained dof: the dofs of clamped edges and the dofs carrying a
+:class:`Motion`. A dof in ``fixed_dofs`` with no motion stays at zero; a dof with a motion follows it.
+A motion on a clamped edge therefore moves the clamp (the moving base, the loading clamp): the other
+component stays clamped. Modal analysis and CEA eliminate all of ``fixed_dofs``.
+
+Units: SI everywhere (m, kg, s, N, Pa).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from os import PathLike
+from typing import Any, Mapping
+
+import numpy as np
+
+__all__ = [
+    "EDGES",
+    "Material",
+    "Block",
+    "Motion",
+    "PointMass",
+    "Spring",
+    "ContactPair",
+    "Sensor",
+    "Reaction",
+    "Model",
+    "load_model",
+]
+
+EDGES = ("bottom", "right", "top", "left")
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear elastic isotropic material.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus [Pa].
+    nu : float
+        Poisson's ratio [-], ``-1 < nu < 0.5``.
+    rho : float
+        Density [kg m-3].
+    """
+
+    E: float
+    nu: float
+    rho: float
+
+    def elasticity_matrix(self, plane: str) -> np.ndarray:
+        """The 3x3 matrix D with ``sigma = D eps`` (engineering shear strain) [Pa].
+
+        Parameters
+        ----------
+        plane : {"stress", "strain"}
+            Plane stress (thin plate, ``sigma_zz = 0``) or plane strain (``eps_zz = 0``).
+        """
+        E, nu = self.E, self.nu
+        if plane == "stress":
+            c = E / (1.0 - nu * nu)
+            return c * np.array([[1.0, nu, 0.0], [nu, 1.0, 0.0], [0.0, 0.0, (1.0 - nu) / 2.0]])
+        if plane == "strain":
+            c = E / ((1.0 + nu) * (1.0 - 2.0 * nu))
+            return c * np.array([[1.0 - nu, nu, 0.0], [nu, 1.0 - nu, 0.0], [0.0, 0.0, (1.0 - 2.0 * nu) / 2.0]])
+        raise ValueError(f"plane must be 'stress' or 'strain', got {plane!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Block:
+    """A logically structured quadrilateral block of ``nx x ny`` Q4 elements.
+
+    Parameters
+    ----------
+    name : str
+        Body name from the config.
+    corners : ndarray, shape (4, 2)
+        Corners [m], counter-clockwise from bottom-left.
+    nx, ny : int
+        Element divisions along ``c0 -> c1`` and ``c0 -> c3``.
+    material : Material
+    thickness : float
+        Out-of-plane thickness (the beam width) [m].
+    plane : {"stress", "strain"}
+    node_offset : int
+        Global number of local node (0, 0).
+    coords : ndarray, shape (ny+1, nx+1, 2)
+        Node coordinates [m], ``coords[j, i]`` is local node ``(i, j)``.
+    initial_velocity : ndarray, shape (2,)
+        Initial velocity of every node of the block [m s-1].
+    """
+
+    name: str
+    corners: np.ndarray
+    nx: int
+    ny: int
+    material: Material
+    thickness: float
+    plane: str
+    node_offset: int
+    coords: np.ndarray
+    initial_velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes ``(nx+1)(ny+1)``."""
+        return (self.nx + 1) * (self.ny + 1)
+
+    @property
+    def n_elements(self) -> int:
+        """Number of elements ``nx*ny``."""
+        return self.nx * self.ny
+
+    def node(self, i, j):
+        """Global node number(s) of local node(s) ``(i, j)``."""
+        return self.node_offset + np.asarray(j) * (self.nx + 1) + np.asarray(i)
+
+    def node_numbers(self) -> np.ndarray:
+        """Global node numbers, shape (ny+1, nx+1), ``[j, i]``."""
+        return self.node_offset + np.arange(self.n_nodes).reshape(self.ny + 1, self.nx + 1)
+
+    def edge_nodes(self, edge: str) -> np.ndarray:
+        """Global node numbers along ``edge`` in its direction (bottom c0->c1, right c1->c2, top c2->c3, left c3->c0)."""
+        n = self.node_numbers()
+        if edge == "bottom":
+            return n[0, :].copy()
+        if edge == "right":
+            return n[:, -1].copy()
+        if edge == "top":
+            return n[-1, ::-1].copy()
+        if edge == "left":
+            return n[::-1, 0].copy()
+        raise ValueError(f"edge must be one of {EDGES}, got {edge!r}")
+
+    def element_nodes(self) -> np.ndarray:
+        """Global node numbers of every element, shape (ny, nx, 4), counter-clockwise from the element's (i, j)."""
+        n = self.node_numbers()
+        return np.stack([n[:-1, :-1], n[:-1, 1:], n[1:, 1:], n[1:, :-1]], axis=-1)
+
+    def element_corners(self) -> np.ndarray:
+        """Coordinates of every element's 4 nodes [m], shape (ny, nx, 4, 2), same order as :meth:`element_nodes`."""
+        c = self.coords
+        return np.stack([c[:-1, :-1], c[:-1, 1:], c[1:, 1:], c[1:, :-1]], axis=-2)
+
+    def element_dofs(self) -> np.ndarray:
+        """Global dofs of every element, shape (ny, nx, 8): ``x0, y0, x1, y1, ...``."""
+        en = self.element_nodes()
+        return np.stack([2 * en, 2 * en + 1], axis=-1).reshape(self.ny, self.nx, 8)
+
+    def is_rectangular_grid(self, rtol: float = 1e-12) -> bool:
+        """Whether every element is the same axis-aligned rectangle (one stencil for the whole block)."""
+        xy = self.element_corners().reshape(-1, 4, 2)
+        d = xy - xy[:, :1, :]
+        scale = float(np.abs(self.corners).max() + np.ptp(self.corners))
+        return bool(np.allclose(d, d[0], rtol=0.0, atol=rtol * scale) and abs(d[0, 1, 1]) <= rtol * scale
+                    and abs(d[0, 3, 0]) <= rtol * scale)
+
+
+@dataclass(frozen=True, eq=False)
+class Motion:
+    """An imposed motion of one displacement component on a set of nodes.
+
+    Parameters
+    ----------
+    name : str
+    nodes : ndarray of int
+        Global node numbers (an edge's nodes, in order).
+    component : {0, 1}
+        0 = x, 1 = y.
+    kind : {"velocity", "displacement"}
+        What ``amplitude`` is: a final velocity [m s-1] or a final displacement [m].
+    amplitude : float
+        Target value reached after ``ramp_time`` [m s-1 or m]; the solver may override it
+        (``--velocity`` for role "base", ``--load`` for role "load").
+    ramp_time : float
+        Duration of the smooth ramp from 0 to ``amplitude`` [s].
+    role : {"base", "load", None}
+        "base": the moving base (sliding velocity); "load": the loading clamp (normal load); None: other.
+    """
+
+    name: str
+    nodes: np.ndarray
+    component: int
+    kind: str
+    amplitude: float
+    ramp_time: float
+    role: str | None = None
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """Global dofs the motion drives."""
+        return 2 * np.asarray(self.nodes) + self.component
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A point mass [kg] on a node (added to both of its dofs)."""
+
+    name: str
+    node: int
+    mass: float
+
+
+@dataclass(frozen=True)
+class Spring:
+    """A spring and dashpot in one component between two nodes, or a node and the ground (``node_b = -1``).
+
+    Parameters
+    ----------
+    name : str
+    node_a, node_b : int
+        Global node numbers; ``node_b = -1`` is the ground.
+    component : {0, 1}
+        0 = x, 1 = y.
+    stiffness : float
+        [N m-1].
+    damping : float
+        Dashpot coefficient [N s m-1].
+    """
+
+    name: str
+    node_a: int
+    node_b: int
+    component: int
+    stiffness: float
+    damping: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class ContactPair:
+    """Slave nodes of one body's edge against master segments of another body's edge.
+
+    Parameters
+    ----------
+    name : str
+    slave_block, master_block : str
+        Body names.
+    slave_nodes : ndarray of int
+        Global slave node numbers in edge order.
+    master_nodes : ndarray of int
+        Global master node numbers in edge order; consecutive nodes form the segments, whose outward
+        normal is the segment tangent turned clockwise.
+    mu : float
+        Nominal (mean) friction coefficient μ0 [-].
+    normal_stiffness : float
+        Penalty stiffness per unit contact area [N m-3] used by the linearised (CEA/modal) contact;
+        the explicit solver enforces contact with Lagrange multipliers and ignores it.
+    """
+
+    name: str
+    slave_block: str
+    slave_nodes: np.ndarray
+    master_block: str
+    master_nodes: np.ndarray
+    mu: float
+    normal_stiffness: float
+
+
+@dataclass(frozen=True, eq=False)
+class Sensor:
+    """An accelerometer: a node and a measuring direction (unit vector)."""
+
+    name: str
+    node: int
+    direction: np.ndarray
+    quantity: str = "acceleration"
+
+
+@dataclass(frozen=True, eq=False)
+class Reaction:
+    """A force transducer: the sum of the constraint reactions on ``nodes``.
+
+    ``tangential_component`` (0/1) gives ``friction_force``, ``normal_component`` gives ``normal_force``.
+    """
+
+    name: str
+    nodes: np.ndarray
+    tangential_component: int
+    normal_component: int
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A 2D finite-element model of a rig (see the module docstring for numbering and constraints).
+
+    Attributes
+    ----------
+    plane : {"stress", "strain"}
+    blocks : tuple of Block
+    n_nodes : int
+    coords : ndarray, shape (n_nodes, 2)
+        Node coordinates [m].
+    fixed_dofs : ndarray of int
+        Sorted, unique constrained dofs (clamps and motions).
+    motions, point_masses, springs, contacts, sensors, reactions : tuple
+    rayleigh_alpha : float
+        Mass-proportional Rayleigh coefficient [s-1].
+    rayleigh_beta : float
+        Stiffness-proportional Rayleigh coefficient [s].
+    source : str
+        ``"<path> sha256:<hex>"`` of the config (or of its canonical JSON for a mapping).
+    config : dict
+        The validated configuration mapping.
+    """
+
+    plane: str
+    blocks: tuple
+    n_nodes: int
+    coords: np.ndarray
+    fixed_dofs: np.ndarray
+    motions: tuple = ()
+    point_masses: tuple = ()
+    springs: tuple = ()
+    contacts: tuple = ()
+    sensors: tuple = ()
+    reactions: tuple = ()
+    rayleigh_alpha: float = 0.0
+    rayleigh_beta: float = 0.0
+    source: str = ""
+    config: dict = field(default_factory=dict)
+
+    @property
+    def n_dofs(self) -> int:
+        """Number of dofs, ``2 * n_nodes``."""
+        return 2 * self.n_nodes
+
+    @property
+    def free_dofs(self) -> np.ndarray:
+        """Sorted dofs not in ``fixed_dofs``."""
+        mask = np.ones(self.n_dofs, dtype=bool)
+        mask[self.fixed_dofs] = False
+        return np.flatnonzero(mask)
+
+    @property
+    def sha256(self) -> str:
+        """The config's sha256 (hex), from ``source``."""
+        return self.source.rsplit("sha256:", 1)[-1] if "sha256:" in self.source else ""
+
+    def block(self, name: str) -> Block:
+        """The block called ``name`` (KeyError if absent)."""
+        for b in self.blocks:
+            if b.name == name:
+                return b
+        raise KeyError(name)
+
+    def block_of_node(self, node: int) -> Block:
+        """The block that owns global ``node``."""
+        for b in self.blocks:
+            if b.node_offset <= node < b.node_offset + b.n_nodes:
+                return b
+        raise IndexError(f"node {node} is not in the model (0..{self.n_nodes - 1})")
+
+    def motion(self, role: str) -> Motion | None:
+        """The first motion with ``role`` ("base" or "load"), or None."""
+        for m in self.motions:
+            if m.role == role:
+                return m
+        return None
+
+    def initial_velocity(self) -> np.ndarray:
+        """Initial velocity vector [m s-1], shape (n_dofs,), from the blocks' ``initial_velocity``."""
+        v = np.zeros(self.n_dofs)
+        for b in self.blocks:
+            nodes = b.node_numbers().ravel()
+            v[2 * nodes] = b.initial_velocity[0]
+            v[2 * nodes + 1] = b.initial_velocity[1]
+        return v
+
+    def describe(self) -> str:
+        """A one-line summary: bodies, meshes and dof count."""
+        parts = [f"{b.name} {b.nx}x{b.ny}" for b in self.blocks]
+        return f"{len(self.blocks)} bodies ({', '.join(parts)}), {self.n_nodes} nodes, {self.n_dofs} dofs, plane {self.plane}"
+
+
+def load_model(source: str | PathLike | Mapping[str, Any]) -> Model:
+    """Build a :class:`Model` from a YAML config file (path) or an already-parsed mapping.
+
+    The configuration format is documented in ``docs/model-config.md``. Every problem raises
+    :class:`~fivid.errors.ConfigError` naming the file, line and key path (``bodies.upper.material.nu``),
+    the value given and what is allowed.
+    """
+    from fivid.fe.config import build_model
+
+    return build_model(source)
