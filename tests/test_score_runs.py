@@ -146,3 +146,36 @@ def test_non_uniform_time_names_the_run():
 def test_band_narrower_than_three_bins():
     with pytest.raises(ConfigError, match="fewer than 3 PSD bins"):
         score_runs(synthetic_run(1), synthetic_run(2, run_id="S"), nperseg=1024, band=(1000, 1010))
+
+
+def test_significance_grows_with_record_length():
+    # A true 0.5 dB level difference: with 2**13 samples (15 segments of 1024) the band-level threshold is
+    # larger than 0.5 dB, with 2**19 samples (1023 segments) it is ~8x smaller (it scales as 1/sqrt(segments)).
+    gain = 10 ** (0.5 / 20)
+    short = score_runs(synthetic_run(5, n=2**13), synthetic_run(6, n=2**13, scale=gain, run_id="S"), nperseg=1024)
+    long = score_runs(synthetic_run(5, n=2**19), synthetic_run(6, n=2**19, scale=gain, run_id="S"), nperseg=1024)
+    assert not bool(short.level_diff_db_significant)
+    assert bool(long.level_diff_db_significant)
+    assert float(long.level_diff_db) == pytest.approx(0.5, abs=float(long.level_diff_db_threshold))
+    ratio = float(short.level_diff_db_threshold) / float(long.level_diff_db_threshold)
+    assert ratio == pytest.approx(np.sqrt(1023 / 15), rel=0.2)
+
+
+def test_steady_option_crops_each_run():
+    m = synthetic_run(1, n=2**15)
+    t = m["time"].values
+    ramp = np.clip(t / 0.5, 0, 1) * np.clip((t[-1] - t) / 0.5, 0, 1)  # 0.5 s ramps, plateau 2.28 s
+    m["velocity"] = ("time", 0.01 * ramp, {"units": "m s-1"})
+    sc = score_runs(m, m, nperseg=1024, steady=True, band=(100, 4000))
+    assert sc.attrs["steady_only"] == 1
+    from fivid.signal import steady_sliding_window, welch_psd
+
+    t0, t1 = steady_sliding_window(m)
+    assert 0.45 < t0 < 0.5 and t[-1] - 0.5 < t1 < t[-1] - 0.45  # 5 % below the plateau: 0.475 s into each ramp
+    crop = welch_psd(m["acceleration"].sel(time=slice(t0, t1)), nperseg=1024).sel(frequency=slice(100, 4000))
+    np.testing.assert_array_equal(sc.psd_measured.values, crop.values)
+    whole = welch_psd(m["acceleration"], nperseg=1024).sel(frequency=slice(100, 4000))
+    assert not np.array_equal(sc.psd_measured.values, whole.values)
+    no_encoder = synthetic_run(2, run_id="S")
+    with pytest.raises(DataQualityError, match=r"simulated run 'S'.*neither 'velocity' nor 'position'"):
+        score_runs(m, no_encoder, nperseg=1024, steady=True)

@@ -206,3 +206,28 @@ def test_pure_layer_matches_wrapper():
     p = welch_psd(signal(x, 10.0), nperseg=512, backend="numpy")
     np.testing.assert_array_equal(pxx, p.values)
     assert k == p.attrs["n_segments"]
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import fivid.signal.welch
+
+    result = doctest.testmod(fivid.signal.welch, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None)
+@given(nperseg=st.integers(8, 600), overlap_fraction=st.floats(0, 0.9), extra=st.integers(0, 3000),
+       detrend=st.sampled_from(["constant", "linear", False]), seed=st.integers(0, 2**32 - 1),
+       backend=st.sampled_from(BACKENDS))
+def test_any_segmentation_equals_scipy(nperseg, overlap_fraction, extra, detrend, seed, backend):
+    noverlap = min(int(overlap_fraction * nperseg), nperseg - 1)
+    x = np.random.default_rng(seed).standard_normal(nperseg + extra)
+    p = welch_psd(signal(x, 100.0), nperseg=nperseg, noverlap=noverlap, detrend=detrend, backend=backend)
+    _, ref = scipy.signal.welch(x, fs=100.0, nperseg=nperseg, noverlap=noverlap, detrend=detrend, window="hann")
+    np.testing.assert_allclose(p.values, ref, rtol=0, atol=roundoff_atol(ref, nperseg))

@@ -237,9 +237,50 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     pk_lm, pk_ls = log_m[im], np.where(matched, log_s[jj], nan)
     pk_level_thr = np.abs(bias[im]) + z2 * np.hypot(sig_m[im], np.where(matched, sig_s[jj], nan))
 
-    return _assemble(
-        locals(), measured=measured, simulated=simulated, variable=variable, units=da_m.attrs["units"],
+    results = dict(
+        band_err=band_err,
+        band_rms=band_rms,
+        band_rms_thr=band_rms_thr,
+        band_sd=band_sd,
+        bands=bands,
+        confidence=confidence,
+        corr=corr,
+        corr_expected=corr_expected,
+        corr_lowest=corr_lowest,
+        df=df,
+        diff=diff,
+        f_hi=f_hi,
+        f_lo=f_lo,
+        fb=fb,
+        fs=fs,
+        lev_m=lev_m,
+        lev_s=lev_s,
+        level=level,
+        level_thr=level_thr,
+        lsd=lsd,
+        lsd_thr=lsd_thr,
+        n_eff=n_eff,
+        nu_m=nu_m,
+        nu_s=nu_s,
+        peak_match_tolerance=peak_match_tolerance,
+        pk_fm=pk_fm,
+        pk_freq_thr=pk_freq_thr,
+        pk_fs=pk_fs,
+        pk_level_thr=pk_level_thr,
+        pk_lm=pk_lm,
+        pk_ls=pk_ls,
+        pmb=pmb,
+        prominence=prominence,
+        psb=psb,
+        psd_m=psd_m,
+        psd_s=psd_s,
+        resampled=resampled,
+        sensor=sensor,
+        sigma=sigma,
+        steady=steady,
+        z2=z2,
     )
+    return _assemble(results, measured=measured, simulated=simulated, variable=variable, units=da_m.attrs["units"])
 
 
 def _flag(value, threshold, larger_is_bad=True):
