@@ -231,3 +231,24 @@ def test_any_segmentation_equals_scipy(nperseg, overlap_fraction, extra, detrend
     p = welch_psd(signal(x, 100.0), nperseg=nperseg, noverlap=noverlap, detrend=detrend, backend=backend)
     _, ref = scipy.signal.welch(x, fs=100.0, nperseg=nperseg, noverlap=noverlap, detrend=detrend, window="hann")
     np.testing.assert_allclose(p.values, ref, rtol=0, atol=roundoff_atol(ref, nperseg))
+
+
+def test_ar1_spectrum_inside_its_chi2_bounds():
+    # AR(1) x_t = phi x_{t-1} + e_t, var(e) = s2: S(f) = (2 s2 / fs) / |1 - phi exp(-2 pi i f / fs)|^2 (one-sided).
+    # The spectrum is smooth on the scale of the Hann main lobe (3 bins of 1/1024 of fs), so the leakage bias,
+    # ~ (1/24) B_e^2 S''/S < 1e-3 here, is negligible beside the ~ +-25 % chi2 width at nu ~ 110.
+    rng = np.random.default_rng(9)
+    fs, phi, s2, nperseg = 2000.0, 0.9, 1.0, 1024
+    e = rng.normal(0.0, np.sqrt(s2), 2**15 + 1000)
+    x = scipy.signal.lfilter([1.0], [1.0, -phi], e)[1000:]  # drop the start-up transient (phi^1000 ~ 1e-46)
+    p = welch_psd(signal(x, fs), nperseg=nperseg)
+    f = p["frequency"].values[1:-1]
+    true = (2 * s2 / fs) / np.abs(1 - phi * np.exp(-2j * np.pi * f / fs)) ** 2
+    lo, hi = p["psd_lower"].values[1:-1], p["psd_upper"].values[1:-1]
+    covered = np.mean((lo <= true) & (true <= hi))
+    sd = np.sqrt(0.95 * 0.05 / f.size * (1 + 2 * (4 / 9 + 1 / 36)))
+    assert abs(covered - 0.95) < 5 * sd
+    # and the estimate averaged over 64-bin blocks follows the closed form to its statistical error
+    ratio = (p.values[1:-1] / true)[: 64 * 7].reshape(7, 64).mean(axis=1)
+    nu = p.attrs["equivalent_degrees_of_freedom"]
+    assert np.all(np.abs(ratio - 1) < 5 * np.sqrt(2 / nu * (1 + 2 * (4 / 9 + 1 / 36)) / 64))
