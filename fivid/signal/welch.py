@@ -171,8 +171,9 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
     coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
     punits = power_units(units)
     long = f"power spectral density of {da.attrs.get('long_name', da.name)}"
-    coords["psd_lower"] = (dims, lower, {"units": punits, "long_name": f"lower {confidence:.0%} χ² bound of the {long}"})
-    coords["psd_upper"] = (dims, upper, {"units": punits, "long_name": f"upper {confidence:.0%} χ² bound of the {long}"})
+    for name, values in (("lower", lower), ("upper", upper)):
+        coords[f"psd_{name}"] = (dims, values, {"units": punits,
+                                                "long_name": f"{name} {confidence:.0%} χ² bound of the {long}"})
     attrs = {"units": punits, "long_name": long, "variable": str(da.name), "variable_units": units}
     attrs.update(_settings_attrs(settings, w, k, nu, confidence))
     return xr.DataArray(psd, dims=dims, coords=coords, name=f"psd_{da.name}" if da.name else "psd", attrs=attrs)
