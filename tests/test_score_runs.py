@@ -181,3 +181,18 @@ def test_steady_option_crops_each_run():
     no_encoder = synthetic_run(2, run_id="S")
     with pytest.raises(DataQualityError, match=r"simulated run 'S'.*neither 'velocity' nor 'position'"):
         score_runs(m, no_encoder, nperseg=1024, steady=True)
+
+
+def test_sensor_selection_survives_resampling():
+    s = synthetic_run(2, run_id="S")
+    base = synthetic_run(1, n=2**17, fs=2 * FS)["acceleration"].values
+    t = np.arange(base.size) / (2 * FS)
+    m = xr.Dataset({"acceleration": (("time", "sensor"), np.stack([base, 2 * base], axis=1), {"units": "m s-2"})},
+                   coords={"time": ("time", t, {"units": "s"}), "sensor": ["a", "b"]},
+                   attrs={"run_id": "M", "sample_rate": 2 * FS})
+    with pytest.raises(ConfigError, match=r"sensors \['a', 'b'\]"):
+        score_runs(m, s, nperseg=1024)
+    a = score_runs(m, s, nperseg=1024, sensor="a", band=(100, 3000))
+    b = score_runs(m, s, nperseg=1024, sensor="b", band=(100, 3000))
+    assert a.attrs["resampled"].startswith("measured 20000 Hz")
+    assert float(a.level_diff_db - b.level_diff_db) == pytest.approx(20 * np.log10(2), abs=1e-9)
