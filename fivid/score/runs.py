@@ -290,9 +290,8 @@ def _peaks(fb, log_m, log_s, sig_m, sig_s, bias, r, z2, *, prominence, tolerance
     return {
         "fm": fit_m[:, 0],
         "fs": fit_s[:, 0],
-        # z times the combined standard error of the two fitted vertices; without a fit, one bin
-        "freq_thr": np.where(np.isfinite(fit_m[:, 1]) & np.isfinite(fit_s[:, 1]),
-                             z2 * np.hypot(fit_m[:, 1], fit_s[:, 1]), df),
+        # z times the combined standard error of the two peak frequencies, never below one bin
+        "freq_thr": np.maximum(z2 * np.hypot(fit_m[:, 1], fit_s[:, 1]), df),
         "lm": log_m[im],
         "ls": np.where(matched, log_s[jj], nan),
         "level_thr": np.abs(bias[im]) + z2 * np.hypot(sig_m[im], np.where(matched, sig_s[jj], nan)),
