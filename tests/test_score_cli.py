@@ -81,3 +81,22 @@ def test_help_lists_both_commands(capsys):
         main(["--help"])
     out = capsys.readouterr().out
     assert "psd" in out and "score" in out
+
+
+def test_psd_command_steady_window_and_missing_variable(tmp_path, capsys):
+    ds = synthetic_run(1, run_id="V", n=2**16)
+    t = ds["time"].values
+    ds["velocity"] = ("time", 0.01 * np.clip(t / 1.0, 0, 1) * np.clip((t[-1] - t) / 1.0, 0, 1), {"units": "m s-1"})
+    ds["normal_force"] = ("time", np.full(t.size, 5.0), {"units": "N"})
+    ds.attrs.update(rig="x", sliding_velocity=0.01, normal_load=5.0, roughness_ra=8e-7, source="synthetic", history="h")
+    write_run(ds, tmp_path / "V.nc")
+    out = tmp_path / "p.nc"
+    assert main(["psd", str(tmp_path / "V.nc"), "--nperseg", "1024", "--steady", "-o", str(out)]) == 0
+    with xr.open_dataset(out) as p:
+        assert p.attrs["steady_only"] == 1 and "steady window" in p.attrs["history"]
+        # 1 s ramps of a 6.55 s record, 5 % tolerance: the window is 6.55 - 2 * 0.95 = 4.65 s (+- smoothing)
+        k = p["psd_acceleration"].attrs["n_segments"]
+    assert abs(k - (4.65 * 10000 - 512) // 512) <= 0.05 * 10000 / 512 + 1
+    assert main(["psd", str(tmp_path / "V.nc"), "--variable", "position", "-o", str(tmp_path / "q.nc")]) == 2
+    err = capsys.readouterr().err
+    assert "run 'V'" in err and "V.nc" in err and "no variable 'position'" in err

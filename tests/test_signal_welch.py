@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 import scipy.signal
 import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from fivid.errors import ConfigError, DataQualityError, UnitError
 from fivid.signal import csd, power_units, welch_psd
@@ -215,10 +217,6 @@ def test_docstring_examples_run():
 
     result = doctest.testmod(fivid.signal.welch, optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.attempted > 0 and result.failed == 0
-
-
-from hypothesis import given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
 
 
 @settings(max_examples=25, deadline=None)
