@@ -51,6 +51,9 @@ def main(argv=None) -> int:
     t_first = time.perf_counter() - t0
     t_fivid = best_time(lambda: averaged_spectra(x, fast), repeats)
     t_numpy = best_time(lambda: averaged_spectra(x, plain), repeats)
+    two = SpectralSettings(fs=fs, nperseg=nperseg, noverlap=nperseg // 2, window="hann", detrend="constant",
+                           backend="pyfftw", threads=2)
+    t_two = best_time(lambda: averaged_spectra(x, two), repeats)
     t_scipy = best_time(lambda: scipy.signal.welch(x, fs=fs, window="hann", nperseg=nperseg, noverlap=nperseg // 2,
                                                    detrend="constant", scaling="density"), repeats)
     p_ref = scipy.signal.welch(x, fs=fs, window="hann", nperseg=nperseg, noverlap=nperseg // 2,
@@ -64,6 +67,8 @@ def main(argv=None) -> int:
         "time_fivid_pyfftw_s": round(t_fivid, 4),
         "time_fivid_first_call_incl_pyfftw_import_s": round(t_first, 4),
         "time_fivid_numpy_s": round(t_numpy, 4),
+        "time_fivid_pyfftw_2_threads_s": round(t_two, 4),
+        "load_average_1min": round(__import__("os").getloadavg()[0], 2),
         "speedup_vs_scipy_welch": round(t_scipy / t_fivid, 3),
         "speedup_numpy_backend": round(t_scipy / t_numpy, 3),
         "max_relative_difference": float(np.max(np.abs(p_fast - p_ref) / p_ref)),

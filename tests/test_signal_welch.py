@@ -250,3 +250,12 @@ def test_ar1_spectrum_inside_its_chi2_bounds():
     ratio = (p.values[1:-1] / true)[: 64 * 7].reshape(7, 64).mean(axis=1)
     nu = p.attrs["equivalent_degrees_of_freedom"]
     assert np.all(np.abs(ratio - 1) < 5 * np.sqrt(2 / nu * (1 + 2 * (4 / 9 + 1 / 36)) / 64))
+
+
+def test_two_fftw_threads_give_the_same_numbers():
+    rng = np.random.default_rng(10)
+    x = signal(rng.standard_normal(100_000), 1000.0)
+    one = welch_psd(x, nperseg=2048, backend="pyfftw")
+    two = welch_psd(x, nperseg=2048, backend="pyfftw", threads=2)
+    np.testing.assert_allclose(one.values, two.values, rtol=0, atol=roundoff_atol(one.values, 2048))
+    assert one.attrs["fft_threads"] == 1 and two.attrs["fft_threads"] == 2
