@@ -29,7 +29,7 @@ from fivid.score.uncertainty import (
     relative_power_std,
     rms_threshold_db,
 )
-from fivid.signal.levels import bin_weights, third_octave_bands
+from fivid.signal.levels import bin_weights, third_octave_weights
 from fivid.signal.resample import resample_to
 from fivid.signal.sampling import run_label, sample_rate_of
 from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, segment_window
@@ -262,14 +262,11 @@ def _level_difference(pm, ps, weights, dof_m, dof_s, r, z2) -> tuple[float, floa
 
 def _third_octave_levels(pm, ps, f, f_lo, f_hi, dof_m, dof_s, r):
     """IEC 1/3-octave bands inside the band, the two runs' band levels [dB] and the std of their difference."""
-    df = f[1] - f[0]
-    bands = third_octave_bands(max(f_lo, df / 2), f_hi)
-    keep = bands["upper"] - bands["lower"] >= df  # a band narrower than a bin rests on a fraction of one estimate
-    bands = {k: v[keep] for k, v in bands.items()}
+    # a band narrower than one bin would rest on a fraction of one estimate
+    bands, wb = third_octave_weights(f, f_lo, f_hi, min_bins=1.0)
     if not bands["centre"].size:
         empty = np.zeros(0)
         return bands, empty, empty, empty
-    wb = np.stack([bin_weights(f, lo, hi) for lo, hi in zip(bands["lower"], bands["upper"])], axis=-1)
     sd = _DB * np.hypot(relative_power_std(pm, wb, dof_m, r), relative_power_std(ps, wb, dof_s, r))
     return bands, band_levels_db(pm, wb), band_levels_db(ps, wb), sd
 
