@@ -13,17 +13,18 @@ import numpy as np
 from fivid.errors import ConfigError, DataQualityError, UnitError
 from fivid.signal.fft import FFTW_THREADS, check_backend
 from fivid.signal.sampling import check_finite, run_label, sample_rate_of
-from fivid.signal.unit_strings import power_units, product_units
 from fivid.signal.spectral import (
-    bin_degrees_of_freedom,
     SpectralSettings,
     averaged_spectra,
+    bin_degrees_of_freedom,
     chi2_interval,
     equivalent_degrees_of_freedom,
     segment_window,
 )
+from fivid.signal.unit_strings import power_units, product_units
 
 __all__ = ["welch_psd", "csd", "spectral_settings"]
+
 
 def _units_of(da, label: str) -> str:
     units = da.attrs.get("units")
@@ -90,7 +91,9 @@ def _settings_attrs(settings: SpectralSettings, w: np.ndarray, k: int, nu: float
         "sample_rate": settings.fs,
         "sample_rate_units": "Hz",
         "frequency_resolution": settings.fs / settings.nperseg,
+        "frequency_resolution_units": "Hz",
         "equivalent_noise_bandwidth": settings.fs * np.dot(w, w) / np.sum(w) ** 2,
+        "equivalent_noise_bandwidth_units": "Hz",
         "n_segments": k,
         "equivalent_degrees_of_freedom": nu,
         "equivalent_averages": nu / 2.0,
