@@ -6,14 +6,15 @@ block, segment length, threads), a 2-D real-to-complex transform along the last 
 block of segments. The ``"numpy"`` backend (:func:`scipy.fft.rfft`) computes the same transform and
 gives the same numbers to round-off; tests run one body on both.
 
-Planner settings, measured on the project machine (2 cores shared by ~8 processes, 64 x 8192
-float64 block): FFTW_ESTIMATE plans in 2 ms and executes in 1.41 ms; FFTW_MEASURE plans in 1.1 s
-and executes in 1.34 ms (5 % faster, not worth a second per shape in short CLI runs and tests);
-two threads took 17-20 ms under that load (thread hand-off when the cores are busy), so the
-default is one thread (:data:`FFTW_THREADS`); scipy.fft took 2.2 ms.
+Planner settings, measured twice on the project machine (2 cores, load average 8-10, 64 x 8192
+float64 block): FFTW_ESTIMATE plans in 2-10 ms and executes in 1.26-1.41 ms; FFTW_MEASURE plans in
+1.1 s and executes in 1.16-1.34 ms (5-8 % faster, not worth a second per shape in short CLI runs and
+tests); two threads took 9-20 ms under that load (thread hand-off when the cores are busy), so the
+default is one thread (:data:`FFTW_THREADS`; ``threads=`` asks for more); scipy.fft took 2.0-2.2 ms.
 
-pyfftw is imported on first use (``import fivid`` stays light). Plans are cached per process and
-guarded by a lock, so threads (dask workers) can share them.
+pyfftw is imported on first use (``import fivid`` stays light; pyfftw itself imports dask.array when
+dask is installed, ~2-3 s once per process). Plans are cached per process (the
+:data:`_MAX_PLANS` most recent) and guarded by a lock, so threads (dask workers) can share them.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ BACKENDS = ("pyfftw", "numpy")
 
 FFTW_THREADS = 1  # see the module docstring for the measurements behind these two
 _FFTW_FLAGS = ("FFTW_ESTIMATE",)
+_MAX_PLANS = 16
 _plans: dict = {}
 _plans_lock = threading.Lock()
 
@@ -74,6 +76,8 @@ def _plan(rows: int, n: int, dtype: np.dtype, threads: int) -> _FFTWPlan:
         plan = _plans.get(key)
         if plan is None:
             plan = _plans[key] = _FFTWPlan(rows, n, np.dtype(dtype), threads)
+            while len(_plans) > _MAX_PLANS:  # forget the oldest; a caller holding it keeps it alive
+                del _plans[next(iter(_plans))]
     return plan
 
 
