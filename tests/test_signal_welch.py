@@ -259,3 +259,14 @@ def test_two_fftw_threads_give_the_same_numbers():
     two = welch_psd(x, nperseg=2048, backend="pyfftw", threads=2)
     np.testing.assert_allclose(one.values, two.values, rtol=0, atol=roundoff_atol(one.values, 2048))
     assert one.attrs["fft_threads"] == 1 and two.attrs["fft_threads"] == 2
+
+
+def test_fftw_plan_is_made_once_and_reused():
+    from fivid.signal import fft
+
+    x = signal(np.random.default_rng(12).standard_normal(50_000), 1000.0)
+    welch_psd(x, nperseg=1536, backend="pyfftw")
+    plans = {k: v for k, v in fft._plans.items() if k[1] == 1536}
+    assert len(plans) == 1
+    welch_psd(x * 2, nperseg=1536, backend="pyfftw")
+    assert {k: v for k, v in fft._plans.items() if k[1] == 1536} == plans  # same key, same plan object
