@@ -94,3 +94,27 @@ def test_unknown_estimator():
     x, y, *_ = sdof(n=4096)
     with pytest.raises(ConfigError, match="H3"):
         frf(x, y, nperseg=256, estimator="H3")
+
+
+def test_input_noise_biases_h1_by_a_closed_form_factor_and_not_h2():
+    # Measured input x + m with white m of variance 0.09 (input variance 1) and a noise-free output:
+    # H1 = H Sxx / (Sxx + Smm) = H / 1.09 and H2 = H in expectation, coherence 1/1.09 at every frequency (Bendat &
+    # Piersol §9.2.2). Averaged over the m bins of 1-400 Hz (away from Nyquist, where the bilinear map is singular);
+    # random error of the mean ~ sqrt(2) sqrt(1 - g2)/(g sqrt(2 n_d)) / sqrt(m / 1.94) (Hann bin correlation), 5 sigma.
+    x, y, analytic, *_ = sdof(n=2**19, seed=5)
+    noisy = x + 0.3 * np.random.default_rng(6).standard_normal(x.size)
+    noisy.attrs = dict(x.attrs)
+    h1 = frf(noisy, y, nperseg=4096, estimator="H1")
+    h2 = frf(noisy, y, nperseg=4096, estimator="H2")
+    f = h1["frequency"].values
+    sel = (f > 1) & (f < 400)
+    g2 = 1 / 1.09
+    n_d = h1.attrs["equivalent_averages"]
+    sd_gamma2 = np.sqrt(2 / n_d) * g2 * (1 - g2)  # Bendat & Piersol eq. 9.82 (random error of the coherence)
+    assert np.mean(h1["coherence"].values[sel]) == pytest.approx(g2, abs=5 * sd_gamma2 / np.sqrt(sel.sum() / 1.94)
+                                                                  + 1 / n_d)  # + its bias ~ (1 - g2)^2 / n_d
+    ha = analytic(f[sel])
+    err = np.sqrt(2) * np.sqrt(1 - g2) / (np.sqrt(g2) * np.sqrt(2 * n_d))
+    tol = 5 * err / np.sqrt(sel.sum() / 1.94)
+    assert np.mean(np.abs(h1.values[sel] / ha)) == pytest.approx(1 / 1.09, abs=tol)
+    assert np.mean(np.abs(h2.values[sel] / ha)) == pytest.approx(1.0, abs=tol)
