@@ -27,6 +27,8 @@ class RawRecords:
     u: np.ndarray
     v: np.ndarray
     ke0: float
+    acc: np.ndarray
+    steps: int
 
 
 def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
@@ -67,6 +69,13 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     # chunk: about 3e7 dof-steps (~0.1-0.3 s of wall time) per kernel call
     chunk = max(1, int(3e7 // max(1, 2 * st.npd * n_sub)))
     seg = ka.seg.copy()
+    # Gauss-Seidel tolerance: relative to the shortest master segment [m]
+    seg_len = np.inf
+    for p in range(ka.master_ptr.size - 1):
+        nodes = ka.master_nodes[ka.master_ptr[p]:ka.master_ptr[p + 1]]
+        seg_len = min(seg_len, float(np.hypot(np.diff(ka.X[nodes]), np.diff(ka.X[nodes + st.npd])).min()))
+    seg_len = seg_len if np.isfinite(seg_len) else 1.0
+    gs_tol = settings.gs_tolerance * seg_len
     mu_tab = np.ascontiguousarray(fric.mu)
     with tqdm(total=n_int, disable=None if progress is None else not progress, unit="sample",
               desc="fivid simulate", leave=False) as bar:
@@ -80,7 +89,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 ka.con_dof, ka.con_kind, ka.con_par, ka.con_react,
                 ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
                 seg, geo, lam, cstate,
-                settings.gs_max_iterations, settings.gs_tolerance, mu_tab, float(fric.rate), mu_now, vold_c,
+                settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
                 ka.cnode_slot, ka.cnodes,
                 ka.sens_node, ka.sens_dir,
                 u, v, w, f, scratch, acc, react_acc,
@@ -90,7 +99,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 raise SimulationDiverged(_diagnosis(model, st, status, diag, dt, settings, u, v))
             r0 += nr
             bar.update(nr)
-    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0)
+    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, acc, n_int * n_sub)
 
 
 def _diagnosis(model, st, status, diag, dt, settings, u, v) -> str:

@@ -132,6 +132,10 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "rayleigh_beta": float(model.rayleigh_beta),
         "contact_method": "node-to-segment, forward-increment Lagrange multipliers, Coulomb stick/slip, Gauss-Seidel",
         "contact_gs_tolerance": settings.gs_tolerance,
+        "contact_gs_mean_sweeps": float(raw.acc[K.GS_SWEEPS] / max(raw.steps, 1)),
+        "contact_gs_max_sweeps": int(raw.acc[K.GS_MAX]),
+        "contact_gs_steps_at_limit": int(raw.acc[K.GS_CAPPED]),
+        "steps": int(raw.steps),
     })
     if roughness_ra is None:
         ds.attrs["roughness_ra_note"] = "not given: recorded as 0"
