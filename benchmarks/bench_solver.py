@@ -38,8 +38,8 @@ def _bare_kernels():
             wx = w[:npd]
             wy = w[npd:]
             for b in range(blocks.shape[0]):
-                _uniform_component(wx, wy, f[:npd], c_uni[b], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2])
-                _uniform_component(wx, wy, f[npd:], c_uni[b], 1, blocks[b, 0], blocks[b, 1], blocks[b, 2])
+                _uniform_component(wx, wy, f[:npd], c_uni[b], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+                _uniform_component(wx, wy, f[npd:], c_uni[b], 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
             for d in range(n):
                 vn = v[d] + dt * (-minv[d] * f[d] - alpha * v[d])
                 v[d] = vn
@@ -56,7 +56,7 @@ def _bare_kernels():
             for b in range(blocks.shape[0]):
                 for a in prange(2):
                     _uniform_component(wx, wy, f[a * npd:(a + 1) * npd], c_uni[b], a, blocks[b, 0], blocks[b, 1],
-                                       blocks[b, 2])
+                                       blocks[b, 2], blocks[b, 3])
             for d in prange(n):
                 vn = v[d] + dt * (-minv[d] * f[d] - alpha * v[d])
                 v[d] = vn
@@ -68,16 +68,16 @@ def _bare_kernels():
 
 
 def _bare_layout(model, st):
-    """Ghost-padded copy of every block: one interior stencil covers all real nodes."""
-    offs, rows, off = [], [], 0
-    for b, block in enumerate(model.blocks):
-        offs.append(off)
-        rows.append((off + 0, block.nx + 2, block.ny + 2))
-        off += (block.nx + 3) * (block.ny + 3)
-    npd = off + 2
-    blocks = np.array([(o + 1, nx, ny) for o, nx, ny in rows], dtype=np.int64)
-    c_uni = np.ascontiguousarray(st.c_uni[: len(model.blocks)])
-    return npd, blocks, c_uni
+    """Ghost-padded copy of every block: one stencil patch covers all real nodes of the block."""
+    rows, off = [], 0
+    for block in model.blocks:
+        stride = block.nx + 3
+        rows.append((off + stride + 1, block.nx + 1, block.ny + 1, stride))
+        off += stride * (block.ny + 3)
+    blocks = np.array(rows, dtype=np.int64)
+    # the interior patch of each uniform block comes first in its group of five
+    c_uni = np.ascontiguousarray(st.c_uni[::5][: len(model.blocks)])
+    return off, blocks, c_uni
 
 
 def _time(fn, *args, repeat=3):

@@ -10,12 +10,13 @@ Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / i
 - ``w = u + beta*v`` is kept up to date by the update pass, so one stencil pass gives
   ``f = K (u + beta v)`` (stiffness-proportional damping folded in).
 - Stencil coefficient ``((dj+1)*3 + (di+1))*4 + 2*a + b`` couples dof ``a`` of node ``p`` with dof ``b`` of
-  node ``p + dj*(nx+1) + di``; uniform blocks share one set for their interior nodes, the other nodes
-  are listed with their own coefficients.
+  node ``p + dj*(nx+1) + di``; in a uniform block the interior nodes share one set and so do the nodes of
+  each edge (corners excluded): five patches; corners and mapped blocks are listed node by node.
 - Hot loops index with unsigned integers: numba then emits no negative-index wraparound, which
   otherwise blocks vectorisation (measured: 6x slower stencil).
-- constrained dofs ``con_dof`` with ``con_kind`` 0 fixed, 1 displacement ramp, 2 velocity ramp and
-  ``con_par = (amplitude, t_start, ramp_time)``; the smooth ramp is ``r(s) = s - sin(2 pi s)/(2 pi)``.
+- constrained dofs ``con_dof`` belong to motion groups ``con_grp``; ``grp_par[g] = (kind, amplitude, t_start,
+  ramp_time)`` with kind 0 fixed, 1 displacement ramp, 2 velocity ramp (one velocity evaluation per group
+  and step, not per dof); the smooth ramp is ``r(s) = s - sin(2 pi s)/(2 pi)``.
 
 Nothing is allocated inside the time loop.
 """
@@ -89,9 +90,10 @@ def constrained_velocity(kind, amp, t0, tr, t, dt):
 
 
 @njit(cache=True, fastmath={"contract"})
-def _uniform_component(wx, wy, fo, c, a, off, nx, ny):
-    """One force component ``a`` of the interior nodes of a uniform block (unsigned indices: no wraparound)."""
-    st = uint64(nx + 1)
+def _uniform_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
+    """Force component ``a`` on a rectangular patch of nodes sharing one stencil ``c`` (unsigned indices: no
+    negative-index wraparound, so the row loop vectorises)."""
+    st = uint64(stride)
     one = uint64(1)
     k = 2 * a
     c0 = c[k]
@@ -112,9 +114,9 @@ def _uniform_component(wx, wy, fo, c, a, off, nx, ny):
     c29 = c[k + 29]
     c32 = c[k + 32]
     c33 = c[k + 33]
-    for j in range(1, ny):
-        b = uint64(off + j * (nx + 1))
-        for i in range(1, nx):
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for i in range(ncols):
             m = b + uint64(i)
             s = m - st
             n = m + st
@@ -136,12 +138,13 @@ def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
         Output forces [N] (same layout).
     npd : int
         Length of one component (nodes plus padding on both sides).
-    blocks : int64 ndarray (n_uniform, 3)
-        ``first index (pad + node_offset), nx, ny`` of each uniform block: its interior nodes.
-    c_uni : ndarray (n_uniform, 36)
-        Interior stencil of each uniform block [N m-1].
+    blocks : int64 ndarray (n_patch, 4)
+        Patches of nodes sharing one stencil: ``first x-index, columns, rows, row stride``
+        (the interior and the four edges without corners of each uniform block).
+    c_uni : ndarray (n_patch, 36)
+        Stencil of each patch [N m-1].
     lst_idx, lst_stride : int64 ndarray (n_list,)
-        Every other node (block boundaries, mapped blocks): x-index and row stride ``nx + 1``.
+        Every other node (block corners, mapped blocks): x-index and row stride ``nx + 1``.
     lst_coef : ndarray (n_list, 36)
         Their stencils [N m-1]; neighbours outside the block have zero coefficients (the padding
         keeps their indices in bounds).
@@ -152,8 +155,8 @@ def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
     fy = f[npd:]
     for b in range(blocks.shape[0]):
         c = c_uni[b]
-        _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2])
-        _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2])
+        _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+        _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
     one = uint64(1)
     for r in range(lst_idx.shape[0]):
         p = uint64(lst_idx[r])
@@ -390,7 +393,7 @@ def run_steps(
     step0, nsteps, dt, alpha, beta, n_sub, npd,
     blocks, c_uni, lst_idx, lst_stride, lst_coef, mass, minv,
     spr_dof, spr_kc,
-    con_dof, con_kind, con_par, con_react,
+    con_dof, con_grp, grp_par, grp_v, con_react,
     X, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, minv_c, seg, geo, lam, cstate,
     gs_max_iter, gs_tol, mu_tab, mu_rate, mu_now, vold_c, cnode_slot, cnodes,
     sens_node, sens_dir,
@@ -440,12 +443,15 @@ def run_steps(
             wext = 0.0
             rt = 0.0
             rn = 0.0
+            for g in range(grp_par.shape[0]):
+                kind = int(grp_par[g, 0])
+                grp_v[g, 0] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t - dt, dt)
+                grp_v[g, 1] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t, dt)
             for c in range(con_dof.shape[0]):
                 d = con_dof[c]
                 vwrong = v[d]
-                kind = con_kind[c]
-                vo = constrained_velocity(kind, con_par[c, 0], con_par[c, 1], con_par[c, 2], t - dt, dt)
-                vn = constrained_velocity(kind, con_par[c, 0], con_par[c, 1], con_par[c, 2], t, dt)
+                vo = grp_v[con_grp[c], 0]
+                vn = grp_v[con_grp[c], 1]
                 u[d] += dt * (vn - vwrong)
                 v[d] = vn
                 w[d] = u[d] + beta * vn

@@ -45,8 +45,8 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     v = st.to_kernel(model.initial_velocity())
     # constrained dofs start at their prescribed velocity at t = -dt/2 (zero for clamps and ramps)
     for c, d in enumerate(ka.con_dof):
-        p = ka.con_par[c]
-        v[d] = K.constrained_velocity(ka.con_kind[c], p[0], p[1], p[2], -dt, dt)
+        p = ka.grp_par[ka.con_grp[c]]
+        v[d] = K.constrained_velocity(int(p[0]), p[1], p[2], p[3], -dt, dt)
     beta = float(model.rayleigh_beta)
     w = u + beta * v
     f = np.zeros_like(u)
@@ -86,7 +86,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, n_sub, st.npd,
                 st.blocks, st.c_uni, st.lst_idx, st.lst_stride, st.lst_coef, ka.mass, ka.minv,
                 ka.spr_dof, ka.spr_kc,
-                ka.con_dof, ka.con_kind, ka.con_par, ka.con_react,
+                ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
                 ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
                 seg, geo, lam, cstate,
                 settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
