@@ -86,7 +86,9 @@ def sampling_deviation(time: np.ndarray, tolerance: float) -> Finding | None:
     if time.size < 3:
         return None
     dt = (time[-1] - time[0]) / (time.size - 1)
-    deviation = np.abs(np.diff(time) - dt)
+    deviation = np.diff(time)
+    deviation -= dt
+    np.abs(deviation, out=deviation)  # in place: one temporary array of n - 1 floats
     worst = int(np.argmax(deviation))
     relative = float(deviation[worst] / dt)
     if relative <= tolerance:

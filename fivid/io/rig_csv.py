@@ -283,6 +283,7 @@ def read_rig_csv(path, profile=None):
                                        line=lines(_first_null(column)), column=spec.name)
             values = _to_si(column, spec.factor, spec.offset)
             del column
+            pa.default_memory_pool().release_unused()  # give the Arrow column back: one copy at a time
             finding = first_non_finite(values)
             if finding is not None:
                 raise _fail(head, lines, finding, column=spec.name)

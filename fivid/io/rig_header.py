@@ -8,6 +8,7 @@ every file's ``run_id`` cheaply before converting anything. Line numbers are the
 from __future__ import annotations
 
 import csv
+import functools
 import logging
 import math
 import re
@@ -109,6 +110,12 @@ def _split(text: str, delimiter: str) -> list[str]:
     return [f.strip().strip("\ufeff").strip() for f in row]
 
 
+@functools.lru_cache(maxsize=256)
+def _conversion(units: str, target: str) -> tuple[float, float]:
+    """:func:`fivid.units.conversion`, cached: a batch of files repeats the same few header units."""
+    return conversion(units, target)
+
+
 def _variables() -> dict:
     return {n: v for n, v in registry().variables.items() if not v.coordinate or n == "time"}
 
@@ -136,7 +143,7 @@ def _rig_csv_columns(path: Path, fields: list[str], line: int):
             raise UnitError(f"column {name!r} has an empty unit; write e.g. '{name} [{variables[name].units}]'",
                             file=path, line=line, column=name)
         try:
-            factor, offset = conversion(units, variables[name].units)
+            factor, offset = _conversion(units, variables[name].units)
         except UnitError as exc:
             raise exc.located(file=path, line=line, column=name) from None
         columns.append((index, ColumnSpec(name, name, units, None, 1.0, factor, offset)))
