@@ -263,9 +263,9 @@ def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
     for attr in _REQUIRED:
         if attr not in attrs:
             att = registry().attributes[attr]
-            unit = f" with a unit, e.g. in {att.units}" if att.units else ""
+            value = f"<value> {att.units}" if att.units else "<value>"
             if profile.format == "fivid-rig-csv":
-                how = f"add a line '# {attr}: ...'{unit} before the header"
+                how = f"add a line '# {attr}: {value}' before the header (any unit of that dimension)"
             else:
                 how = (f"give it in the file's preamble, the file name (metadata.file_name.pattern) or "
                        f"metadata.values of {profile.describe()}")
