@@ -182,6 +182,7 @@ def test_killed_before_rename_leaves_no_nc(tmp_path):
     assert len(names) == 1 and names[0].startswith(".K1.nc.") and names[0].endswith(".tmp")  # the complete temp file
 
 
+@pytest.mark.slow
 def test_killed_while_writing_leaves_no_nc(tmp_path):
     """SIGKILL from outside while the temporary file grows: no K2.nc, partial data only in the .tmp."""
     rows = [f"{i / 51200.0:.9f},0.01,1.5,5.0,0.0" for i in range(400_000)]
