@@ -13,7 +13,6 @@ import hashlib
 import os
 import re
 import threading
-from pathlib import Path
 
 import numpy as np
 

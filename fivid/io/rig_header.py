@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid.errors import FividError, SchemaError, UnitError
-from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile, metadata_value
+from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile
+from fivid.io.rig_quantities import metadata_value
 from fivid.schema import registry
 from fivid.units import conversion
 
