@@ -40,7 +40,7 @@ def first_non_finite(values: np.ndarray) -> Finding | None:
         return None
     i = int(np.argmin(finite))
     n = int(values.size - np.count_nonzero(finite))
-    return Finding(i, f"value {values[i]!r} is not a finite number ({n} non-finite value(s) in this column)")
+    return Finding(i, f"value {float(values[i])!r} is not a finite number ({n} non-finite value(s) in this column)")
 
 
 def time_not_increasing(time: np.ndarray) -> Finding | None:
@@ -56,7 +56,7 @@ def time_not_increasing(time: np.ndarray) -> Finding | None:
     what = "is duplicated" if time[i] == time[i - 1] else "goes backwards"
     return Finding(
         i,
-        f"time is not strictly increasing: {time[i]!r} s {what} after {time[i - 1]!r} s "
+        f"time is not strictly increasing: {float(time[i])!r} s {what} after {float(time[i - 1])!r} s "
         f"({n} such step(s) in the file)",
         previous=i - 1,
     )

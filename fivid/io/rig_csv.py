@@ -133,12 +133,11 @@ def _parse_columns(buffer, head: RigHead, lines: _Lines) -> dict:
         if "Empty CSV file" in str(exc):
             raise SchemaError("no data rows after the header", file=head.path, line=head.header_line) from None
         raise _locate_parse_error(buffer, head, names, include, lines, str(exc)) from None
-    return {spec.variable: table.column(names[i]) for i, spec in head.columns}
+    return {i: table.column(names[i]) for i, _ in head.columns}
 
 
-def _to_si(column, factor: float, offset: float) -> np.ndarray:
-    """Copy an Arrow float64 column into a new numpy array, scaled to SI in the same pass."""
-    out = np.empty(len(column), dtype=np.float64)
+def _to_si(column, factor: float, offset: float, out: np.ndarray) -> np.ndarray:
+    """Copy an Arrow float64 column into ``out`` (1-D, may be strided), scaled to SI in the same pass."""
     start = 0
     for chunk in column.chunks:
         raw = chunk.to_numpy(zero_copy_only=True)
@@ -165,6 +164,14 @@ def _fail(head: RigHead, lines: _Lines, finding, column: str | None = None) -> D
     if finding.previous is not None:
         message += f" (previous sample at line {lines(finding.previous)})"
     return DataQualityError(message, file=head.path, line=line, column=column)
+
+
+def _by_variable(head: RigHead) -> dict:
+    """``variable -> [(field index, ColumnSpec), ...]`` in header order (several for sensors)."""
+    groups: dict = {}
+    for index, spec in head.columns:
+        groups.setdefault(spec.variable, []).append((index, spec))
+    return groups
 
 
 def _time_spec(head: RigHead):
@@ -202,7 +209,8 @@ def _history(head: RigHead, digest: str) -> str:
             how += f" at {spec.sensitivity}"
         if spec.scale != 1.0:
             how += f" x {spec.scale:g}"
-        cols.append(f"{spec.variable} <- {how}")
+        target = spec.variable if spec.sensor is None else f"{spec.variable}[{spec.sensor}]"
+        cols.append(f"{target} <- {how}")
     origin = ", ".join(f"{k} ({v})" for k, v in head.attr_origin.items())
     return new_history(
         f"ingest {head.path.name} (sha256 {digest}) with {head.profile.describe()}; columns: {'; '.join(cols)}; "
@@ -275,18 +283,23 @@ def read_rig_csv(path, profile=None):
         finally:
             hasher.join()
         arrays = {}
-        for _, spec in head.columns:
-            column = arrow_columns.pop(spec.variable)
-            if column.null_count:
-                raise DataQualityError("empty value (a missing sample)", file=head.path,
-                                       line=lines(_first_null(column)), column=spec.name)
-            values = _to_si(column, spec.factor, spec.offset)
-            del column
-            pa.default_memory_pool().release_unused()  # give the Arrow column back: one copy at a time
-            finding = first_non_finite(values)
-            if finding is not None:
-                raise _fail(head, lines, finding, column=spec.name)
-            arrays[spec.variable] = (values, spec)
+        for variable, members in _by_variable(head).items():
+            n = len(arrow_columns[members[0][0]])
+            sensors = [spec.sensor for _, spec in members]
+            values = np.empty((n, len(members)) if sensors[0] is not None else n, dtype=np.float64)
+            for k, (index, spec) in enumerate(members):
+                column = arrow_columns.pop(index)
+                if column.null_count:
+                    raise DataQualityError("empty value (a missing sample)", file=head.path,
+                                           line=lines(_first_null(column)), column=spec.name)
+                target = values if values.ndim == 1 else values[:, k]
+                _to_si(column, spec.factor, spec.offset, target)
+                del column
+                pa.default_memory_pool().release_unused()  # give the Arrow column back: one copy at a time
+                finding = first_non_finite(target)
+                if finding is not None:
+                    raise _fail(head, lines, finding, column=spec.name)
+            arrays[variable] = (values, [spec for _, spec in members])
         time = arrays.pop("time")[0]
         sample_rate = _sample_rate(head, lines, time)
     digest = sha.hexdigest()
@@ -294,16 +307,26 @@ def read_rig_csv(path, profile=None):
     attrs["sample_rate"] = sample_rate
     attrs["source"] = f"{head.path.name} sha256:{digest}"
     attrs["history"] = _history(head, digest)
-    data_vars = {}
-    for name, (values, spec) in arrays.items():
-        var_attrs = {"source_column": spec.name, "source_units": spec.units}
-        if spec.sensitivity:
-            var_attrs["sensitivity"] = spec.sensitivity
-        if spec.scale != 1.0:
-            var_attrs["scale"] = spec.scale
-        data_vars[name] = xr.Variable(("time",), values, var_attrs)
+    data_vars, sensor_names = {}, None
+    for name, (values, specs) in arrays.items():
+        var_attrs = {"source_column": ", ".join(s.name for s in specs),
+                     "source_units": ", ".join(s.units for s in specs)}
+        if any(s.sensitivity for s in specs):
+            var_attrs["sensitivity"] = ", ".join(s.sensitivity or "-" for s in specs)
+        if any(s.scale != 1.0 for s in specs):
+            var_attrs["scale"] = ", ".join(f"{s.scale:g}" for s in specs) if len(specs) > 1 else specs[0].scale
+        if values.ndim == 2:
+            names = [s.sensor for s in specs]
+            if sensor_names is not None and names != sensor_names:
+                raise SchemaError(f"{name!r} has sensors {names} but another variable has {sensor_names}; "
+                                  "every variable with a sensor dimension must list the same sensors",
+                                  file=head.path, line=head.header_line, column=specs[0].name)
+            sensor_names = names
+        data_vars[name] = xr.Variable(("time",) if values.ndim == 1 else ("time", "sensor"), values, var_attrs)
     time_spec = _time_spec(head)
     coords = {"time": xr.Variable(("time",), time, {"source_column": time_spec.name, "source_units": time_spec.units})}
+    if sensor_names is not None:
+        coords["sensor"] = xr.Variable(("sensor",), np.array(sensor_names, dtype=object))
     ds = apply_cf_attrs(xr.Dataset(data_vars, coords=coords, attrs=attrs))
     known = registry().variables
     ds = ds[[n for n in known if n in ds.data_vars]]  # canonical order

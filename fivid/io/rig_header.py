@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid.errors import FividError, SchemaError, UnitError
-from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile
+from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile, has_sensor_dim
 from fivid.io.rig_quantities import metadata_value
 from fivid.schema import registry
 from fivid.units import conversion
@@ -122,7 +122,7 @@ def _variables() -> dict:
 
 
 def _rig_csv_columns(path: Path, fields: list[str], line: int):
-    """Columns of a fivid-rig-csv header ``name [unit], ...``."""
+    """Columns of a fivid-rig-csv header ``name [unit]`` or ``name:sensor [unit]``."""
     variables = _variables()
     columns, ignored, seen = [], [], {}
     for index, text in enumerate(fields):
@@ -132,22 +132,32 @@ def _rig_csv_columns(path: Path, fields: list[str], line: int):
                 f"column header {text!r} must be written 'name [unit]', e.g. 'acceleration [g]'",
                 file=path, line=line, column=text or f"#{index + 1}",
             )
-        name, units = m.group("name").strip(), m.group("units").strip()
-        if name in seen:
-            raise SchemaError(f"column {name!r} appears twice in the header (fields {seen[name]} and {index + 1})",
-                              file=path, line=line, column=name)
-        seen[name] = index + 1
+        label, units = m.group("name").strip(), m.group("units").strip()
+        if label in seen:
+            raise SchemaError(f"column {label!r} appears twice in the header (fields {seen[label]} and {index + 1})",
+                              file=path, line=line, column=label)
+        seen[label] = index + 1
+        name, _, sensor = (part.strip() for part in label.partition(":"))
         if name not in variables:
-            ignored.append(name)
+            ignored.append(label)
             continue
+        if sensor and not has_sensor_dim(name):
+            raise SchemaError(f"{name!r} has no sensor dimension; write '{name} [unit]' (one column)",
+                              file=path, line=line, column=label)
         if not units:
-            raise UnitError(f"column {name!r} has an empty unit; write e.g. '{name} [{variables[name].units}]'",
-                            file=path, line=line, column=name)
+            raise UnitError(f"column {label!r} has an empty unit; write e.g. '{label} [{variables[name].units}]'",
+                            file=path, line=line, column=label)
         try:
             factor, offset = _conversion(units, variables[name].units)
         except UnitError as exc:
-            raise exc.located(file=path, line=line, column=name) from None
-        columns.append((index, ColumnSpec(name, name, units, None, 1.0, factor, offset)))
+            raise exc.located(file=path, line=line, column=label) from None
+        columns.append((index, ColumnSpec(name, label, units, None, 1.0, factor, offset, sensor or None)))
+    for name in {spec.variable for _, spec in columns}:
+        named = [spec.sensor is not None for _, spec in columns if spec.variable == name]
+        if len(named) > 1 and not all(named):
+            raise SchemaError(
+                f"{name!r} has {len(named)} columns: name each one's sensor, e.g. '{name}:top [unit]', "
+                f"'{name}:side [unit]'", file=path, line=line, column=name)
     return columns, ignored
 
 

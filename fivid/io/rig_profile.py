@@ -42,6 +42,7 @@ __all__ = [
     "rig_profile_from_mapping",
     "profile_search_path",
     "RESERVED_ATTRIBUTES",
+    "has_sensor_dim",
 ]
 
 PROFILE_VERSION = 1
@@ -74,6 +75,8 @@ class ColumnSpec:
         Total factor to the canonical SI unit: ``si = factor * raw + offset``.
     offset : float
         Offset to the canonical unit (non-zero only for affine units such as degC).
+    sensor : str or None
+        Sensor name when the variable has several transducers (dimension ``sensor``).
     """
 
     variable: str
@@ -83,6 +86,7 @@ class ColumnSpec:
     scale: float = 1.0
     factor: float = 1.0
     offset: float = 0.0
+    sensor: str | None = None
 
 
 @dataclass(frozen=True)
@@ -260,6 +264,55 @@ def _units_map(raw, key: str, problems: _Problems) -> dict:
     return out
 
 
+def has_sensor_dim(variable: str) -> bool:
+    """Whether canonical ``variable`` may have a ``sensor`` dimension (several transducers)."""
+    return ("time", "sensor") in registry().variables[variable].dims
+
+
+_SENSOR_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
+
+
+def _column_spec(variable: str, spec, key: str, problems: _Problems, sensor_required: bool) -> ColumnSpec | None:
+    """One column mapping ``{name, units, sensitivity, scale, sensor}`` (or just the name)."""
+    if isinstance(spec, str):
+        spec = {"name": spec}
+    allowed = ("name", "units", "sensitivity", "scale", "sensor") if has_sensor_dim(variable) else (
+        "name", "units", "sensitivity", "scale")
+    spec = _mapping(spec, key, problems, allowed=allowed)
+    name = _string(spec, "name", f"{key}.name", problems)
+    units = _string(spec, "units", f"{key}.units", problems)
+    sensitivity = spec.get("sensitivity")
+    scale = spec.get("scale", 1.0)
+    sensor = spec.get("sensor")
+    target = registry().variables[variable].units
+    if name is None or not name.strip():
+        problems.add(f"{key}.name", "missing: the column's name as written in the file's header")
+        return None
+    if units is None:
+        problems.add(f"{key}.units", f"missing: the unit the column is written in (canonical: {target!r})")
+        return None
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:
+        problems.add(f"{key}.scale", f"must be a finite non-zero number (e.g. -1 to flip the sign), got {scale!r}")
+        return None
+    if sensor is None and sensor_required:
+        problems.add(f"{key}.sensor", "missing: with several columns for one variable, name each one's sensor")
+        return None
+    if sensor is not None and not _SENSOR_NAME.match(str(sensor)):
+        problems.add(f"{key}.sensor", f"{sensor!r} is not a sensor name (letters, digits, . _ + -)")
+        return None
+    try:
+        if sensitivity is None:
+            factor, offset = conversion(units, target)
+        else:
+            factor, offset = sensitivity_factor(units, str(sensitivity), target), 0.0
+    except UnitError as exc:
+        problems.add(f"{key}.{'units' if sensitivity is None else 'sensitivity'}", exc.message)
+        return None
+    return ColumnSpec(variable, name.strip(), units, None if sensitivity is None else str(sensitivity),
+                      float(scale), factor * float(scale), offset * float(scale),
+                      None if sensor is None else str(sensor))
+
+
 def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
     reg = registry()
     columns = _mapping(raw, "columns", problems)
@@ -275,37 +328,28 @@ def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
         if variable not in mappable:
             problems.add(key, f"{variable!r} is not a canonical variable; known: {', '.join(mappable)}")
             continue
-        if isinstance(spec, str):
-            spec = {"name": spec}
-        spec = _mapping(spec, key, problems, allowed=("name", "units", "sensitivity", "scale"))
-        name = _string(spec, "name", f"{key}.name", problems)
-        units = _string(spec, "units", f"{key}.units", problems)
-        sensitivity = spec.get("sensitivity")
-        scale = spec.get("scale", 1.0)
-        if name is None or not name.strip():
-            problems.add(f"{key}.name", "missing: the column's name as written in the file's header")
-            continue
-        if units is None:
-            problems.add(f"{key}.units", f"missing: the unit the column is written in (canonical: {reg.variables[variable].units!r})")
-            continue
-        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:
-            problems.add(f"{key}.scale", f"must be a finite non-zero number (e.g. -1 to flip the sign), got {scale!r}")
-            continue
-        target = reg.variables[variable].units
-        try:
-            if sensitivity is None:
-                factor, offset = conversion(units, target)
-            else:
-                factor, offset = sensitivity_factor(units, str(sensitivity), target), 0.0
-        except UnitError as exc:
-            problems.add(f"{key}.{'units' if sensitivity is None else 'sensitivity'}", exc.message)
-            continue
-        specs.append(ColumnSpec(variable, name.strip(), units, None if sensitivity is None else str(sensitivity),
-                                float(scale), factor * float(scale), offset * float(scale)))
+        if isinstance(spec, list):
+            if not has_sensor_dim(variable):
+                problems.add(key, f"{variable!r} has no sensor dimension: map it to one column")
+                continue
+            if not spec:
+                problems.add(key, "an empty list: map it to at least one column")
+                continue
+            found = [_column_spec(variable, s, f"{key}[{i}]", problems, True) for i, s in enumerate(spec)]
+            seen = set()
+            for i, s in enumerate(found):
+                if s is not None and s.sensor in seen:
+                    problems.add(f"{key}[{i}].sensor", f"sensor {s.sensor!r} is already mapped to another column")
+                seen.add(None if s is None else s.sensor)
+            specs += [s for s in found if s is not None]
+        else:
+            found = _column_spec(variable, spec, key, problems, False)
+            if found is not None:
+                specs.append(found)
     names = [s.name for s in specs]
     for s in specs:
         if names.count(s.name) > 1:
-            problems.add(f"columns.{s.variable}.name", f"column {s.name!r} is mapped to more than one variable")
+            problems.add(f"columns.{s.variable}.name", f"column {s.name!r} is mapped more than once")
     required = [n for n, v in reg.variables.items() if v.required or n == "time"]
     given = {s.variable for s in specs} | set(columns)
     for n in required:
