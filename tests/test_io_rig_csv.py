@@ -199,3 +199,18 @@ def test_round_trip_with_conversions(tmp_path):
     ds = read_rig_csv(SAMPLES / "R001_v10_ra08.csv")
     back = read_run(write_run(ds, tmp_path / "R001.nc"))
     xr.testing.assert_identical(back, ds)
+
+
+def test_trailing_delimiter_only_rows_are_not_samples(tmp_path):
+    """Spreadsheets save trailing ',,,,' rows; they are dropped, a trailing delimiter on real rows is kept."""
+    plain = read_rig_csv(write_rig(tmp_path / "plain.csv"))
+    text = rig_text() + ",,,,\n , ,,,\r\n,,,,"
+    ds = read_rig_csv(write_rig(tmp_path / "excel.csv", text=text))
+    np.testing.assert_array_equal(ds["acceleration"].values, plain["acceleration"].values)
+    rows = [r + "," for r in rig_rows()]  # every row ends with a delimiter: a 6th, empty field
+    header = HEADER + ","
+    with pytest.raises(SchemaError, match="column header '' must be written"):
+        read_rig_csv(write_rig(tmp_path / "t.csv", rows=rows, header=header))
+    only_junk = rig_text(rows=[]) + ",,,,\n,,,,\n"
+    with pytest.raises(SchemaError, match="no data rows"):
+        read_rig_csv(write_rig(tmp_path / "j.csv", text=only_junk))

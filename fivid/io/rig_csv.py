@@ -65,6 +65,29 @@ class _Lines:
         return row == self._nonempty().size - 1
 
 
+def _data_block(buffer, head: RigHead):
+    """The data part of the file, without trailing lines made only of delimiters and blanks.
+
+    Spreadsheet programs often save a table with trailing ``;;;;`` rows; they are not samples.
+    Only the file's tail is read.
+    """
+    junk = b" \t\r\n" + head.profile.delimiter.encode()
+    start = end = buffer.size
+    last = None  # offset of the last byte that is not junk
+    while start > head.data_offset and last is None:
+        start = max(head.data_offset, start - (1 << 16))
+        kept = buffer.slice(start, end - start).to_pybytes().rstrip(junk)
+        if kept:
+            last = start + len(kept) - 1
+        end = start
+    if last is None:
+        return buffer.slice(head.data_offset, 0)
+    rest = buffer.slice(last, buffer.size - last).to_pybytes()
+    newline = rest.find(b"\n")
+    stop = buffer.size if newline < 0 else last + newline + 1
+    return buffer.slice(head.data_offset, stop - head.data_offset)
+
+
 def _arrow_options(head: RigHead, *, use_threads: bool, names: list[str], include: list[str], handler=None):
     import pyarrow as pa
     import pyarrow.csv as pcsv
@@ -88,7 +111,7 @@ def _locate_parse_error(buffer, head: RigHead, names, include, lines: _Lines, fa
 
     read, parse, convert = _arrow_options(head, use_threads=False, names=names, include=include)
     try:
-        pcsv.read_csv(pa.BufferReader(buffer.slice(head.data_offset)), read_options=read,
+        pcsv.read_csv(pa.BufferReader(_data_block(buffer, head)), read_options=read,
                       parse_options=parse, convert_options=convert)
     except pa.ArrowInvalid as exc:
         message = str(exc)
@@ -127,7 +150,7 @@ def _parse_columns(buffer, head: RigHead, lines: _Lines) -> dict:
     include = [names[i] for i, _ in head.columns]
     read, parse, convert = _arrow_options(head, use_threads=True, names=names, include=include)
     try:
-        table = pcsv.read_csv(pa.BufferReader(buffer.slice(head.data_offset)), read_options=read,
+        table = pcsv.read_csv(pa.BufferReader(_data_block(buffer, head)), read_options=read,
                               parse_options=parse, convert_options=convert)
     except pa.ArrowInvalid as exc:
         if "Empty CSV file" in str(exc):
