@@ -249,8 +249,9 @@ def test_decimal_point_file_with_decimal_comma_profile(tmp_path):
     assert info.value.line == 2 and info.value.column == "acc" and "decimal comma" in info.value.message
 
 
-def test_profile_object_and_errors_are_fivid_errors(tmp_path):
+def test_profile_object_and_missing_profile_file(tmp_path):
     profile = rig_profile_from_mapping(GOOD)
     ds = read_rig_csv(_daq(tmp_path, ["t [ms];acc;Ft;Fn"] + ROWS), profile)
     assert ds.attrs["run_id"] == "T1"
-    assert issubclass(ConfigError, FividError)
+    with pytest.raises(FividError):  # the CLI's one-line, exit-2 path catches every profile error
+        read_rig_csv(tmp_path / "run.csv", tmp_path / "absent.yaml")

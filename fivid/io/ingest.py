@@ -157,6 +157,9 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
             continue
         try:
             ds = read_rig_csv(path, profile)
+            if ds.attrs["run_id"] != head.attrs["run_id"]:
+                raise SchemaError(f"the file changed during the ingest (run_id {head.attrs['run_id']!r} became "
+                                  f"{ds.attrs['run_id']!r}); run the ingest again", file=path, key="run_id")
             write_run(ds, target, overwrite=overwrite)
         except FividError as exc:
             result.rejected.append(Rejection(path, exc.located(file=path)))
