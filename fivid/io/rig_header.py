@@ -313,9 +313,10 @@ def read_rig_head(path, profile: RigProfile | None = None) -> RigHead:
         if profile.format == "fivid-rig-csv" and number == 1:
             m = _RIG_META.match(text[len(profile.comment):]) if text.startswith(profile.comment) else None
             if m is None or m.group("key") != MAGIC_KEY:
+                used = "" if profile.path is None else f" (the format of {profile.describe()})"
                 raise SchemaError(
-                    f"not a fivid-rig-csv file: the first line must be '# {MAGIC_KEY}: {FORMAT_VERSION}', got "
-                    f"{text[:60]!r}; for another DAQ export give a rig profile (--rig NAME, configs/rigs/)",
+                    f"not a fivid-rig-csv file{used}: the first line must be '# {MAGIC_KEY}: {FORMAT_VERSION}', "
+                    f"got {text[:60]!r}; for another DAQ export give its rig profile (--rig NAME, configs/rigs/)",
                     file=path, line=1,
                 )
             if m.group("value") != FORMAT_VERSION:
