@@ -241,3 +241,29 @@ def test_multi_block_file_agrees_with_pandas_bit_for_bit(tmp_path):
     for k, name in enumerate(["acceleration", "friction_force", "normal_force", "position"], start=1):
         np.testing.assert_array_equal(ds[name].values, ref[:, k])
     np.testing.assert_array_equal(ds["acceleration"].values, values[:, 0])  # shortest repr round-trips
+
+
+def test_same_record_in_both_formats_gives_the_same_dataset(tmp_path):
+    """R001 rewritten by hand as a labdaq export (g -> mV at 100 mV/g by shifting the decimal point,
+    ';' and ',' decimals, CRLF, metadata split between preamble and file name) reads back the same.
+
+    The two acceleration paths are x_g * 9.80665 and x_mV * 0.0980665 with x_mV = 100 x_g exactly in
+    decimal: each side has <= 2 roundings of relative size 2**-53, so they agree within 4 * 2**-53.
+    """
+    from decimal import Decimal
+
+    src = SAMPLES / "R001_v10_ra08.csv"
+    rows = [line.split(",") for line in src.read_text(encoding="utf-8").splitlines() if line[:1].isdigit()]
+    daq = ["LabDAQ Export;v3.2", "Run;R001", "Normal load;5 N", "Sample rate;51200 Hz",
+           '"Time (s)";"Accel Z (mV)";"Fx (N)";"Fz (N)";"Pos (mm)"']
+    for t, a, ft, fn, x, _ in rows:
+        mv = format(Decimal(a).scaleb(2), "f")
+        daq.append(";".join([t, mv, ft, fn, x]).replace(".", ","))
+    path = tmp_path / "R001_v10_ra08.csv"
+    path.write_bytes(("\r\n".join(daq) + "\r\n").encode())
+    a, b = read_rig_csv(src), read_rig_csv(path, "labdaq")
+    np.testing.assert_allclose(b["acceleration"].values, a["acceleration"].values, rtol=4 * 2.0**-53, atol=0)
+    for name in ("time", "friction_force", "normal_force", "position"):
+        np.testing.assert_array_equal(b[name].values, a[name].values)
+    for key in ("run_id", "rig", "sliding_velocity", "normal_load", "roughness_ra", "sample_rate"):
+        assert b.attrs[key] == pytest.approx(a.attrs[key], rel=2.0**-52), key
