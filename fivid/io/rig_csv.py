@@ -53,12 +53,15 @@ class _Lines:
             starts = np.concatenate(([0], newlines + 1))
             ends = np.concatenate((newlines, [data.size]))
             length = ends - starts
-            has_cr = (length > 0) & (data[np.maximum(ends - 1, 0)] == 13) if data.size else length > 0
-            self._rows = np.flatnonzero(length - has_cr > 0)
+            if data.size:  # a line holding only "\r" is blank too (CRLF files)
+                length -= (length > 0) & (data[np.maximum(ends - 1, 0)] == 13)
+            self._rows = np.flatnonzero(length > 0)
         return self._rows
 
     def __call__(self, row: int) -> int:
         rows = self._nonempty()
+        if rows.size == 0:
+            return self._head.header_line + 1
         return self._head.header_line + 1 + int(rows[min(row, rows.size - 1)])
 
     def is_last(self, row: int) -> bool:
