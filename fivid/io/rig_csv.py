@@ -145,7 +145,7 @@ def _locate_parse_error(buffer, head: RigHead, names, include, lines: _Lines, fa
 
 
 def _parse_columns(buffer, head: RigHead, lines: _Lines) -> dict:
-    """Parse the data block with pyarrow; returns ``variable -> pyarrow.ChunkedArray`` (float64)."""
+    """Parse the data block with pyarrow; returns ``field index -> pyarrow.ChunkedArray`` (float64)."""
     import pyarrow as pa
     import pyarrow.csv as pcsv
 

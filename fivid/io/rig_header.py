@@ -17,7 +17,7 @@ from pathlib import Path
 
 from fivid.errors import FividError, SchemaError, UnitError
 from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile, has_sensor_dim
-from fivid.io.rig_quantities import metadata_value
+from fivid.io.rig_quantities import attribute_units, metadata_value
 from fivid.schema import registry
 from fivid.units import conversion
 
@@ -229,6 +229,33 @@ def _same(a, b) -> bool:
     return a == b
 
 
+def _from_file_name(path: Path, profile: RigProfile, attrs: dict, origin: dict) -> bool:
+    """Add the attributes the profile's file-name pattern gives; False when the name does not match."""
+    if not profile.file_name_pattern:
+        return True
+    m = re.search(profile.file_name_pattern, path.name)
+    if m is None:
+        return False
+    for attr, raw in m.groupdict().items():
+        if raw is None:
+            continue
+        try:
+            value = metadata_value(attr, raw, default_units=profile.file_name_units.get(attr), decimal=profile.decimal)
+        except FividError as exc:
+            raise type(exc)(f"from the file name ({raw!r}): {exc.message}", file=path, key=attr) from None
+        if attr in attrs and not _same(attrs[attr], value):
+            unit = f" {attribute_units(attr)}" if attribute_units(attr) else ""
+            raise SchemaError(
+                f"the file says {attr} = {attrs[attr]!r}{unit} ({origin[attr]}) but its name says {value!r}{unit}; "
+                "correct one of them",
+                file=path, key=attr,
+            )
+        if attr not in attrs:
+            attrs[attr] = value
+            origin[attr] = "file name"
+    return True
+
+
 def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
     """Attributes from the file, then the file name, then the profile; file and name must agree."""
     attrs, origin = {}, {}
@@ -244,29 +271,7 @@ def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
         except FividError as exc:
             raise exc.located(file=path, line=number, key=attr) from None
         origin[attr] = f"line {number}"
-    unmatched_name = False
-    if profile.file_name_pattern:
-        m = re.search(profile.file_name_pattern, path.name)
-        if m is None:
-            unmatched_name = True
-        else:
-            for attr, raw in m.groupdict().items():
-                if raw is None:
-                    continue
-                try:
-                    value = metadata_value(attr, raw, default_units=profile.file_name_units.get(attr), decimal=profile.decimal)
-                except FividError as exc:
-                    raise exc.located(file=path, key=attr).__class__(
-                        f"from the file name ({raw!r}): {exc.message}", file=path, key=attr) from None
-                if attr in attrs and not _same(attrs[attr], value):
-                    raise SchemaError(
-                        f"the file says {attr} = {attrs[attr]!r} ({origin[attr]}) but its name says {value!r}; "
-                        "correct one of them",
-                        file=path, key=attr,
-                    )
-                if attr not in attrs:
-                    attrs[attr] = value
-                    origin[attr] = "file name"
+    unmatched_name = not _from_file_name(path, profile, attrs, origin)
     for attr, value in profile.values.items():
         if attr not in attrs:
             attrs[attr] = value
