@@ -255,3 +255,11 @@ def test_profile_object_and_missing_profile_file(tmp_path):
     assert ds.attrs["run_id"] == "T1"
     with pytest.raises(FividError):  # the CLI's one-line, exit-2 path catches every profile error
         read_rig_csv(tmp_path / "run.csv", tmp_path / "absent.yaml")
+
+
+def test_bad_value_in_file_name(tmp_path):
+    profile = _profile(tmp_path, metadata__file_name={"pattern": r"_v(?P<sliding_velocity>[^_.]+)",
+                                                       "units": {"sliding_velocity": "mm/s"}})
+    with pytest.raises(UnitError) as info:
+        read_rig_csv(_daq(tmp_path, ["t [ms];acc;Ft;Fn"] + ROWS, name="R1_vfast.csv"), profile)
+    assert info.value.key == "sliding_velocity" and "from the file name ('fast')" in info.value.message
