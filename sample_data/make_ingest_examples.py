@@ -26,6 +26,7 @@ from scipy import signal
 HERE = Path(__file__).resolve().parent
 SAMPLE_RATE = 51200.0  # [Hz]
 N_SAMPLES = 6400  # 0.125 s, keeps both files under 0.5 MB each
+SYNTHETIC = "SYNTHETIC example written by sample_data/make_ingest_examples.py (not a measurement)"
 
 
 def synthetic_run(seed: int, velocity_mm_s: float, normal_load: float):
@@ -50,17 +51,12 @@ def synthetic_run(seed: int, velocity_mm_s: float, normal_load: float):
 def write_rig_csv(path: Path) -> None:
     """R001: fivid-rig-csv, 10 mm/s, 5 N, Ra 0.8 µm."""
     t, a, ft, fn, x, v = synthetic_run(1, 10.0, 5.0)
-    lines = [
-        "# fivid-rig-csv: 1",
-        "# SYNTHETIC example written by sample_data/make_ingest_examples.py (not a measurement)",
-        "# run_id: R001",
-        "# rig: triboair",
-        "# sliding_velocity: 10 mm/s",
-        "# normal_load: 5 N",
-        "# roughness_ra: 0.8 µm",
-        "# sample_rate: 51.2 kHz",
-        "time [s],acceleration [g],friction_force [N],normal_force [N],position [mm],velocity [mm/s]",
-    ]
+    metadata = {
+        "run_id": "R001", "rig": "triboair", "sliding_velocity": "10 mm/s", "normal_load": "5 N",
+        "roughness_ra": "0.8 µm", "sample_rate": "51.2 kHz",
+    }
+    lines = ["# fivid-rig-csv: 1", f"# {SYNTHETIC}"] + [f"# {k}: {v}" for k, v in metadata.items()]
+    lines.append("time [s],acceleration [g],friction_force [N],normal_force [N],position [mm],velocity [mm/s]")
     lines += [f"{r[0]:.7f},{r[1]:.5f},{r[2]:.4f},{r[3]:.4f},{r[4]:.5f},{r[5]:.4f}" for r in zip(t, a, ft, fn, x, v)]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
@@ -68,15 +64,12 @@ def write_rig_csv(path: Path) -> None:
 def write_daq_csv(path: Path) -> None:
     """R002: semicolon/decimal-comma export, CRLF line ends, accelerometer in mV at 100 mV/g."""
     t, a, ft, fn, x, _ = synthetic_run(2, 20.0, 5.0)
-    lines = [
-        "LabDAQ Export;v3.2",
-        "Comment;SYNTHETIC example written by sample_data/make_ingest_examples.py (not a measurement)",
-        "Run;R002",
-        "Date;2026-11-20 14:03:11",
-        "Normal load;5,0 N",
-        "Sample rate;51200 Hz",
-        '"Time (s)";"Accel Z (mV)";"Fx (N)";"Fz (N)";"Pos (mm)"',
-    ]
+    preamble = {
+        "LabDAQ Export": "v3.2", "Comment": SYNTHETIC, "Run": "R002", "Date": "2026-11-20 14:03:11",
+        "Normal load": "5,0 N", "Sample rate": "51200 Hz",
+    }
+    lines = [f"{k};{v}" for k, v in preamble.items()]
+    lines.append('"Time (s)";"Accel Z (mV)";"Fx (N)";"Fz (N)";"Pos (mm)"')
     mv = a * 100.0  # 100 mV/g
     rows = (f"{r[0]:.7f};{r[1]:.3f};{r[2]:.4f};{r[3]:.4f};{r[4]:.5f}" for r in zip(t, mv, ft, fn, x))
     lines += [row.replace(".", ",") for row in rows]

@@ -3,7 +3,8 @@
 Not measured data. Each run mimics a TRIBOAIR-like record at 25.6 kHz: an unloaded interval 0-0.6 s
 (tare: use 0-0.5 s), a normal-load ramp, a velocity ramp, steady sliding and a ramp down. The friction force is
 ``Ft = (μ0 + μp(t)) Fn(t)`` with μp drawn from the true law (:meth:`PerturbedCoulombLaw.sample`) and a
-normal force fluctuating by ~1 %. The force sensors add white noise, offsets and mains hum
+normal force fluctuating by ~1 %. The friction force reaches its Coulomb value once the base moves at 30 % of the plateau velocity.
+The force sensors add white noise, offsets and mains hum
 (50.02 Hz, odd harmonics); the encoder velocity has 1 % noise. The truth a test compares with:
 
 - ``mu0`` of the law;
@@ -15,14 +16,14 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from fivid.friction import AmplitudeModel, PerturbedCoulombLaw
+from fivid.friction import AmplitudeModel, PerturbedCoulombLaw, synthesise_perturbation
 from fivid.schema import apply_cf_attrs, new_history, validate_run
 
 __all__ = ["true_law", "synthetic_run", "run_grid", "band_fraction", "band_amplitude", "FS", "ANALYSIS_BAND", "MU0"]
 
 FS = 25600.0  # [Hz]
 ANALYSIS_BAND = (100.0, 5000.0)  # [Hz], multiples of the Welch resolution 12.5 Hz (nperseg 2048)
-SHAPE_F = np.linspace(5.0, 12000.0, 4000)
+SHAPE_F = np.linspace(0.0, 12000.0, 4001)  # flat down to 0 Hz: batch means of μ are then independent
 CORNER, ORDER = 1500.0, 2.0
 SHAPE = 1.0 / (1.0 + (SHAPE_F / CORNER) ** (2 * ORDER))
 MU0 = 0.3
@@ -70,7 +71,7 @@ def _smoothstep(x):
 
 
 def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", duration=3.2, fs=FS,
-                  noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02):
+                  noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02, acceleration_psd=None):
     """A SYNTHETIC RunDataset from ``law`` (see the module docstring).
 
     Parameters
@@ -85,6 +86,8 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
         Offsets of the friction and normal force sensors [N].
     hum : sequence of float
         Amplitudes [N] of the mains hum at the 1st, 3rd, 5th... harmonics of ``mains`` [Hz].
+    acceleration_psd : callable, optional
+        One-sided PSD [m2 s-4 Hz-1] of the acceleration (default: white, 0.5 m s-2 RMS).
     """
     rng = np.random.default_rng(seed + 1_000_003)
     n = int(round(duration * fs))
@@ -93,8 +96,10 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
     slide = _smoothstep((t - 0.7) / 0.1) * _smoothstep((duration - 0.05 - t) / 0.1)
     v = velocity * slide
     fn = normal_load * load * (1 + 0.01 * np.sin(2 * np.pi * 3.1 * t + rng.uniform(0, 6.28)))
-    mup = law.sample(duration, fs, velocity, roughness, seed=seed, normal_load=normal_load)[0]
-    ft = (law.mu0 + mup) * fn * slide
+    # the synthesis is periodic over its record with an exactly zero mean; drawn over 8 record lengths
+    # and cut, the low frequencies that set the variance of a window mean are represented
+    mup = law.sample(8 * duration, fs, velocity, roughness, seed=seed, normal_load=normal_load)[0, :n]
+    ft = (law.mu0 + mup) * fn * _smoothstep(slide / 0.3)  # full Coulomb friction once sliding has started
     hum_t = sum(a * np.sin(2 * np.pi * (2 * k + 1) * mains * t + rng.uniform(0, 6.28)) for k, a in enumerate(hum))
     hum_n = sum(0.5 * a * np.sin(2 * np.pi * (2 * k + 1) * mains * t + rng.uniform(0, 6.28)) for k, a in enumerate(hum))
     ft_m = ft + offsets[0] + noise * rng.standard_normal(n) + hum_t
@@ -102,7 +107,8 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
     v_m = v + 0.01 * velocity * rng.standard_normal(n)
     ds = xr.Dataset(
         {
-            "acceleration": ("time", 0.5 * rng.standard_normal(n)),
+            "acceleration": ("time", 0.5 * rng.standard_normal(n) if acceleration_psd is None else
+                             synthesise_perturbation(acceleration_psd, duration, fs, seed=seed + 7)[0]),
             "friction_force": ("time", ft_m),
             "normal_force": ("time", fn_m),
             "velocity": ("time", v_m),

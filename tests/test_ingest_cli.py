@@ -182,6 +182,7 @@ def test_killed_before_rename_leaves_no_nc(tmp_path):
     assert len(names) == 1 and names[0].startswith(".K1.nc.") and names[0].endswith(".tmp")  # the complete temp file
 
 
+@pytest.mark.slow
 def test_killed_while_writing_leaves_no_nc(tmp_path):
     """SIGKILL from outside while the temporary file grows: no K2.nc, partial data only in the .tmp."""
     rows = [f"{i / 51200.0:.9f},0.01,1.5,5.0,0.0" for i in range(400_000)]
@@ -220,3 +221,23 @@ def test_written_values_equal_read_values(tmp_path):
     ds, back = read_rig_csv(a), read_run(tmp_path / "out" / "A1.nc")
     for name in ds.variables:
         np.testing.assert_array_equal(back[name].values, ds[name].values)
+
+
+def test_docs_commands_run(tmp_path, monkeypatch, capsys):
+    """Every `fivid ingest` command in docs/ingest.md's first code block works as documented."""
+    import re
+    import shlex
+
+    text = (ROOT / "docs" / "ingest.md").read_text(encoding="utf-8")
+    block = re.search(r"```bash\n(.*?)```", text, re.S).group(1)
+    commands = [line.split("#")[0].strip() for line in block.splitlines() if line.startswith("fivid ingest")]
+    assert len(commands) == 2
+    monkeypatch.chdir(ROOT)
+    out = tmp_path / "out"
+    for command in commands:
+        argv = shlex.split(command)[1:]
+        argv[argv.index("-o") + 1] = str(out)
+        assert main(argv) == 0, capsys.readouterr().err
+    ds = read_run(out / "R002.nc")
+    assert ds.attrs["sliding_velocity"] == pytest.approx(0.02, rel=4e-16)
+    assert ds["acceleration"].attrs["sensitivity"] == "100 mV/g"

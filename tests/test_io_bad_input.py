@@ -131,23 +131,29 @@ def test_time_in_ms_written_as_seconds_is_not_uniform_when_a_sample_is_dropped(t
     err = _error(tmp_path, rows=rows)
     assert isinstance(err, DataQualityError) and err.column == "time" and err.line == data_line(120)
     t = np.array([float(r.split(",")[0]) for r in rows])
-    dt = (t[-1] - t[0]) / (t.size - 1)
-    expected = 100 * abs((t[120] - t[119]) - dt) / dt  # ~ 99.5 %: the deviation is reported
+    dt = 1 / 51200.0  # the nominal (median) step; times written to 1e-9 s, so steps are off by <= 1e-9 s
+    expected = 100 * abs((t[120] - t[119]) - dt) / dt  # 100 %: the deviation is reported
     reported = float(re.search(r"([\d.]+) % off", err.message).group(1))
-    assert reported == pytest.approx(expected, rel=5e-3)  # printed with 3 significant digits
+    # printed with 3 significant digits (rel 5e-3); the steps' rounding adds <= 2e-9 / 1.95e-5 = 1e-4
+    assert reported == pytest.approx(expected, rel=5e-3)
     assert "1 step(s) exceed" in err.message and "tolerance 1 %" in err.message
 
 
-def test_jitter_within_tolerance_is_accepted_and_beyond_it_rejected(tmp_path):
-    fs = 51200.0
-    jitter = np.where(np.arange(100) % 2, 0.004, -0.004) / fs  # ±0.4 % of a step at every sample
-    rows = [f"{i / fs + jitter[i]:.12f},0.0,1.5,5.0,0.0" for i in range(100)]
+def test_rounding_jitter_within_tolerance_is_accepted_and_beyond_it_rejected(tmp_path):
+    """Times of a 51.2 kHz DAQ written with 7 decimals: steps of 1.95e-5 or 1.96e-5 s (true 1.953125e-5).
+
+    The median step is 1.95e-5 s, so the worst step deviates by 1e-7 / 1.95e-5 = 0.513 %: inside the
+    default 1 % tolerance, outside a 0.4 % one.
+    """
+    rows = [f"{i / 51200.0:.7f},0.0,1.5,5.0,0.0" for i in range(1000)]
     ds = read_rig_csv(write_rig(tmp_path / "ok.csv", rows=rows))
-    assert ds.sizes["time"] == 100
+    assert ds.sizes["time"] == 1000
     strict = tmp_path / "strict.yaml"
-    strict.write_text("fivid-rig-profile: 1\nformat: fivid-rig-csv\nchecks: {sampling_tolerance: 0.005}\n")
+    strict.write_text("fivid-rig-profile: 1\nformat: fivid-rig-csv\nchecks: {sampling_tolerance: 0.004}\n")
     err = _error(tmp_path, rows=rows, profile=strict)
-    assert "not uniform" in err.message and "tolerance 0.5 %" in err.message
+    assert "not uniform" in err.message and "tolerance 0.4 %" in err.message
+    reported = float(re.search(r"([\d.]+) % off", err.message).group(1))
+    assert reported == pytest.approx(100 * 1e-7 / 1.95e-5, rel=5e-3)  # 3 significant digits
 
 
 @pytest.mark.parametrize("header_unit, column", [("furlongs", "acceleration"), ("N/", "acceleration")])

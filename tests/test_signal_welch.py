@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 import scipy.signal
 import xarray as xr
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from fivid.errors import ConfigError, DataQualityError, UnitError
 from fivid.signal import csd, power_units, welch_psd
@@ -206,3 +208,65 @@ def test_pure_layer_matches_wrapper():
     p = welch_psd(signal(x, 10.0), nperseg=512, backend="numpy")
     np.testing.assert_array_equal(pxx, p.values)
     assert k == p.attrs["n_segments"]
+
+
+def test_docstring_examples_run():
+    import doctest
+
+    import fivid.signal.welch
+
+    result = doctest.testmod(fivid.signal.welch, optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(nperseg=st.integers(8, 600), overlap_fraction=st.floats(0, 0.9), extra=st.integers(0, 3000),
+       detrend=st.sampled_from(["constant", "linear", False]), seed=st.integers(0, 2**32 - 1),
+       backend=st.sampled_from(BACKENDS))
+def test_any_segmentation_equals_scipy(nperseg, overlap_fraction, extra, detrend, seed, backend):
+    noverlap = min(int(overlap_fraction * nperseg), nperseg - 1)
+    x = np.random.default_rng(seed).standard_normal(nperseg + extra)
+    p = welch_psd(signal(x, 100.0), nperseg=nperseg, noverlap=noverlap, detrend=detrend, backend=backend)
+    _, ref = scipy.signal.welch(x, fs=100.0, nperseg=nperseg, noverlap=noverlap, detrend=detrend, window="hann")
+    np.testing.assert_allclose(p.values, ref, rtol=0, atol=roundoff_atol(ref, nperseg))
+
+
+def test_ar1_spectrum_inside_its_chi2_bounds():
+    # AR(1) x_t = phi x_{t-1} + e_t, var(e) = s2: S(f) = (2 s2 / fs) / |1 - phi exp(-2 pi i f / fs)|^2 (one-sided).
+    # The spectrum is smooth on the scale of the Hann main lobe (3 bins of 1/1024 of fs), so the leakage bias,
+    # ~ (1/24) B_e^2 S''/S < 1e-3 here, is negligible beside the ~ +-25 % chi2 width at nu ~ 110.
+    rng = np.random.default_rng(9)
+    fs, phi, s2, nperseg = 2000.0, 0.9, 1.0, 1024
+    e = rng.normal(0.0, np.sqrt(s2), 2**15 + 1000)
+    x = scipy.signal.lfilter([1.0], [1.0, -phi], e)[1000:]  # drop the start-up transient (phi^1000 ~ 1e-46)
+    p = welch_psd(signal(x, fs), nperseg=nperseg)
+    f = p["frequency"].values[1:-1]
+    true = (2 * s2 / fs) / np.abs(1 - phi * np.exp(-2j * np.pi * f / fs)) ** 2
+    lo, hi = p["psd_lower"].values[1:-1], p["psd_upper"].values[1:-1]
+    covered = np.mean((lo <= true) & (true <= hi))
+    sd = np.sqrt(0.95 * 0.05 / f.size * (1 + 2 * (4 / 9 + 1 / 36)))
+    assert abs(covered - 0.95) < 5 * sd
+    # and the estimate averaged over 64-bin blocks follows the closed form to its statistical error
+    ratio = (p.values[1:-1] / true)[: 64 * 7].reshape(7, 64).mean(axis=1)
+    nu = p.attrs["equivalent_degrees_of_freedom"]
+    assert np.all(np.abs(ratio - 1) < 5 * np.sqrt(2 / nu * (1 + 2 * (4 / 9 + 1 / 36)) / 64))
+
+
+def test_two_fftw_threads_give_the_same_numbers():
+    rng = np.random.default_rng(10)
+    x = signal(rng.standard_normal(100_000), 1000.0)
+    one = welch_psd(x, nperseg=2048, backend="pyfftw")
+    two = welch_psd(x, nperseg=2048, backend="pyfftw", threads=2)
+    np.testing.assert_allclose(one.values, two.values, rtol=0, atol=roundoff_atol(one.values, 2048))
+    assert one.attrs["fft_threads"] == 1 and two.attrs["fft_threads"] == 2
+
+
+def test_fftw_plan_is_made_once_and_reused():
+    from fivid.signal import fft
+
+    x = signal(np.random.default_rng(12).standard_normal(50_000), 1000.0)
+    welch_psd(x, nperseg=1536, backend="pyfftw")
+    plans = {k: v for k, v in fft._plans.items() if k[1] == 1536}
+    assert len(plans) == 1
+    welch_psd(x * 2, nperseg=1536, backend="pyfftw")
+    assert {k: v for k, v in fft._plans.items() if k[1] == 1536} == plans  # same key, same plan object

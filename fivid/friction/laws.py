@@ -216,6 +216,30 @@ class PerturbedCoulombLaw:
         target = a**2 * s / total
         return synthesise_perturbation(lambda _f: target, n / float(sample_rate), sample_rate, seed, n_signals=n_signals)
 
+    def scaled(self, factor: float) -> "PerturbedCoulombLaw":
+        """The same law with the amplitude multiplied by ``factor`` (> 0) at every (V, Ra, Fn).
+
+        Linear forms scale every coefficient; power laws add ``ln factor`` to ``log_prefactor``.
+        Standard errors and covariance are scaled alike (relative errors unchanged).
+        """
+        import dataclasses
+
+        factor = float(factor)
+        if not (np.isfinite(factor) and factor > 0):
+            raise FividError(f"amplitude scale factor {factor!r} must be finite and > 0")
+        m = self.amplitude_model
+        if m.is_log_form:
+            coeffs = np.array(m.coefficients, float)
+            coeffs[list(m.names).index("log_prefactor")] += np.log(factor)
+            model = dataclasses.replace(m, coefficients=coeffs)
+        else:
+            model = dataclasses.replace(m, coefficients=np.asarray(m.coefficients, float) * factor,
+                                        stderr=np.asarray(m.stderr, float) * factor,
+                                        covariance=np.asarray(m.covariance, float) * factor**2)
+        return PerturbedCoulombLaw(self.mu0, self.shape_frequency, self.shape, model, self.band,
+                                   injection=self.injection, reference_velocity=self.reference_velocity,
+                                   source=f"{self.source} scaled by {factor:.6g}".strip())
+
     def describe(self) -> str:
         """A few lines: μ0, the amplitude form and coefficients, the band, the injection mode."""
         m = self.amplitude_model

@@ -161,7 +161,7 @@ class FrictionIdentification:
             ds["form_n_params"] = ("form", np.array([f.n_params for f in self.form_fits], np.int32))
             ds["form_fitted"] = ("form", np.array([f.fitted for f in self.form_fits], np.int8))
             ds["form_reason"] = ("form", np.array([f.reason for f in self.form_fits], dtype=object))
-        return xr.Dataset(ds)
+        return ds
 
     def write(self, path, *, overwrite: bool = False):
         """Write the law file atomically (:func:`fivid.friction.write_law`); returns the path."""
@@ -234,7 +234,7 @@ def identify_friction_law(
     shape_method: str = "smoothed",
     smoothing_octaves: float = 1.0 / 6.0,
     forms=AMPLITUDE_FORMS,
-    weighting: str = "none",
+    weighting: str = "estimator",
     injection: str = "uniform",
     confidence: float = 0.95,
 ) -> FrictionIdentification:
@@ -265,8 +265,8 @@ def identify_friction_law(
         Width of the log-frequency smoothing [octaves].
     forms : sequence of str
         Candidate amplitude forms.
-    weighting : {"none", "estimator"}
-        OLS, or WLS with the per-run estimator variances.
+    weighting : {"estimator", "none"}
+        WLS with the per-run estimator variances as relative weights (default), or OLS.
     injection : {"uniform", "per_node", "convected"}
         Injection mode written into the law.
     confidence : float, default 0.95

@@ -164,13 +164,18 @@ def band_weights(frequency: np.ndarray, band: tuple) -> np.ndarray:
     return w
 
 
-def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, half_width=3, p_false=1e-3):
+def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2):
     """Bins of mains harmonics that stand out of the broadband floor.
 
-    For each harmonic ``k f_m`` in the band, the bins within ``half_width`` of it are compared with
-    the median of the bins 5 to 15 away on either side (the local floor). A line is declared when the
-    largest of those bins exceeds the floor by more than the χ² quantile of a broadband bin
-    (``chi2.ppf(1 - p_false/(2 half_width + 1), dof)/dof``: a false alarm rate ``p_false`` per harmonic).
+    A Hann-windowed line at frequency ``f_k = k f_m`` puts its power into the bins within two bins
+    of ``f_k`` (the main lobe; 2.5 bins away the leakage is below −31 dB). For each harmonic in the
+    band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the median of the
+    bins 5 to 15 bins away on either side. A line is declared when the largest of them exceeds the
+    floor by more than a broadband bin would with probability ``p_false`` over the whole band
+    (near 0 Hz the floor window is clipped to the bins above 0 Hz):
+    the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
+    ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
+    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``).
 
     Returns
     -------
@@ -185,29 +190,37 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, half_width=3,
     mask = np.zeros(f.size, dtype=bool)
     if mains_frequency is None:
         return mask
-    threshold = stats.chi2.ppf(1.0 - p_false / (2 * half_width + 1), dof) / dof
-    k_max = int(band[1] // mains_frequency)
-    for k in range(1, k_max + 1):
-        fk = k * mains_frequency
-        if fk < band[0] - half_width * df:
-            continue
-        c = int(round(fk / df))
-        lo, hi = c - half_width, c + half_width
-        if lo < 1 or hi + 15 >= f.size:
-            continue
-        around = np.r_[p[max(lo - 15, 1):lo - 4], p[hi + 5:hi + 16]]
-        floor = np.median(around)
-        if floor > 0 and p[lo:hi + 1].max() > threshold * floor:
-            mask[lo:hi + 1] = True
+    k_lo = max(1, int(np.ceil((band[0] - 2 * df) / mains_frequency)))
+    k_hi = int(np.floor((band[1] + 2 * df) / mains_frequency))
+    fk = np.arange(k_lo, k_hi + 1) * mains_frequency
+    centre = np.rint(fk / df).astype(int)
+    offsets = np.arange(-3, 4)
+    near = centre[:, None] + offsets[None, :]  # candidate bins; kept where |f - f_k| <= 2 df
+    floor_off = np.r_[np.arange(-17, -6), np.arange(7, 18)]  # 5 to 15 bins beyond the +-2-bin lobe
+    # near 0 Hz and Nyquist the floor window is clipped to the spectrum (repeating its end bins)
+    around = np.clip(centre[:, None] + floor_off[None, :], 1, f.size - 1)
+    ok = (near.min(axis=1) >= 1) & (near.max(axis=1) < f.size)
+    if not ok.any():
+        return mask
+    fk, near, around = fk[ok], near[ok], around[ok]
+    in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
+    n_tested = int(in_lobe.sum())
+    chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
+    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
+    floor = np.median(p[around], axis=1)
+    peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
+    for i in np.nonzero((floor > 0) & (peak > threshold * floor))[0]:
+        mask[near[i][in_lobe[i]]] = True
     return mask
 
 
 def _replace_lines(frequency, psd, mask):
-    """Linear interpolation across masked bins (from the nearest unmasked bins)."""
+    """Linear interpolation across masked bins from the nearest unmasked bins (never from 0 Hz)."""
     if not mask.any():
         return psd
     out = psd.copy()
     keep = ~mask
+    keep[0] = False
     out[mask] = np.interp(frequency[mask], frequency[keep], psd[keep])
     return out
 

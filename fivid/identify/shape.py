@@ -95,17 +95,22 @@ def octave_smooth(frequency, values, octaves: float = 1.0 / 6.0) -> np.ndarray:
     return (c[hi] - c[lo]) / (hi - lo)
 
 
-def octave_median(frequency, values, octaves: float = 1.0 / 3.0) -> np.ndarray:
-    """Running median over ``[f 2^(-b/2), f 2^(b/2)]`` around each frequency (robust to spectral lines).
+def octave_median(frequency, values, octaves: float = 1.0 / 3.0, *, per_octave: int = 12) -> np.ndarray:
+    """Running median over ``[f 2^(-b/2), f 2^(b/2)]`` (robust to spectral lines), at every frequency.
 
-    Parameters as :func:`octave_smooth`. The median of a χ²_ν/ν-distributed estimate is biased by
+    The median is evaluated at ``per_octave`` log-spaced centres per octave and interpolated in
+    log-frequency to ``frequency`` (enough for a floor that is smooth on the scale of b octaves).
+    ``frequency`` must be > 0. The median of a χ²_ν/ν-distributed estimate is biased by
     ``chi2.ppf(0.5, ν)/ν``; callers correct for it.
     """
     f = np.asarray(frequency, float)
     v = np.asarray(values, float)
-    lo = np.searchsorted(f, f * 2.0 ** (-octaves / 2), side="left")
-    hi = np.searchsorted(f, f * 2.0 ** (octaves / 2), side="right")
-    return np.array([np.median(v[a:b]) for a, b in zip(lo, hi)])
+    n_centres = max(2, int(np.ceil(np.log2(f[-1] / f[0]) * per_octave)) + 1)
+    centres = np.geomspace(f[0], f[-1], n_centres)
+    lo = np.searchsorted(f, centres * 2.0 ** (-octaves / 2), side="left")
+    hi = np.searchsorted(f, centres * 2.0 ** (octaves / 2), side="right")
+    med = np.array([np.median(v[a:max(b, a + 1)]) for a, b in zip(lo, hi)])
+    return np.interp(np.log(f), np.log(centres), med)
 
 
 def rolloff_shape(frequency, corner_frequency, order):

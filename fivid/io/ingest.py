@@ -99,7 +99,23 @@ def expand_inputs(paths) -> list[Path]:
     return out
 
 
-def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_written=None) -> IngestResult:
+def _convert(path: Path, head, target: Path, profile, overwrite: bool):
+    """Read one file and write its RunDataset to ``target``; raises FividError."""
+    if target.exists() and not overwrite:
+        raise OutputExistsError(f"output {str(target)!r} exists; pass --overwrite to replace it", file=path)
+    ds = read_rig_csv(path, profile)
+    if ds.attrs["run_id"] != head.attrs["run_id"]:
+        raise SchemaError(f"the file changed during the ingest (run_id {head.attrs['run_id']!r} became "
+                          f"{ds.attrs['run_id']!r}); run the ingest again", file=path, key="run_id")
+    try:
+        write_run(ds, target, overwrite=overwrite)
+    except OSError as exc:
+        raise FividError(f"cannot write {str(target)!r}: {exc.strerror or exc}", file=path) from None
+    return ds
+
+
+def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_written=None,
+                 on_file_done=None) -> IngestResult:
     """Convert rig files to ``<outdir>/<run_id>.nc``, one RunDataset per file.
 
     Parameters
@@ -114,6 +130,9 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
         Replace existing outputs; otherwise a file whose output exists is rejected.
     on_written : callable, optional
         Called as ``on_written(input_path, output_path, dataset)`` after each file is written.
+    on_file_done : callable, optional
+        Called as ``on_file_done(input_path)`` after each file whose data were converted or
+        rejected (for a progress bar; files rejected from their head alone are not counted).
 
     Returns
     -------
@@ -151,24 +170,17 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
                 del heads[path]
     for path, head in heads.items():
         target = outdir / f"{head.attrs['run_id']}.nc"
-        if target.exists() and not overwrite:
-            result.rejected.append(Rejection(path, OutputExistsError(
-                f"output {str(target)!r} exists; pass --overwrite to replace it", file=path)))
-            continue
         try:
-            ds = read_rig_csv(path, profile)
-            write_run(ds, target, overwrite=overwrite)
+            ds = _convert(path, head, target, profile, overwrite)
         except FividError as exc:
             result.rejected.append(Rejection(path, exc.located(file=path)))
-            continue
-        except OSError as exc:
-            result.rejected.append(Rejection(path, FividError(
-                f"cannot write {str(target)!r}: {exc.strerror or exc}", file=path)))
-            continue
-        log.info("%s -> %s", path, target)
-        result.written.append(target)
-        if on_written is not None:
-            on_written(path, target, ds)
+        else:
+            log.info("%s -> %s", path, target)
+            result.written.append(target)
+            if on_written is not None:
+                on_written(path, target, ds)
+        if on_file_done is not None:
+            on_file_done(path)
     order = {p: i for i, p in enumerate(expand_inputs(paths))}
     result.rejected.sort(key=lambda r: order.get(r.path, len(order)))
     return result

@@ -13,7 +13,6 @@ import hashlib
 import os
 import re
 import threading
-from pathlib import Path
 
 import numpy as np
 
@@ -54,16 +53,42 @@ class _Lines:
             starts = np.concatenate(([0], newlines + 1))
             ends = np.concatenate((newlines, [data.size]))
             length = ends - starts
-            has_cr = (length > 0) & (data[np.maximum(ends - 1, 0)] == 13) if data.size else length > 0
-            self._rows = np.flatnonzero(length - has_cr > 0)
+            if data.size:  # a line holding only "\r" is blank too (CRLF files)
+                length -= (length > 0) & (data[np.maximum(ends - 1, 0)] == 13)
+            self._rows = np.flatnonzero(length > 0)
         return self._rows
 
     def __call__(self, row: int) -> int:
         rows = self._nonempty()
+        if rows.size == 0:
+            return self._head.header_line + 1
         return self._head.header_line + 1 + int(rows[min(row, rows.size - 1)])
 
     def is_last(self, row: int) -> bool:
         return row == self._nonempty().size - 1
+
+
+def _data_block(buffer, head: RigHead):
+    """The data part of the file, without trailing lines made only of delimiters and blanks.
+
+    Spreadsheet programs often save a table with trailing ``;;;;`` rows; they are not samples.
+    Only the file's tail is read.
+    """
+    junk = b" \t\r\n" + head.profile.delimiter.encode()
+    start = end = buffer.size
+    last = None  # offset of the last byte that is not junk
+    while start > head.data_offset and last is None:
+        start = max(head.data_offset, start - (1 << 16))
+        kept = buffer.slice(start, end - start).to_pybytes().rstrip(junk)
+        if kept:
+            last = start + len(kept) - 1
+        end = start
+    if last is None:
+        return buffer.slice(head.data_offset, 0)
+    rest = buffer.slice(last, buffer.size - last).to_pybytes()
+    newline = rest.find(b"\n")
+    stop = buffer.size if newline < 0 else last + newline + 1
+    return buffer.slice(head.data_offset, stop - head.data_offset)
 
 
 def _arrow_options(head: RigHead, *, use_threads: bool, names: list[str], include: list[str], handler=None):
@@ -89,7 +114,7 @@ def _locate_parse_error(buffer, head: RigHead, names, include, lines: _Lines, fa
 
     read, parse, convert = _arrow_options(head, use_threads=False, names=names, include=include)
     try:
-        pcsv.read_csv(pa.BufferReader(buffer.slice(head.data_offset)), read_options=read,
+        pcsv.read_csv(pa.BufferReader(_data_block(buffer, head)), read_options=read,
                       parse_options=parse, convert_options=convert)
     except pa.ArrowInvalid as exc:
         message = str(exc)
@@ -120,7 +145,7 @@ def _locate_parse_error(buffer, head: RigHead, names, include, lines: _Lines, fa
 
 
 def _parse_columns(buffer, head: RigHead, lines: _Lines) -> dict:
-    """Parse the data block with pyarrow; returns ``variable -> pyarrow.ChunkedArray`` (float64)."""
+    """Parse the data block with pyarrow; returns ``field index -> pyarrow.ChunkedArray`` (float64)."""
     import pyarrow as pa
     import pyarrow.csv as pcsv
 
@@ -128,18 +153,17 @@ def _parse_columns(buffer, head: RigHead, lines: _Lines) -> dict:
     include = [names[i] for i, _ in head.columns]
     read, parse, convert = _arrow_options(head, use_threads=True, names=names, include=include)
     try:
-        table = pcsv.read_csv(pa.BufferReader(buffer.slice(head.data_offset)), read_options=read,
+        table = pcsv.read_csv(pa.BufferReader(_data_block(buffer, head)), read_options=read,
                               parse_options=parse, convert_options=convert)
     except pa.ArrowInvalid as exc:
         if "Empty CSV file" in str(exc):
             raise SchemaError("no data rows after the header", file=head.path, line=head.header_line) from None
         raise _locate_parse_error(buffer, head, names, include, lines, str(exc)) from None
-    return {spec.variable: table.column(names[i]) for i, spec in head.columns}
+    return {i: table.column(names[i]) for i, _ in head.columns}
 
 
-def _to_si(column, factor: float, offset: float) -> np.ndarray:
-    """Copy an Arrow float64 column into a new numpy array, scaled to SI in the same pass."""
-    out = np.empty(len(column), dtype=np.float64)
+def _to_si(column, factor: float, offset: float, out: np.ndarray) -> np.ndarray:
+    """Copy an Arrow float64 column into ``out`` (1-D, may be strided), scaled to SI in the same pass."""
     start = 0
     for chunk in column.chunks:
         raw = chunk.to_numpy(zero_copy_only=True)
@@ -166,6 +190,14 @@ def _fail(head: RigHead, lines: _Lines, finding, column: str | None = None) -> D
     if finding.previous is not None:
         message += f" (previous sample at line {lines(finding.previous)})"
     return DataQualityError(message, file=head.path, line=line, column=column)
+
+
+def _by_variable(head: RigHead) -> dict:
+    """``variable -> [(field index, ColumnSpec), ...]`` in header order (several for sensors)."""
+    groups: dict = {}
+    for index, spec in head.columns:
+        groups.setdefault(spec.variable, []).append((index, spec))
+    return groups
 
 
 def _time_spec(head: RigHead):
@@ -203,7 +235,8 @@ def _history(head: RigHead, digest: str) -> str:
             how += f" at {spec.sensitivity}"
         if spec.scale != 1.0:
             how += f" x {spec.scale:g}"
-        cols.append(f"{spec.variable} <- {how}")
+        target = spec.variable if spec.sensor is None else f"{spec.variable}[{spec.sensor}]"
+        cols.append(f"{target} <- {how}")
     origin = ", ".join(f"{k} ({v})" for k, v in head.attr_origin.items())
     return new_history(
         f"ingest {head.path.name} (sha256 {digest}) with {head.profile.describe()}; columns: {'; '.join(cols)}; "
@@ -276,17 +309,23 @@ def read_rig_csv(path, profile=None):
         finally:
             hasher.join()
         arrays = {}
-        for _, spec in head.columns:
-            column = arrow_columns.pop(spec.variable)
-            if column.null_count:
-                raise DataQualityError("empty value (a missing sample)", file=head.path,
-                                       line=lines(_first_null(column)), column=spec.name)
-            values = _to_si(column, spec.factor, spec.offset)
-            del column
-            finding = first_non_finite(values)
-            if finding is not None:
-                raise _fail(head, lines, finding, column=spec.name)
-            arrays[spec.variable] = (values, spec)
+        for variable, members in _by_variable(head).items():
+            n = len(arrow_columns[members[0][0]])
+            sensors = [spec.sensor for _, spec in members]
+            values = np.empty((n, len(members)) if sensors[0] is not None else n, dtype=np.float64)
+            for k, (index, spec) in enumerate(members):
+                column = arrow_columns.pop(index)
+                if column.null_count:
+                    raise DataQualityError("empty value (a missing sample)", file=head.path,
+                                           line=lines(_first_null(column)), column=spec.name)
+                target = values if values.ndim == 1 else values[:, k]
+                _to_si(column, spec.factor, spec.offset, target)
+                del column
+                pa.default_memory_pool().release_unused()  # give the Arrow column back: one copy at a time
+                finding = first_non_finite(target)
+                if finding is not None:
+                    raise _fail(head, lines, finding, column=spec.name)
+            arrays[variable] = (values, [spec for _, spec in members])
         time = arrays.pop("time")[0]
         sample_rate = _sample_rate(head, lines, time)
     digest = sha.hexdigest()
@@ -294,16 +333,26 @@ def read_rig_csv(path, profile=None):
     attrs["sample_rate"] = sample_rate
     attrs["source"] = f"{head.path.name} sha256:{digest}"
     attrs["history"] = _history(head, digest)
-    data_vars = {}
-    for name, (values, spec) in arrays.items():
-        var_attrs = {"source_column": spec.name, "source_units": spec.units}
-        if spec.sensitivity:
-            var_attrs["sensitivity"] = spec.sensitivity
-        if spec.scale != 1.0:
-            var_attrs["scale"] = spec.scale
-        data_vars[name] = xr.Variable(("time",), values, var_attrs)
+    data_vars, sensor_names = {}, None
+    for name, (values, specs) in arrays.items():
+        var_attrs = {"source_column": ", ".join(s.name for s in specs),
+                     "source_units": ", ".join(s.units for s in specs)}
+        if any(s.sensitivity for s in specs):
+            var_attrs["sensitivity"] = ", ".join(s.sensitivity or "-" for s in specs)
+        if any(s.scale != 1.0 for s in specs):
+            var_attrs["scale"] = ", ".join(f"{s.scale:g}" for s in specs) if len(specs) > 1 else specs[0].scale
+        if values.ndim == 2:
+            names = [s.sensor for s in specs]
+            if sensor_names is not None and names != sensor_names:
+                raise SchemaError(f"{name!r} has sensors {names} but another variable has {sensor_names}; "
+                                  "every variable with a sensor dimension must list the same sensors",
+                                  file=head.path, line=head.header_line, column=specs[0].name)
+            sensor_names = names
+        data_vars[name] = xr.Variable(("time",) if values.ndim == 1 else ("time", "sensor"), values, var_attrs)
     time_spec = _time_spec(head)
     coords = {"time": xr.Variable(("time",), time, {"source_column": time_spec.name, "source_units": time_spec.units})}
+    if sensor_names is not None:
+        coords["sensor"] = xr.Variable(("sensor",), np.array(sensor_names, dtype=object))
     ds = apply_cf_attrs(xr.Dataset(data_vars, coords=coords, attrs=attrs))
     known = registry().variables
     ds = ds[[n for n in known if n in ds.data_vars]]  # canonical order

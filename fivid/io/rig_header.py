@@ -8,6 +8,7 @@ every file's ``run_id`` cheaply before converting anything. Line numbers are the
 from __future__ import annotations
 
 import csv
+import functools
 import logging
 import math
 import re
@@ -15,7 +16,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid.errors import FividError, SchemaError, UnitError
-from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile, metadata_value
+from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile, has_sensor_dim
+from fivid.io.rig_quantities import attribute_units, metadata_value
 from fivid.schema import registry
 from fivid.units import conversion
 
@@ -109,12 +111,18 @@ def _split(text: str, delimiter: str) -> list[str]:
     return [f.strip().strip("\ufeff").strip() for f in row]
 
 
+@functools.lru_cache(maxsize=256)
+def _conversion(units: str, target: str) -> tuple[float, float]:
+    """:func:`fivid.units.conversion`, cached: a batch of files repeats the same few header units."""
+    return conversion(units, target)
+
+
 def _variables() -> dict:
     return {n: v for n, v in registry().variables.items() if not v.coordinate or n == "time"}
 
 
 def _rig_csv_columns(path: Path, fields: list[str], line: int):
-    """Columns of a fivid-rig-csv header ``name [unit], ...``."""
+    """Columns of a fivid-rig-csv header ``name [unit]`` or ``name:sensor [unit]``."""
     variables = _variables()
     columns, ignored, seen = [], [], {}
     for index, text in enumerate(fields):
@@ -124,22 +132,32 @@ def _rig_csv_columns(path: Path, fields: list[str], line: int):
                 f"column header {text!r} must be written 'name [unit]', e.g. 'acceleration [g]'",
                 file=path, line=line, column=text or f"#{index + 1}",
             )
-        name, units = m.group("name").strip(), m.group("units").strip()
-        if name in seen:
-            raise SchemaError(f"column {name!r} appears twice in the header (fields {seen[name]} and {index + 1})",
-                              file=path, line=line, column=name)
-        seen[name] = index + 1
+        label, units = m.group("name").strip(), m.group("units").strip()
+        if label in seen:
+            raise SchemaError(f"column {label!r} appears twice in the header (fields {seen[label]} and {index + 1})",
+                              file=path, line=line, column=label)
+        seen[label] = index + 1
+        name, _, sensor = (part.strip() for part in label.partition(":"))
         if name not in variables:
-            ignored.append(name)
+            ignored.append(label)
             continue
+        if sensor and not has_sensor_dim(name):
+            raise SchemaError(f"{name!r} has no sensor dimension; write '{name} [unit]' (one column)",
+                              file=path, line=line, column=label)
         if not units:
-            raise UnitError(f"column {name!r} has an empty unit; write e.g. '{name} [{variables[name].units}]'",
-                            file=path, line=line, column=name)
+            raise UnitError(f"column {label!r} has an empty unit; write e.g. '{label} [{variables[name].units}]'",
+                            file=path, line=line, column=label)
         try:
-            factor, offset = conversion(units, variables[name].units)
+            factor, offset = _conversion(units, variables[name].units)
         except UnitError as exc:
-            raise exc.located(file=path, line=line, column=name) from None
-        columns.append((index, ColumnSpec(name, name, units, None, 1.0, factor, offset)))
+            raise exc.located(file=path, line=line, column=label) from None
+        columns.append((index, ColumnSpec(name, label, units, None, 1.0, factor, offset, sensor or None)))
+    for name in {spec.variable for _, spec in columns}:
+        named = [spec.sensor is not None for _, spec in columns if spec.variable == name]
+        if len(named) > 1 and not all(named):
+            raise SchemaError(
+                f"{name!r} has {len(named)} columns: name each one's sensor, e.g. '{name}:top [unit]', "
+                f"'{name}:side [unit]'", file=path, line=line, column=name)
     return columns, ignored
 
 
@@ -211,6 +229,33 @@ def _same(a, b) -> bool:
     return a == b
 
 
+def _from_file_name(path: Path, profile: RigProfile, attrs: dict, origin: dict) -> bool:
+    """Add the attributes the profile's file-name pattern gives; False when the name does not match."""
+    if not profile.file_name_pattern:
+        return True
+    m = re.search(profile.file_name_pattern, path.name)
+    if m is None:
+        return False
+    for attr, raw in m.groupdict().items():
+        if raw is None:
+            continue
+        try:
+            value = metadata_value(attr, raw, default_units=profile.file_name_units.get(attr), decimal=profile.decimal)
+        except FividError as exc:
+            raise type(exc)(f"from the file name ({raw!r}): {exc.message}", file=path, key=attr) from None
+        if attr in attrs and not _same(attrs[attr], value):
+            unit = f" {attribute_units(attr)}" if attribute_units(attr) else ""
+            raise SchemaError(
+                f"the file says {attr} = {attrs[attr]!r}{unit} ({origin[attr]}) but its name says {value!r}{unit}; "
+                "correct one of them",
+                file=path, key=attr,
+            )
+        if attr not in attrs:
+            attrs[attr] = value
+            origin[attr] = "file name"
+    return True
+
+
 def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
     """Attributes from the file, then the file name, then the profile; file and name must agree."""
     attrs, origin = {}, {}
@@ -226,29 +271,7 @@ def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
         except FividError as exc:
             raise exc.located(file=path, line=number, key=attr) from None
         origin[attr] = f"line {number}"
-    unmatched_name = False
-    if profile.file_name_pattern:
-        m = re.search(profile.file_name_pattern, path.name)
-        if m is None:
-            unmatched_name = True
-        else:
-            for attr, raw in m.groupdict().items():
-                if raw is None:
-                    continue
-                try:
-                    value = metadata_value(attr, raw, default_units=profile.file_name_units.get(attr), decimal=profile.decimal)
-                except FividError as exc:
-                    raise exc.located(file=path, key=attr).__class__(
-                        f"from the file name ({raw!r}): {exc.message}", file=path, key=attr) from None
-                if attr in attrs and not _same(attrs[attr], value):
-                    raise SchemaError(
-                        f"the file says {attr} = {attrs[attr]!r} ({origin[attr]}) but its name says {value!r}; "
-                        "correct one of them",
-                        file=path, key=attr,
-                    )
-                if attr not in attrs:
-                    attrs[attr] = value
-                    origin[attr] = "file name"
+    unmatched_name = not _from_file_name(path, profile, attrs, origin)
     for attr, value in profile.values.items():
         if attr not in attrs:
             attrs[attr] = value
@@ -256,9 +279,9 @@ def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
     for attr in _REQUIRED:
         if attr not in attrs:
             att = registry().attributes[attr]
-            unit = f" with a unit, e.g. in {att.units}" if att.units else ""
+            value = f"<value> {att.units}" if att.units else "<value>"
             if profile.format == "fivid-rig-csv":
-                how = f"add a line '# {attr}: ...'{unit} before the header"
+                how = f"add a line '# {attr}: {value}' before the header (any unit of that dimension)"
             else:
                 how = (f"give it in the file's preamble, the file name (metadata.file_name.pattern) or "
                        f"metadata.values of {profile.describe()}")
@@ -295,9 +318,10 @@ def read_rig_head(path, profile: RigProfile | None = None) -> RigHead:
         if profile.format == "fivid-rig-csv" and number == 1:
             m = _RIG_META.match(text[len(profile.comment):]) if text.startswith(profile.comment) else None
             if m is None or m.group("key") != MAGIC_KEY:
+                used = "" if profile.path is None else f" (the format of {profile.describe()})"
                 raise SchemaError(
-                    f"not a fivid-rig-csv file: the first line must be '# {MAGIC_KEY}: {FORMAT_VERSION}', got "
-                    f"{text[:60]!r}; for another DAQ export give a rig profile (--rig NAME, configs/rigs/)",
+                    f"not a fivid-rig-csv file{used}: the first line must be '# {MAGIC_KEY}: {FORMAT_VERSION}', "
+                    f"got {text[:60]!r}; for another DAQ export give its rig profile (--rig NAME, configs/rigs/)",
                     file=path, line=1,
                 )
             if m.group("value") != FORMAT_VERSION:

@@ -28,7 +28,8 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fivid.errors import ConfigError, FividError, SchemaError, UnitError
+from fivid.errors import ConfigError, FividError, UnitError
+from fivid.io.rig_quantities import attribute_units, metadata_value, sensitivity_factor
 from fivid.schema import registry
 from fivid.units import conversion
 
@@ -40,9 +41,8 @@ __all__ = [
     "load_rig_profile",
     "rig_profile_from_mapping",
     "profile_search_path",
-    "sensitivity_factor",
-    "metadata_value",
     "RESERVED_ATTRIBUTES",
+    "has_sensor_dim",
 ]
 
 PROFILE_VERSION = 1
@@ -51,7 +51,6 @@ FORMATS = ("fivid-rig-csv", "table")
 RESERVED_ATTRIBUTES = frozenset({"source", "history", "fivid_version", "schema_version", "Conventions"})
 #: Preamble line ``key: value`` (also ``key;value``, ``key=value``, ``key<TAB>value``).
 DEFAULT_METADATA_PATTERN = r"^\s*(?P<key>[^:;=\t]+?)\s*[:;=\t]\s*(?P<value>.*?)\s*$"
-_NUMBER = r"[-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?"
 _ATTR_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
@@ -76,6 +75,8 @@ class ColumnSpec:
         Total factor to the canonical SI unit: ``si = factor * raw + offset``.
     offset : float
         Offset to the canonical unit (non-zero only for affine units such as degC).
+    sensor : str or None
+        Sensor name when the variable has several transducers (dimension ``sensor``).
     """
 
     variable: str
@@ -85,6 +86,7 @@ class ColumnSpec:
     scale: float = 1.0
     factor: float = 1.0
     offset: float = 0.0
+    sensor: str | None = None
 
 
 @dataclass(frozen=True)
@@ -234,11 +236,6 @@ def _regex(text: str | None, key: str, problems: _Problems, groups: tuple[str, .
     return compiled
 
 
-def _attribute_units(name: str) -> str | None:
-    att = registry().attributes.get(name)
-    return None if att is None else att.units
-
-
 def _check_attribute_name(name, key: str, problems: _Problems) -> bool:
     if not isinstance(name, str) or not _ATTR_NAME.match(name):
         problems.add(key, f"{name!r} is not a valid attribute name (letters, digits, _; starting with a letter)")
@@ -253,7 +250,7 @@ def _units_map(raw, key: str, problems: _Problems) -> dict:
     out = {}
     for name, units in _mapping(raw, key, problems).items():
         k = f"{key}.{name}"
-        target = _attribute_units(name)
+        target = attribute_units(name)
         if target is None:
             problems.add(k, f"{name!r} is not a quantity attribute; units apply to "
                          f"{', '.join(n for n, a in registry().attributes.items() if a.units)}")
@@ -267,51 +264,53 @@ def _units_map(raw, key: str, problems: _Problems) -> dict:
     return out
 
 
-def sensitivity_factor(column_units: str, sensitivity: str, target_units: str) -> float:
-    """Factor turning a transducer signal in ``column_units`` into ``target_units``.
+def has_sensor_dim(variable: str) -> bool:
+    """Whether canonical ``variable`` may have a ``sensor`` dimension (several transducers)."""
+    return ("time", "sensor") in registry().variables[variable].dims
 
-    Parameters
-    ----------
-    column_units : str
-        Unit of the recorded signal (``"mV"``).
-    sensitivity : str
-        ``"<number> <signal unit>/<measured unit>"``, e.g. ``"100 mV/g"`` or ``"10.2 mV/(m/s^2)"``;
-        ``g`` in the measured unit is standard gravity.
-    target_units : str
-        Canonical unit of the measured quantity (``"m s-2"``).
 
-    Returns
-    -------
-    float
-        ``si_value = factor * signal``: for 1 mV at 100 mV/g into m s-2, 9.80665e-2.
+_SENSOR_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
 
-    Raises
-    ------
-    UnitError
-        The sensitivity is not ``number unit/unit``, is zero, or its units do not fit.
-    """
-    m = re.fullmatch(rf"\s*({_NUMBER})\s*(.+?)\s*", str(sensitivity))
-    if m is None or "/" not in m.group(2):
-        raise UnitError(
-            f"sensitivity {sensitivity!r} must be '<number> <signal unit>/<measured unit>', e.g. '100 mV/g'"
-        )
-    value = float(m.group(1).replace(",", "."))
-    if value == 0 or not math.isfinite(value):
-        raise UnitError(f"sensitivity {sensitivity!r} must be a finite, non-zero number")
-    signal_units, measured_units = (s.strip() for s in m.group(2).split("/", 1))
-    if measured_units.startswith("(") and measured_units.endswith(")"):
-        measured_units = measured_units[1:-1].strip()
+
+def _column_spec(variable: str, spec, key: str, problems: _Problems, sensor_required: bool) -> ColumnSpec | None:
+    """One column mapping ``{name, units, sensitivity, scale, sensor}`` (or just the name)."""
+    if isinstance(spec, str):
+        spec = {"name": spec}
+    allowed = ("name", "units", "sensitivity", "scale", "sensor") if has_sensor_dim(variable) else (
+        "name", "units", "sensitivity", "scale")
+    spec = _mapping(spec, key, problems, allowed=allowed)
+    name = _string(spec, "name", f"{key}.name", problems)
+    units = _string(spec, "units", f"{key}.units", problems)
+    sensitivity = spec.get("sensitivity")
+    scale = spec.get("scale", 1.0)
+    sensor = spec.get("sensor")
+    target = registry().variables[variable].units
+    if name is None or not name.strip():
+        problems.add(f"{key}.name", "missing: the column's name as written in the file's header")
+        return None
+    if units is None:
+        problems.add(f"{key}.units", f"missing: the unit the column is written in (canonical: {target!r})")
+        return None
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:
+        problems.add(f"{key}.scale", f"must be a finite non-zero number (e.g. -1 to flip the sign), got {scale!r}")
+        return None
+    if sensor is None and sensor_required:
+        problems.add(f"{key}.sensor", "missing: with several columns for one variable, name each one's sensor")
+        return None
+    if sensor is not None and not _SENSOR_NAME.match(str(sensor)):
+        problems.add(f"{key}.sensor", f"{sensor!r} is not a sensor name (letters, digits, . _ + -)")
+        return None
     try:
-        to_signal, off1 = conversion(column_units, signal_units)
+        if sensitivity is None:
+            factor, offset = conversion(units, target)
+        else:
+            factor, offset = sensitivity_factor(units, str(sensitivity), target), 0.0
     except UnitError as exc:
-        raise UnitError(f"the column's unit {column_units!r} does not fit sensitivity {sensitivity!r}: {exc.message}") from None
-    try:
-        to_target, off2 = conversion(measured_units, target_units)
-    except UnitError as exc:
-        raise UnitError(f"sensitivity {sensitivity!r} does not measure a quantity in {target_units!r}: {exc.message}") from None
-    if off1 or off2:
-        raise UnitError(f"sensitivity {sensitivity!r}: affine units (with an offset) are not allowed here")
-    return to_signal / value * to_target
+        problems.add(f"{key}.{'units' if sensitivity is None else 'sensitivity'}", exc.message)
+        return None
+    return ColumnSpec(variable, name.strip(), units, None if sensitivity is None else str(sensitivity),
+                      float(scale), factor * float(scale), offset * float(scale),
+                      None if sensor is None else str(sensor))
 
 
 def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
@@ -329,37 +328,28 @@ def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
         if variable not in mappable:
             problems.add(key, f"{variable!r} is not a canonical variable; known: {', '.join(mappable)}")
             continue
-        if isinstance(spec, str):
-            spec = {"name": spec}
-        spec = _mapping(spec, key, problems, allowed=("name", "units", "sensitivity", "scale"))
-        name = _string(spec, "name", f"{key}.name", problems)
-        units = _string(spec, "units", f"{key}.units", problems)
-        sensitivity = spec.get("sensitivity")
-        scale = spec.get("scale", 1.0)
-        if name is None or not name.strip():
-            problems.add(f"{key}.name", "missing: the column's name as written in the file's header")
-            continue
-        if units is None:
-            problems.add(f"{key}.units", f"missing: the unit the column is written in (canonical: {reg.variables[variable].units!r})")
-            continue
-        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:
-            problems.add(f"{key}.scale", f"must be a finite non-zero number (e.g. -1 to flip the sign), got {scale!r}")
-            continue
-        target = reg.variables[variable].units
-        try:
-            if sensitivity is None:
-                factor, offset = conversion(units, target)
-            else:
-                factor, offset = sensitivity_factor(units, str(sensitivity), target), 0.0
-        except UnitError as exc:
-            problems.add(f"{key}.{'units' if sensitivity is None else 'sensitivity'}", exc.message)
-            continue
-        specs.append(ColumnSpec(variable, name.strip(), units, None if sensitivity is None else str(sensitivity),
-                                float(scale), factor * float(scale), offset * float(scale)))
+        if isinstance(spec, list):
+            if not has_sensor_dim(variable):
+                problems.add(key, f"{variable!r} has no sensor dimension: map it to one column")
+                continue
+            if not spec:
+                problems.add(key, "an empty list: map it to at least one column")
+                continue
+            found = [_column_spec(variable, s, f"{key}[{i}]", problems, True) for i, s in enumerate(spec)]
+            seen = set()
+            for i, s in enumerate(found):
+                if s is not None and s.sensor in seen:
+                    problems.add(f"{key}[{i}].sensor", f"sensor {s.sensor!r} is already mapped to another column")
+                seen.add(None if s is None else s.sensor)
+            specs += [s for s in found if s is not None]
+        else:
+            found = _column_spec(variable, spec, key, problems, False)
+            if found is not None:
+                specs.append(found)
     names = [s.name for s in specs]
     for s in specs:
         if names.count(s.name) > 1:
-            problems.add(f"columns.{s.variable}.name", f"column {s.name!r} is mapped to more than one variable")
+            problems.add(f"columns.{s.variable}.name", f"column {s.name!r} is mapped more than once")
     required = [n for n, v in reg.variables.items() if v.required or n == "time"]
     given = {s.variable for s in specs} | set(columns)
     for n in required:
@@ -458,44 +448,3 @@ def rig_profile_from_mapping(raw, *, path=None) -> RigProfile:
         values=values, columns=columns, sampling_tolerance=float(tolerance),
         path=None if path is None else str(path),
     )
-
-
-def metadata_value(name: str, value, *, default_units: str | None = None, decimal: str = "."):
-    """A metadata value as stored in a RunDataset's attrs: SI float for quantity attributes, else str.
-
-    Parameters
-    ----------
-    name : str
-        Attribute name (``sliding_velocity``, ``run_id``, ...).
-    value : str or number
-        As written (``"10 mm/s"``; a bare number only with ``default_units``).
-    default_units : str, optional
-        Unit of a bare number (from the profile).
-    decimal : str
-        Decimal mark of the file (``","`` turns ``"0,8 um"`` into 0.8 µm).
-
-    Raises
-    ------
-    UnitError, SchemaError
-        Unknown or incompatible unit, missing unit, or an invalid ``run_id``.
-    """
-    from fivid.units import parse_quantity
-
-    units = _attribute_units(name)
-    if units is not None:
-        text = value
-        if isinstance(value, str) and decimal == ",":
-            text = re.sub(r"(?<=\d),(?=\d)", ".", value)
-        if isinstance(text, str) and default_units and re.fullmatch(rf"\s*{_NUMBER}\s*", text):
-            text = text.strip().replace(",", ".")
-        return float(parse_quantity(text, units, default_units=default_units))
-    if isinstance(value, (dict, list)) or value is None:
-        raise SchemaError(f"{name!r} must be a single value, got {value!r}")
-    text = str(value).strip()
-    if name == "run_id" and not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._+-]*", text):
-        raise SchemaError(
-            f"run_id {text!r} cannot name a file: use letters, digits and . _ + - (starting with a letter or digit)"
-        )
-    if not text:
-        raise SchemaError(f"{name!r} is empty")
-    return text

@@ -36,11 +36,13 @@ def scores_to_json(scores) -> dict:
     ]
     out["peaks"] = [
         {"frequency_measured_hz": _num(fm), "frequency_simulated_hz": _num(fs), "frequency_relative_error": _num(fe),
-         "frequency_significant": bool(fsig), "level_diff_db": _num(ld), "level_threshold_db": _num(lt),
+         "frequency_relative_threshold": _num(ft), "frequency_significant": bool(fsig),
+         "level_diff_db": _num(ld), "level_threshold_db": _num(lt),
          "level_significant": bool(lsig)}
-        for fm, fs, fe, fsig, ld, lt, lsig in zip(
+        for fm, fs, fe, ft, fsig, ld, lt, lsig in zip(
             scores["peak_frequency_measured"].values, scores["peak_frequency_simulated"].values,
-            scores["peak_frequency_error"].values, scores["peak_frequency_error_significant"].values,
+            scores["peak_frequency_error"].values, scores["peak_frequency_error_threshold"].values,
+            scores["peak_frequency_error_significant"].values,
             scores["peak_level_diff_db"].values, scores["peak_level_diff_db_threshold"].values,
             scores["peak_level_diff_db_significant"].values)
     ]

@@ -18,6 +18,7 @@ __all__ = [
     "shape_correlation",
     "spectral_peaks",
     "match_peaks",
+    "refine_peak",
 ]
 
 
@@ -97,3 +98,46 @@ def match_peaks(frequency: np.ndarray, peaks_m: np.ndarray, peaks_s: np.ndarray,
                 best = free.pop(k)
         pairs.append((int(i), best))
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+
+
+def refine_peak(frequency: np.ndarray, log_psd: np.ndarray, index: int, sigma_db: float,
+                inflation: float = 1.0, drop_db: float = 3.0) -> tuple[float, float]:
+    """Peak frequency [Hz] refined by a least-squares parabola through the peak's top, and its standard error.
+
+    The top is the contiguous run of bins within ``max(drop_db, 4 sigma_db)`` of the maximum (at
+    least 2 bins each side). With errors of ``sigma_db`` on the log-PSD (or the residual variance, if
+    larger) the fit's covariance is ``σ² (XᵀX)⁻¹``, times ``inflation`` for correlated bins; the vertex
+    ``f0 = f_k − b / (2c)`` has its variance by the delta method. When the top is not concave (a
+    plateau, an edge, noise) it returns ``f_k`` with the standard error of a position spread uniformly
+    over the top, ``width / sqrt(12)``.
+    """
+    f = np.asarray(frequency, dtype=np.float64)
+    lp = np.asarray(log_psd, dtype=np.float64)
+    floor = lp[index] - max(drop_db, 4.0 * sigma_db)
+    lo, hi = index, index
+    while lo > 0 and (lp[lo - 1] >= floor or index - lo < 2):
+        lo -= 1
+    while hi < lp.size - 1 and (lp[hi + 1] >= floor or hi - index < 2):
+        hi += 1
+    df = f[1] - f[0]
+    uniform = (float(f[index]), (hi - lo + 1) * df / np.sqrt(12.0))
+    if hi - lo < 2:
+        return uniform
+    x = (f[lo:hi + 1] - f[index]) / df
+    design = np.stack([np.ones_like(x), x, x**2], axis=1)
+    coef, *_ = np.linalg.lstsq(design, lp[lo:hi + 1], rcond=None)
+    _, b, c = coef
+    if not c < 0:
+        return uniform
+    vertex = -b / (2.0 * c)
+    if not x[0] <= vertex <= x[-1]:
+        return uniform
+    # error variance: the known log-PSD noise, or the fit's residual variance when larger (the top of a
+    # resonance is only approximately a parabola in dB; misfit then widens the interval rather than hiding)
+    resid = lp[lo:hi + 1] - design @ coef
+    dof = x.size - 3
+    var = max(sigma_db**2, float(resid @ resid) / dof) if dof > 0 else sigma_db**2
+    cov = var * inflation * np.linalg.inv(design.T @ design)
+    grad = np.array([0.0, -1.0 / (2.0 * c), b / (2.0 * c * c)])
+    return float(f[index] + vertex * df), float(np.sqrt(grad @ cov @ grad) * df)

@@ -18,6 +18,7 @@ from fivid.score.metrics import (
     log_psd_db,
     log_spectral_distance,
     match_peaks,
+    refine_peak,
     shape_correlation,
     spectral_peaks,
 )
@@ -28,7 +29,7 @@ from fivid.score.uncertainty import (
     relative_power_std,
     rms_threshold_db,
 )
-from fivid.signal.levels import bin_weights, third_octave_bands
+from fivid.signal.levels import bin_weights, third_octave_weights
 from fivid.signal.resample import resample_to
 from fivid.signal.sampling import run_label, sample_rate_of
 from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, segment_window
@@ -164,10 +165,10 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     resampled = "none"
     if abs(fs_m / fs_s - 1) > 1e-9:
         if fs_m > fs:
-            da_m = resample_to(measured[[variable]], fs)[variable]
+            da_m = resample_to(da_m.to_dataset(name=variable).assign_attrs(measured.attrs), fs)[variable]
             resampled = f"measured {fs_m:.10g} Hz -> {fs:.10g} Hz"
         else:
-            da_s = resample_to(simulated[[variable]], fs)[variable]
+            da_s = resample_to(da_s.to_dataset(name=variable).assign_attrs(simulated.attrs), fs)[variable]
             resampled = f"simulated {fs_s:.10g} Hz -> {fs:.10g} Hz"
     settings = dict(nperseg=int(nperseg), noverlap=noverlap, window=window, detrend=detrend, confidence=confidence,
                     backend=backend)
@@ -192,24 +193,13 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     lsd = log_spectral_distance(pmb, psb)
     lsd_thr = rms_threshold_db(sigma, bias, confidence, r)
 
-    w_band = bin_weights(f, f_lo, f_hi)
-    level = level_difference_db(pm, ps, w_band)
-    level_sd = _DB * np.hypot(relative_power_std(pm, w_band, dof_m, r), relative_power_std(ps, w_band, dof_s, r))
-    level_thr = z2 * level_sd
-
-    bands = third_octave_bands(max(f_lo, df / 2), f_hi)
-    keep = bands["upper"] - bands["lower"] >= df  # a band narrower than a bin rests on a fraction of one estimate
-    bands = {k: v[keep] for k, v in bands.items()}
-    if bands["centre"].size:
-        wb = np.stack([bin_weights(f, lo, hi) for lo, hi in zip(bands["lower"], bands["upper"])], axis=-1)
-        lev_m, lev_s = band_levels_db(pm, wb), band_levels_db(ps, wb)
-        band_err = lev_s - lev_m
-        band_sd = _DB * np.hypot(relative_power_std(pm, wb, dof_m, r), relative_power_std(ps, wb, dof_s, r))
+    level, level_thr = _level_difference(pm, ps, bin_weights(f, f_lo, f_hi), dof_m, dof_s, r, z2)
+    bands, lev_m, lev_s, band_sd = _third_octave_levels(pm, ps, f, f_lo, f_hi, dof_m, dof_s, r)
+    band_err = lev_s - lev_m
+    if band_err.size:
         band_rms = float(np.sqrt(np.mean(band_err**2)))
         band_rms_thr = rms_threshold_db(band_sd, np.zeros_like(band_sd), confidence)
     else:
-        wb = np.zeros((f.size, 0))
-        lev_m = lev_s = band_err = band_sd = np.zeros(0)
         band_rms = band_rms_thr = float("nan")
 
     corr = shape_correlation(pmb, psb)
@@ -219,20 +209,90 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
 
     sigma_one = float(max(np.max(sig_m), np.max(sig_s)))
     prominence = max(3.0, 6.0 * sigma_one) if peak_prominence_db is None else float(peak_prominence_db)
-    peaks = match_peaks(fb, spectral_peaks(log_m, prominence_db=prominence, max_peaks=max_peaks),
-                        spectral_peaks(log_s, prominence_db=prominence), relative_tolerance=peak_match_tolerance)
-    im, js = peaks[:, 0], peaks[:, 1]
+    peaks = _peaks(fb, log_m, log_s, sig_m, sig_s, bias, r, z2, prominence=prominence,
+                   tolerance=peak_match_tolerance, max_peaks=max_peaks)
+
+    results = dict(
+        band_err=band_err,
+        band_rms=band_rms,
+        band_rms_thr=band_rms_thr,
+        band_sd=band_sd,
+        bands=bands,
+        confidence=confidence,
+        corr=corr,
+        corr_expected=corr_expected,
+        corr_lowest=corr_lowest,
+        df=df,
+        diff=diff,
+        f_hi=f_hi,
+        f_lo=f_lo,
+        fb=fb,
+        fs=fs,
+        lev_m=lev_m,
+        lev_s=lev_s,
+        level=level,
+        level_thr=level_thr,
+        lsd=lsd,
+        lsd_thr=lsd_thr,
+        n_eff=n_eff,
+        nu_m=nu_m,
+        nu_s=nu_s,
+        peak_match_tolerance=peak_match_tolerance,
+        peaks=peaks,
+        pmb=pmb,
+        prominence=prominence,
+        psb=psb,
+        psd_m=psd_m,
+        psd_s=psd_s,
+        resampled=resampled,
+        sensor=sensor,
+        sigma=sigma,
+        steady=steady,
+        z2=z2,
+    )
+    return _assemble(results, measured=measured, simulated=simulated, variable=variable, units=da_m.attrs["units"])
+
+
+def _level_difference(pm, ps, weights, dof_m, dof_s, r, z2) -> tuple[float, float]:
+    """Band level difference [dB] and its two-sided threshold (z times the combined std of the two levels)."""
+    level = level_difference_db(pm, ps, weights)
+    sd = _DB * np.hypot(relative_power_std(pm, weights, dof_m, r), relative_power_std(ps, weights, dof_s, r))
+    return level, float(z2 * sd)
+
+
+def _third_octave_levels(pm, ps, f, f_lo, f_hi, dof_m, dof_s, r):
+    """IEC 1/3-octave bands inside the band, the two runs' band levels [dB] and the std of their difference."""
+    # a band narrower than one bin would rest on a fraction of one estimate
+    bands, wb = third_octave_weights(f, f_lo, f_hi, min_bins=1.0)
+    if not bands["centre"].size:
+        empty = np.zeros(0)
+        return bands, empty, empty, empty
+    sd = _DB * np.hypot(relative_power_std(pm, wb, dof_m, r), relative_power_std(ps, wb, dof_s, r))
+    return bands, band_levels_db(pm, wb), band_levels_db(ps, wb), sd
+
+
+def _peaks(fb, log_m, log_s, sig_m, sig_s, bias, r, z2, *, prominence, tolerance, max_peaks) -> dict:
+    """Matched peaks: refined frequencies [Hz], log-PSD levels [dB] and thresholds of their differences."""
+    pairs = match_peaks(fb, spectral_peaks(log_m, prominence_db=prominence, max_peaks=max_peaks),
+                        spectral_peaks(log_s, prominence_db=prominence), relative_tolerance=tolerance)
+    im, js = pairs[:, 0], pairs[:, 1]
     matched = js >= 0
     jj = np.where(matched, js, 0)
     nan = np.nan
-    pk_fm = fb[im]
-    pk_fs = np.where(matched, fb[jj], nan)
-    pk_lm, pk_ls = log_m[im], np.where(matched, log_s[jj], nan)
-    pk_level_thr = np.abs(bias[im]) + z2 * np.hypot(sig_m[im], np.where(matched, sig_s[jj], nan))
-
-    return _assemble(
-        locals(), measured=measured, simulated=simulated, variable=variable, units=da_m.attrs["units"],
-    )
+    inflation = 1.0 + 2.0 * float(np.sum(r[1:]))
+    fit_m = np.array([refine_peak(fb, log_m, i, sig_m[i], inflation) for i in im]).reshape(-1, 2)
+    fit_s = np.array([refine_peak(fb, log_s, j, sig_s[j], inflation) if j >= 0 else (nan, nan)
+                      for j in js]).reshape(-1, 2)
+    df = fb[1] - fb[0]
+    return {
+        "fm": fit_m[:, 0],
+        "fs": fit_s[:, 0],
+        # z times the combined standard error of the two peak frequencies, never below one bin
+        "freq_thr": np.maximum(z2 * np.hypot(fit_m[:, 1], fit_s[:, 1]), df),
+        "lm": log_m[im],
+        "ls": np.where(matched, log_s[jj], nan),
+        "level_thr": np.abs(bias[im]) + z2 * np.hypot(sig_m[im], np.where(matched, sig_s[jj], nan)),
+    }
 
 
 def _flag(value, threshold, larger_is_bad=True):
@@ -249,6 +309,7 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
 
     psd_units = power_units(units)
     db = {"units": "dB"}
+    pk = v["peaks"]
     ds = xr.Dataset(
         {
             "lsd_db": ((), v["lsd"], {**db, "long_name": "log-spectral distance: RMS of 10 log10(P_sim/P_meas) "
@@ -257,7 +318,8 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
                                                     "below this with probability 'confidence'"}),
             "lsd_db_significant": ((), _flag(v["lsd"], v["lsd_thr"])),
             "level_diff_db": ((), v["level"], {**db, "long_name": "10 log10 of band power ratio sim/meas"}),
-            "level_diff_db_threshold": ((), v["level_thr"], {**db, "long_name": "two-sided threshold of |level_diff_db|"}),
+            "level_diff_db_threshold": ((), v["level_thr"], {**db,
+                                                             "long_name": "two-sided threshold of |level_diff_db|"}),
             "level_diff_db_significant": ((), _flag(abs(v["level"]), v["level_thr"])),
             "band_level_rms_error_db": ((), v["band_rms"], {**db, "long_name": "RMS over 1/3-octave bands of "
                                                             "band_level_error_db"}),
@@ -283,17 +345,18 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
                                     "1/3-octave band level"}),
             "band_level_error_db_threshold": ("band_centre", v["z2"] * v["band_sd"], db),
             "band_level_error_db_significant": ("band_centre", _flag(np.abs(v["band_err"]), v["z2"] * v["band_sd"])),
-            "peak_frequency_measured": ("peak", v["pk_fm"], {"units": "Hz"}),
-            "peak_frequency_simulated": ("peak", v["pk_fs"], {"units": "Hz", "long_name": "matched simulated peak "
+            "peak_frequency_measured": ("peak", pk["fm"], {"units": "Hz"}),
+            "peak_frequency_simulated": ("peak", pk["fs"], {"units": "Hz", "long_name": "matched simulated peak "
                                          "(NaN: none within peak_match_tolerance)"}),
-            "peak_frequency_error": ("peak", (v["pk_fs"] - v["pk_fm"]) / v["pk_fm"],
+            "peak_frequency_error": ("peak", (pk["fs"] - pk["fm"]) / pk["fm"],
                                      {"units": "1", "long_name": "relative frequency error (f_sim - f_meas)/f_meas"}),
-            "peak_frequency_error_significant": ("peak", _flag(np.abs(v["pk_fs"] - v["pk_fm"]),
-                                                               np.full(v["pk_fm"].size, v["df"]))),
-            "peak_level_diff_db": ("peak", v["pk_ls"] - v["pk_lm"], {**db, "long_name": "log-PSD at the simulated "
+            "peak_frequency_error_threshold": ("peak", pk["freq_thr"] / pk["fm"], {
+                "units": "1", "long_name": "relative frequency difference within the peaks' resolution"}),
+            "peak_frequency_error_significant": ("peak", _flag(np.abs(pk["fs"] - pk["fm"]), pk["freq_thr"])),
+            "peak_level_diff_db": ("peak", pk["ls"] - pk["lm"], {**db, "long_name": "log-PSD at the simulated "
                                    "peak minus at the measured peak"}),
-            "peak_level_diff_db_threshold": ("peak", v["pk_level_thr"], db),
-            "peak_level_diff_db_significant": ("peak", _flag(np.abs(v["pk_ls"] - v["pk_lm"]), v["pk_level_thr"])),
+            "peak_level_diff_db_threshold": ("peak", pk["level_thr"], db),
+            "peak_level_diff_db_significant": ("peak", _flag(np.abs(pk["ls"] - pk["lm"]), pk["level_thr"])),
         },
         coords={
             "frequency": ("frequency", v["fb"], {"units": "Hz", "long_name": "frequency"}),
@@ -301,7 +364,7 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
                             "exact mid-band frequency"}),
             "band_lower": ("band_centre", v["bands"]["lower"], {"units": "Hz"}),
             "band_upper": ("band_centre", v["bands"]["upper"], {"units": "Hz"}),
-            "peak": ("peak", np.arange(v["pk_fm"].size)),
+            "peak": ("peak", np.arange(pk["fm"].size)),
         },
     )
     psd_m, psd_s = v["psd_m"], v["psd_s"]
@@ -335,7 +398,8 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
         "peak_match_tolerance": v["peak_match_tolerance"],
         "fft_backend": psd_m.attrs["fft_backend"],
         "significance": "a score is significant when it exceeds what two Welch estimates of one spectrum reach "
-                        "with probability 'confidence' (chi-square statistics of the estimates; fivid.score.uncertainty)",
+                        "with probability 'confidence' (chi-square statistics of the estimates; "
+                        "fivid.score.uncertainty)",
         "history": new_history(f"score_runs({variable!r}, band=[{v['f_lo']:g}, {v['f_hi']:g}] Hz, "
                                f"nperseg={psd_m.attrs['nperseg']})"),
     }

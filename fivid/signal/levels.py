@@ -16,6 +16,7 @@ __all__ = [
     "band_power",
     "band_rms",
     "third_octave_bands",
+    "third_octave_weights",
     "third_octave_levels",
     "vibration_level_db",
     "VELOCITY_REFERENCE",
@@ -100,6 +101,29 @@ def third_octave_bands(f_lo: float, f_hi: float) -> dict[str, np.ndarray]:
     return {"index": x, "centre": centre, "lower": centre / edge, "upper": centre * edge}
 
 
+def third_octave_weights(frequency: np.ndarray, f_lo: float, f_hi: float, *, min_bins: float = 1.0):
+    """The 1/3-octave bands inside ``[f_lo, f_hi]`` at least ``min_bins`` PSD bins wide, and their bin weights.
+
+    Returns
+    -------
+    bands : dict
+        As :func:`third_octave_bands`, plus ``n_bins`` (band width in bins).
+    weights : ndarray, shape (n_frequencies, n_bands)
+        :func:`bin_weights` [Hz] of each band; ``psd @ weights`` are the band powers.
+    """
+    f = np.asarray(frequency, dtype=np.float64)
+    df = f[1] - f[0]
+    bands = third_octave_bands(max(f_lo, df / 2), f_hi)
+    width = bands["upper"] - bands["lower"]
+    keep = width >= min_bins * df
+    bands = {k: v[keep] for k, v in bands.items()}
+    bands["n_bins"] = width[keep] / df
+    if not bands["centre"].size:
+        return bands, np.zeros((f.size, 0))
+    weights = np.stack([bin_weights(f, lo, hi) for lo, hi in zip(bands["lower"], bands["upper"])], axis=-1)
+    return bands, weights
+
+
 def third_octave_levels(psd, *, band=None, reference=1.0, min_bins=1.0):
     """Band RMS and level of a PSD in the 1/3-octave bands within ``band``.
 
@@ -123,14 +147,8 @@ def third_octave_levels(psd, *, band=None, reference=1.0, min_bins=1.0):
     import xarray as xr
 
     f = psd["frequency"].values
-    df = f[1] - f[0]
     f_lo, f_hi = _check_band(psd, band if band is not None else (f[1], f[-1]))
-    bands = third_octave_bands(max(f_lo, df / 2), f_hi)
-    width = bands["upper"] - bands["lower"]
-    keep = width >= min_bins * df
-    bands = {k: v[keep] for k, v in bands.items()}
-    weights = np.stack([bin_weights(f, lo, hi) for lo, hi in zip(bands["lower"], bands["upper"])], axis=-1) \
-        if bands["centre"].size else np.zeros((f.size, 0))
+    bands, weights = third_octave_weights(f, f_lo, f_hi, min_bins=min_bins)
     power = np.asarray(psd.values, dtype=np.float64) @ weights
     rms = np.sqrt(power)
     with np.errstate(divide="ignore"):
@@ -144,7 +162,7 @@ def third_octave_levels(psd, *, band=None, reference=1.0, min_bins=1.0):
         "band_lower": ("band_centre", bands["lower"], {"units": "Hz", "long_name": "lower band-edge frequency"}),
         "band_upper": ("band_centre", bands["upper"], {"units": "Hz", "long_name": "upper band-edge frequency"}),
         "band_index": ("band_centre", bands["index"], {"long_name": "IEC 61260-1 band number x (1000 Hz is 0)"}),
-        "n_bins": ("band_centre", width[keep] / df, {"units": "1", "long_name": "band width in PSD bins"}),
+        "n_bins": ("band_centre", bands["n_bins"], {"units": "1", "long_name": "band width in PSD bins"}),
     })
     return xr.Dataset(
         {"band_rms": (dims, rms, {"units": units, "long_name": "1/3-octave band RMS"}),

@@ -84,6 +84,8 @@ class SpectralSettings:
         Per-segment detrending.
     backend : {"pyfftw", "numpy"} or None
         FFT implementation (None: pyfftw when available).
+    threads : int or None
+        FFTW threads (None: :data:`fivid.signal.fft.FFTW_THREADS`, 1, the fastest on a loaded machine).
     """
 
     fs: float
@@ -92,6 +94,7 @@ class SpectralSettings:
     window: object = "hann"
     detrend: str = "constant"
     backend: str | None = None
+    threads: int | None = None
 
     def __post_init__(self):
         if not (np.isfinite(self.fs) and self.fs > 0):
@@ -103,6 +106,8 @@ class SpectralSettings:
                 f"noverlap must be an integer in [0, nperseg) = [0, {self.nperseg}), got {self.noverlap!r}",
                 key="noverlap",
             )
+        if self.threads is not None and (int(self.threads) != self.threads or self.threads < 1):
+            raise ConfigError(f"threads must be a positive integer, got {self.threads!r}", key="threads")
         if self.detrend not in DETRENDS:
             raise ConfigError(f"unknown detrend {self.detrend!r}; choose one of {', '.join(DETRENDS)}", key="detrend")
 
@@ -119,7 +124,7 @@ class SpectralSettings:
 def _transformer(settings: SpectralSettings, w: np.ndarray) -> SegmentTransform:
     rows = max(1, _BLOCK_VALUES // settings.nperseg)
     detrend = None if settings.detrend == "none" else settings.detrend
-    return SegmentTransform(w, detrend, rows, settings.backend)
+    return SegmentTransform(w, detrend, rows, settings.backend, settings.threads)
 
 
 def _one_sided_density(acc: np.ndarray, settings: SpectralSettings, w: np.ndarray, k: int) -> np.ndarray:

@@ -11,19 +11,20 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError, UnitError
-from fivid.signal.fft import check_backend
+from fivid.signal.fft import FFTW_THREADS, check_backend
 from fivid.signal.sampling import check_finite, run_label, sample_rate_of
-from fivid.signal.unit_strings import power_units, product_units
 from fivid.signal.spectral import (
-    bin_degrees_of_freedom,
     SpectralSettings,
     averaged_spectra,
+    bin_degrees_of_freedom,
     chi2_interval,
     equivalent_degrees_of_freedom,
     segment_window,
 )
+from fivid.signal.unit_strings import power_units, product_units
 
 __all__ = ["welch_psd", "csd", "spectral_settings"]
+
 
 def _units_of(da, label: str) -> str:
     units = da.attrs.get("units")
@@ -44,7 +45,7 @@ def _detrend_name(detrend) -> str:
 
 
 def spectral_settings(da, *, nperseg, noverlap=None, window="hann", detrend="constant", fs=None,
-                      backend=None, label=None) -> tuple[SpectralSettings, np.ndarray]:
+                      backend=None, threads=None, label=None) -> tuple[SpectralSettings, np.ndarray]:
     """Validate ``da`` (dim ``time``) and the Welch settings; return them and the time-last values.
 
     Raises DataQualityError (non-uniform time, NaN, fewer samples than one segment) naming the run.
@@ -61,7 +62,7 @@ def spectral_settings(da, *, nperseg, noverlap=None, window="hann", detrend="con
     nperseg = int(nperseg)
     noverlap = nperseg // 2 if noverlap is None else int(noverlap)
     settings = SpectralSettings(fs=rate, nperseg=nperseg, noverlap=noverlap, window=window,
-                                detrend=_detrend_name(detrend), backend=check_backend(backend))
+                                detrend=_detrend_name(detrend), backend=check_backend(backend), threads=threads)
     values = np.moveaxis(np.asarray(da.values, dtype=np.float64), da.dims.index("time"), -1)
     n = values.shape[-1]
     if n < nperseg:
@@ -90,17 +91,20 @@ def _settings_attrs(settings: SpectralSettings, w: np.ndarray, k: int, nu: float
         "sample_rate": settings.fs,
         "sample_rate_units": "Hz",
         "frequency_resolution": settings.fs / settings.nperseg,
+        "frequency_resolution_units": "Hz",
         "equivalent_noise_bandwidth": settings.fs * np.dot(w, w) / np.sum(w) ** 2,
+        "equivalent_noise_bandwidth_units": "Hz",
         "n_segments": k,
         "equivalent_degrees_of_freedom": nu,
         "equivalent_averages": nu / 2.0,
         "confidence": confidence,
         "fft_backend": settings.backend,
+        "fft_threads": settings.threads or FFTW_THREADS,
     }
 
 
 def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", fs=None, confidence=0.95,
-              backend=None, label=None):
+              backend=None, threads=None, label=None):
     """One-sided power spectral density by Welch's method, with χ² confidence bounds.
 
     Parameters
@@ -122,6 +126,8 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
         Level of the two-sided χ² interval ``psd_lower``/``psd_upper``.
     backend : {"pyfftw", "numpy"}, optional
         FFT implementation; both give the same numbers to round-off.
+    threads : int, optional
+        FFTW threads; default 1 (measured fastest on a shared 2-core machine, see :mod:`fivid.signal.fft`).
     label : str, optional
         How to name the signal in error messages (default: its ``run_id`` attr or name).
 
@@ -155,7 +161,7 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
 
     label = label or run_label(da, default=f"variable {da.name!r}")
     settings, values = spectral_settings(da, nperseg=nperseg, noverlap=noverlap, window=window, detrend=detrend,
-                                         fs=fs, backend=backend, label=label)
+                                         fs=fs, backend=backend, threads=threads, label=label)
     units = _units_of(da, label)
     lead = values.shape[:-1]
     rows = values.reshape(-1, values.shape[-1])
@@ -171,8 +177,9 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
     coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
     punits = power_units(units)
     long = f"power spectral density of {da.attrs.get('long_name', da.name)}"
-    coords["psd_lower"] = (dims, lower, {"units": punits, "long_name": f"lower {confidence:.0%} χ² bound of the {long}"})
-    coords["psd_upper"] = (dims, upper, {"units": punits, "long_name": f"upper {confidence:.0%} χ² bound of the {long}"})
+    for name, values in (("lower", lower), ("upper", upper)):
+        coords[f"psd_{name}"] = (dims, values, {"units": punits,
+                                                "long_name": f"{name} {confidence:.0%} χ² bound of the {long}"})
     attrs = {"units": punits, "long_name": long, "variable": str(da.name), "variable_units": units}
     attrs.update(_settings_attrs(settings, w, k, nu, confidence))
     return xr.DataArray(psd, dims=dims, coords=coords, name=f"psd_{da.name}" if da.name else "psd", attrs=attrs)

@@ -47,7 +47,8 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     t_int = 1.0 / (sample_rate * q)
     n_out = raw.rec.shape[0] // q
     time = (np.arange(n_out) * q + 0.5) * t_int
-    sv = np.concatenate([raw.sens_v0[None, :], raw.sens_v], axis=0)
+    sv = np.concatenate([raw.sens_v0[None, :], raw.sens_v[:, :, 0]], axis=0)
+    sens_u = raw.sens_v[::q, :, 1][:n_out]
     acc = _decimate(np.diff(sv, axis=0) / t_int, q)
     rec = raw.rec
     ft = _decimate(rec[:, K.R_FT], q)
@@ -75,8 +76,10 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     sensors = [s.name for s in model.sensors]
     if len(sensors) == 1:
         data["acceleration"] = (("time",), acc[:, 0])
+        data["sensor_displacement"] = (("time",), sens_u[:, 0])
     elif sensors:
         data["acceleration"] = (("time", "sensor"), acc)
+        data["sensor_displacement"] = (("time", "sensor"), sens_u)
         coords["sensor"] = np.array(sensors, dtype=object)
     else:
         data["acceleration"] = (("time",), np.zeros(n_out))
@@ -92,6 +95,10 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         if len(pairs) > 1:
             coords["contact"] = np.array(pairs, dtype=object)
     ds = xr.Dataset(data, coords=coords)
+    if "sensor_displacement" in ds:
+        ds["sensor_displacement"].attrs.update(
+            units="m", long_name="displacement at the sensors along their direction (diagnostic)",
+            description="value at the end of the first oversampled interval of each output period")
     ds["impact_dissipation"].attrs["description"] = "minus the work of the normal contact multipliers"
     ds["energy_balance_error"].attrs["description"] = (
         "external_work - (kinetic - kinetic(0) + strain + damping + friction + impact); round-off for a correct run")
@@ -125,6 +132,10 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "rayleigh_beta": float(model.rayleigh_beta),
         "contact_method": "node-to-segment, forward-increment Lagrange multipliers, Coulomb stick/slip, Gauss-Seidel",
         "contact_gs_tolerance": settings.gs_tolerance,
+        "contact_gs_mean_sweeps": float(raw.acc[K.GS_SWEEPS] / max(raw.steps, 1)),
+        "contact_gs_max_sweeps": int(raw.acc[K.GS_MAX]),
+        "contact_gs_steps_at_limit": int(raw.acc[K.GS_CAPPED]),
+        "steps": int(raw.steps),
     })
     if roughness_ra is None:
         ds.attrs["roughness_ra_note"] = "not given: recorded as 0"

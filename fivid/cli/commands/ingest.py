@@ -48,14 +48,22 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Handler of ``fivid ingest``; returns 0 when every file was written, 2 when one was rejected."""
+    from tqdm import tqdm
+
     from fivid.io import ingest_files
+    from fivid.io.ingest import expand_inputs
+
+    n_files = len(expand_inputs(args.paths))
+    bar = tqdm(total=n_files, unit="file", desc="ingest", disable=n_files < 2 or not sys.stderr.isatty())
 
     def written(path, target, ds):
         n = ds.sizes["time"]
-        print(f"{path} -> {target} (run {ds.attrs['run_id']}: {n} samples at {ds.attrs['sample_rate']:.6g} Hz)",
-              flush=True)
+        bar.write(f"{path} -> {target} (run {ds.attrs['run_id']}: {n} samples at {ds.attrs['sample_rate']:.6g} Hz)",
+                  file=sys.stdout)
 
-    result = ingest_files(args.paths, args.outdir, profile=args.rig, overwrite=args.overwrite, on_written=written)
+    with bar:
+        result = ingest_files(args.paths, args.outdir, profile=args.rig, overwrite=args.overwrite,
+                              on_written=written, on_file_done=lambda path: bar.update())
     for rejection in result.rejected:
         print(f"fivid ingest: rejected: {rejection}", file=sys.stderr)
     if result.rejected:
