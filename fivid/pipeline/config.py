@@ -96,6 +96,7 @@ class RunConfig:
     output: Path
     band: tuple[float, float]
     nperseg: int
+    settle: float
     identify: dict
     n_modes: int
     duration: float
@@ -320,7 +321,7 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
 
     out = Path(output) if output is not None else _resolve(base, raw.get("output", "out"))
 
-    analysis = chk.section(raw, "analysis", {"band", "nperseg"})
+    analysis = chk.section(raw, "analysis", {"band", "nperseg", "settle"})
     band_raw = analysis.get("band", ["100 Hz", "20 kHz"])
     band = (0.0, 0.0)
     if not isinstance(band_raw, (list, tuple)) or len(band_raw) != 2:
@@ -333,6 +334,9 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
                 chk.add("analysis.band", f"f_lo must be below f_hi, got {band_raw!r}")
             band = (lo, hi)
     nperseg = chk.integer(analysis, "analysis.nperseg", "nperseg", 4096, 64, 2**22)
+    settle = chk.quantity(analysis, "analysis.settle", "settle", "s", default="0 s", positive=False)
+    if settle is not None and settle < 0:
+        chk.add("analysis.settle", f"must be >= 0 s, got {analysis.get('settle')!r}")
 
     identify = _identify_options(chk, raw)
 
@@ -351,9 +355,9 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
     else:
         chk.add("simulate.seeds", f"must be a count in [1, 1000] or a list of distinct non-negative integers, got {seeds_raw!r}")
         seeds = (0,)
-    if duration is not None and nperseg and sample_rate and duration * sample_rate < nperseg:
-        chk.add("simulate.duration", f"{sim.get('duration')!r} at {sample_rate:g} Hz gives fewer samples than "
-                f"analysis.nperseg = {nperseg}; lengthen it or lower nperseg")
+    if duration is not None and nperseg and sample_rate and (duration - (settle or 0.0)) * sample_rate < nperseg:
+        chk.add("simulate.duration", f"{sim.get('duration')!r} less analysis.settle at {sample_rate:g} Hz gives "
+                f"fewer samples than analysis.nperseg = {nperseg}; lengthen it or lower nperseg")
 
     thr_node = chk.section(raw, "thresholds", set(_SCORE_KINDS))
     thresholds = []
@@ -369,7 +373,8 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
     chk.raise_if_any()
     return RunConfig(
         path=Path(path), sha256=sha, raw=raw, input_folder=folder, input_pattern=pattern, input_files=files,
-        rig_profile=profile, model=model, output=out, band=band, nperseg=nperseg, identify=identify,
+        rig_profile=profile, model=model, output=out, band=band, nperseg=nperseg, settle=settle or 0.0,
+        identify=identify,
         n_modes=n_modes, duration=duration, sample_rate=sample_rate, seeds=seeds, thresholds=tuple(thresholds),
     )
 

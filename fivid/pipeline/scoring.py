@@ -21,23 +21,26 @@ log = logging.getLogger("fivid")
 HEADLINE = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
 
 
-def steady_part(ds, *, label: str):
-    """The steady-sliding part of a run.
+def steady_part(ds, *, label: str, settle: float = 0.0):
+    """The steady-sliding part of a run, less ``settle`` [s] at its start.
 
     A simulation says where its transient (preload, settling, base ramp) ends (attribute
     ``transient_end`` [s]); a measured run's window is found from its encoder signal
-    (:func:`fivid.signal.steady_sliding_window`); without either the whole record is used.
+    (:func:`fivid.signal.steady_sliding_window`); without either the whole record is used. The same
+    ``settle`` is skipped in both, so that the ringing of lightly damped modes excited by the start
+    of sliding has decayed (it would otherwise raise the PSD at those modes in one and not the other).
     """
     from fivid.signal import steady_sliding_window
 
     if "transient_end" in ds.attrs:
-        return ds.sel(time=slice(float(ds.attrs["transient_end"]), None))
-    try:
-        t0, t1 = steady_sliding_window(ds)
-    except DataQualityError as exc:
-        log.info("%s: no steady-sliding window found (%s); the whole record is used", label, exc.message)
-        return ds
-    return ds.sel(time=slice(t0, t1))
+        t0, t1 = float(ds.attrs["transient_end"]), None
+    else:
+        try:
+            t0, t1 = steady_sliding_window(ds)
+        except DataQualityError as exc:
+            log.info("%s: no steady-sliding window found (%s); the whole record is used", label, exc.message)
+            t0, t1 = float(ds["time"].values[0]), None
+    return ds.sel(time=slice(t0 + settle, t1))
 
 
 def _acceleration(ds):
@@ -54,7 +57,7 @@ def acceleration_psd(ds, *, nperseg: int):
     return welch_psd(_acceleration(ds), nperseg=nperseg, window="hann", detrend="constant", confidence=0.95)
 
 
-def score_condition(measured: list, simulated: list, *, band, nperseg: int):
+def score_condition(measured: list, simulated: list, *, band, nperseg: int, settle: float = 0.0):
     """Scores of every (measured run, simulation) pair and their mean; the PSDs for the report.
 
     Parameters
@@ -65,6 +68,8 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int):
         Scoring band [Hz].
     nperseg : int
         Welch segment length [samples].
+    settle : float
+        Time skipped after the start of steady sliding [s] (see :func:`steady_part`).
 
     Returns
     -------
@@ -82,8 +87,8 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int):
     from fivid.io import read_run
     from fivid.score import score_runs, scores_to_json
 
-    meas = {Path(p).stem: steady_part(read_run(p), label=Path(p).name) for p in measured}
-    sims = {Path(p).stem: steady_part(read_run(p), label=Path(p).name) for p in simulated}
+    meas = {Path(p).stem: steady_part(read_run(p), label=Path(p).name, settle=settle) for p in measured}
+    sims = {Path(p).stem: steady_part(read_run(p), label=Path(p).name, settle=settle) for p in simulated}
     pairs = []
     for mname, m in meas.items():
         for sname, s in sims.items():
@@ -119,4 +124,4 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int):
         attrs={k: pm[0].attrs[k] for k in ("nperseg", "noverlap", "window", "detrend", "equivalent_averages",
                                            "sample_rate", "confidence")},
     )
-    return {"band": list(band), "nperseg": nperseg, "pairs": pairs, "summary": summary}, psd
+    return {"band": list(band), "nperseg": nperseg, "settle": settle, "pairs": pairs, "summary": summary}, psd

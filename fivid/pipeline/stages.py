@@ -225,7 +225,8 @@ class Score:
             for t in ctx.tasks["simulate"].values():
                 if t.name.rsplit("-seed", 1)[0] == cond:
                     inputs[f"sim:{t.name}"] = ctx.digests["simulate"][t.name]["sim"]
-            tasks.append(Task("score", cond, {"band": list(cfg.band), "nperseg": cfg.nperseg}, inputs,
+            tasks.append(Task("score", cond, {"band": list(cfg.band), "nperseg": cfg.nperseg, "settle": cfg.settle},
+                              inputs,
                               {"scores": str(ctx.out / "scores" / f"{cond}.json"),
                                "psd": str(ctx.out / "scores" / f"{cond}-psd.nc")}))
         return tasks
@@ -241,7 +242,8 @@ class Score:
             simulated = ctx.data["sims"][task.name]
 
             def work(task=task, measured=measured, simulated=simulated):
-                scores, psd = score_condition(measured, simulated, band=ctx.config.band, nperseg=ctx.config.nperseg)
+                scores, psd = score_condition(measured, simulated, band=ctx.config.band, nperseg=ctx.config.nperseg,
+                                               settle=ctx.config.settle)
                 write_netcdf(psd, task.outputs["psd"])
                 write_json(task.outputs["scores"], scores)
             _timed(ctx, task, work)
