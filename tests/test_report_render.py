@@ -37,13 +37,14 @@ def _signal(fs, n, peaks, seed):
     return t, x
 
 
-@pytest.fixture
-def report_inputs(tmp_path):
+@pytest.fixture(scope="module")
+def report_inputs(tmp_path_factory):
     import xarray as xr
 
     from fivid.friction import law_dataset
     from fivid.signal import welch_psd
 
+    tmp_path = tmp_path_factory.mktemp("report_inputs")
     law_path = tmp_path / "law.nc"
     law_dataset(_law(), mu0_ci=(0.29, 0.31)).to_netcdf(law_path)
     modal_path = tmp_path / "modal.nc"
@@ -84,11 +85,11 @@ def report_inputs(tmp_path):
     }
 
 
-@pytest.fixture
-def report(tmp_path, report_inputs):
+@pytest.fixture(scope="module")
+def report(tmp_path_factory, report_inputs):
     from fivid.report import render_report
 
-    return render_report(tmp_path / "report.html", report_inputs)
+    return render_report(tmp_path_factory.mktemp("report") / "report.html", report_inputs)
 
 
 EXPECTED_FIGURES = 1 + 1 + 2 + 1  # law shape, amplitude, one PSD overlay per condition, modes vs peaks
@@ -108,8 +109,9 @@ def test_report_is_self_contained_with_every_figure_embedded(report):
 def test_verdict_fails_when_a_check_fails(tmp_path, report_inputs):
     from fivid.report import render_report
 
-    report_inputs["checks"][0] = {**report_inputs["checks"][0], "value": 9.0, "pass": False}
-    text = render_report(tmp_path / "r.html", report_inputs).read_text()
+    checks = [dict(c) for c in report_inputs["checks"]]
+    checks[0].update(value=9.0, **{"pass": False})
+    text = render_report(tmp_path / "r.html", {**report_inputs, "checks": checks}).read_text()
     assert "FAIL: 1 of 2 threshold checks fail" in text
 
 

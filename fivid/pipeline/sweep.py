@@ -60,7 +60,7 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
     os.environ.update(env)
     try:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None, silence_logs=logging.WARNING)
+                               dashboard_address=None, silence_logs=logging.ERROR)
     finally:
         for k, v in old.items():
             if v is None:
