@@ -8,7 +8,8 @@ second run does no work.
 
 import hashlib
 import json
-import shutil
+import signal
+import subprocess
 import sys
 import time
 
@@ -47,6 +48,17 @@ def test_both_formats_hold_the_same_records(root):
     np.testing.assert_allclose(a["acceleration"], b["acceleration"], rtol=0, atol=1e-6 * 9.80665)
     for v in ("friction_force", "normal_force", "position"):
         np.testing.assert_array_equal(a[v].values, b[v].values)
+
+
+def _numeric(folder):
+    """Numeric variables of every netCDF file in ``folder`` (history and timestamps excluded)."""
+    import xarray as xr
+
+    out = {}
+    for p in sorted(folder.glob("*.nc")):
+        with xr.open_dataset(p) as ds:
+            out[p.name] = {k: ds[k].values for k in ds.variables if ds[k].dtype.kind in "fiu"}
+    return out
 
 
 def _truth(root):
@@ -106,3 +118,31 @@ def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path):
     again = json.loads((out / "summary.json").read_text())
     assert again["cache"]["ran"] == 0 and again["cache"]["cached"] == again["cache"]["tasks"]
     assert (out / "report.html").stat().st_size > 100_000
+
+    # killed while the dask workers simulate (--force redoes everything), then run again: the same results
+    first = {p.relative_to(out): p.read_bytes() for p in (out / "scores").glob("*.json")}
+    first_sims = _numeric(out / "sims")
+    t_force = time.time()
+    proc = subprocess.Popen([sys.executable, "-m", "fivid", *argv, "--force"], cwd=root,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    manifests = out / ".fivid-cache" / "simulate"
+    deadline = time.monotonic() + 600
+    while time.monotonic() < deadline and proc.poll() is None:
+        done = [m for m in manifests.glob("*.json") if m.stat().st_mtime > t_force]
+        if len(done) >= 3:  # in the middle of the sweep: 3 of 12 simulations redone
+            break
+        time.sleep(0.2)
+    assert proc.poll() is None, "the forced run ended before it could be killed mid-sweep"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert main(argv) == 0  # takes over the dead run's lock, redoes only the unfinished tasks
+    for rel, data in first.items():
+        assert (out / rel).read_bytes() == data, rel
+    assert _numeric(out / "sims").keys() == first_sims.keys()
+    again_sims = _numeric(out / "sims")
+    for name, variables in first_sims.items():  # seeded, serial kernels: bit-identical simulations
+        for k, v in variables.items():
+            np.testing.assert_array_equal(again_sims[name][k], v, err_msg=f"{name}:{k}")
+    resumed = json.loads((out / "summary.json").read_text())
+    sim_stage = next(st for st in resumed["stages"] if st["name"] == "simulate")
+    assert sim_stage["cached"] >= 3  # the simulations finished before the kill were kept, not redone
