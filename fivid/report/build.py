@@ -217,12 +217,16 @@ def _modal_section(page: Page, inputs: dict, frequency, psds, units: str) -> Non
                 "peaks (triangles, ≥ 6 dB prominence).", "modes against peaks")
     rows = []
     for i, fm in enumerate(modal_f):
+        if not band[0] / 2 <= fm <= 1.5 * band[1]:
+            continue  # far outside the analysis band: nothing measured to compare with
         if peaks.size:
             j = int(np.argmin(np.abs(peaks - fm)))
             rows.append([i + 1, float(fm), float(peaks[j]), float((fm - peaks[j]) / peaks[j] * 100)])
         else:
             rows.append([i + 1, float(fm), None, None])
     page.raw(table(["mode", "model frequency [Hz]", "nearest measured peak [Hz]", "difference [%]"], rows))
+    page.paragraph(f"Modes computed: {modal_f.size} (with the contact pairs as normal penalty springs, no "
+                   f"friction); listed: those between half the band's lower edge and 1.5 times its upper edge.")
 
 
 def _provenance(page: Page, inputs: dict) -> None:
