@@ -69,3 +69,11 @@ def test_single_run_prints_the_per_run_result(run_files, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "no amplitude law across runs can be fitted" in text
     assert "run C0" in text and out.exists()
+
+
+def test_inverse_with_an_unknown_run_is_bad_input(run_files, tmp_path, capsys, root):
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    status = main(["identify", *run_files, "-o", str(tmp_path / "l.nc"), "--band", "100", "5000",
+                   "--inverse", str(model), "--inverse-run", "NOPE"])
+    assert status == 2
+    assert "--inverse-run NOPE: no such run" in capsys.readouterr().err

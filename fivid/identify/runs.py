@@ -175,7 +175,9 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     (near 0 Hz the floor window is clipped to the bins above 0 Hz):
     the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
-    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``).
+    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``). A line is narrow: the peak must also exceed,
+    by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
+    broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
 
     Returns
     -------
@@ -202,14 +204,16 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     ok = (near.min(axis=1) >= 1) & (near.max(axis=1) < f.size)
     if not ok.any():
         return mask
-    fk, near, around = fk[ok], near[ok], around[ok]
+    fk, centre, near, around = fk[ok], centre[ok], near[ok], around[ok]
     in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
     n_tested = int(in_lobe.sum())
     chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
     threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
     floor = np.median(p[around], axis=1)
+    shoulder = np.median(p[np.clip(centre[:, None] + np.array([-5, -4, 4, 5])[None, :], 1, f.size - 1)], axis=1)
     peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
-    for i in np.nonzero((floor > 0) & (peak > threshold * floor))[0]:
+    line = (floor > 0) & (peak > threshold * floor) & (peak > threshold * shoulder)
+    for i in np.nonzero(line)[0]:
         mask[near[i][in_lobe[i]]] = True
     return mask
 
