@@ -55,9 +55,13 @@ def test_linear_form_refuses_unknown_roughness():
         linear_model()(0.01, 3.2e-6)
 
 
-def test_load_form_needs_normal_load():
+def test_missing_factors_are_named():
     with pytest.raises(FividError, match="normal_load"):
         power_model()(0.01, RA)
+    with pytest.raises(FividError, match=r"depends on roughness_ra: pass roughness_ra > 0 \(got none\)"):
+        power_model()(0.01, None, 5.0)
+    with pytest.raises(FividError, match="depends on the roughness"):
+        linear_model()(0.01, None)
 
 
 def test_psd_integrates_to_amplitude_squared():
@@ -131,7 +135,7 @@ def test_law_file_round_trip(tmp_path):
 
 
 def test_bad_law_files(tmp_path):
-    with pytest.raises(FividError, match="no such law file"):
+    with pytest.raises(FividError, match="no such file"):
         load_law(tmp_path / "missing.nc")
     (tmp_path / "junk.nc").write_text("not netcdf")
     with pytest.raises(SchemaError, match="cannot read"):

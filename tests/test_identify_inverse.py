@@ -54,6 +54,28 @@ def test_scaled_law_scales_amplitude_and_psd():
 
 
 @pytest.mark.slow
+def test_identified_law_file_drives_the_fe_solver(tmp_path):
+    """The law file written by identify, loaded by load_law, is what the solver samples (its sha recorded)."""
+    from synthetic_friction_runs import ANALYSIS_BAND, run_grid
+
+    from fivid.fe import load_model
+    from fivid.friction import load_law
+    from fivid.identify import identify_friction_law
+    from fivid.solver import simulate
+
+    res = identify_friction_law(run_grid(true_law(), seed=2), band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    law = load_law(res.write(tmp_path / "law.nc"))
+    model = load_model(Path(__file__).resolve().parents[1] / "configs" / "models" / "triboair_coarse.yaml")
+    sim = simulate(model, law=law, sliding_velocity=0.01, normal_load=5.0, roughness_ra=0.4e-6, duration=0.02,
+                   sample_rate=51200.0, seed=1, progress=False)
+    steady = sim.sel(time=slice(sim.attrs["transient_end"], None))
+    mu = steady["friction_force"] / steady["normal_force"]
+    assert law.sha256 in str(sim.attrs)
+    # the mean friction coefficient of the contact follows μ0 of the law: within a few times A
+    assert abs(float(mu.mean()) - law.mu0) < 5 * law.amplitude(0.01, 0.4e-6)
+
+
+@pytest.mark.slow
 def test_inverse_route_with_the_fe_solver():
     from fivid.fe import load_model
     from fivid.solver import simulate
