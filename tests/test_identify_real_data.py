@@ -18,7 +18,7 @@ import xarray as xr
 
 from fivid.errors import DataQualityError
 from fivid.identify import identify_friction_law
-from fivid.identify.runs import _batch_means_interval, mains_line_bins
+from fivid.identify.runs import batch_means_interval, mains_line_bins
 from fivid.schema import apply_cf_attrs, new_history
 from fivid.signal import welch_psd
 from fivid.units import convert
@@ -72,7 +72,7 @@ def test_slip_force_grows_with_band_tension(runs):
         v = ds["velocity"].values
         f = ds["friction_force"].values
         slip = v > 0.5 * v.max()
-        levels.append(_batch_means_interval(f[slip], 10, 0.95))
+        levels.append(batch_means_interval(f[slip], 10, 0.95))
     (m20, ci20), (m35, ci35) = levels[0], levels[1]
     assert ci20[1] < ci35[0], levels  # 20 lb: ~4.3 kN, 35 lb: ~9.8 kN
     assert all(m > 0 for m, _ in levels)

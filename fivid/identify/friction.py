@@ -230,6 +230,7 @@ def identify_friction_law(
     min_normal_force: float = 0.1,
     tare=None,
     mains_frequency: float | None = 50.0,
+    noise_correction: bool = True,
     transfer_function=None,
     shape_method: str = "smoothed",
     smoothing_octaves: float = 1.0 / 6.0,
@@ -257,6 +258,8 @@ def identify_friction_law(
         Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
     mains_frequency : float or None, default 50.0
         Mains harmonics standing out of the PSD are interpolated over [Hz]; None disables.
+    noise_correction : bool, default True
+        With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
     transfer_function : xarray.DataArray, optional
         Force-chain transfer function on dim ``frequency`` [Hz]; the μp PSD is divided by ``|H|^2``.
     shape_method : {"smoothed", "rolloff"}
@@ -297,9 +300,9 @@ def identify_friction_law(
     if not datasets:
         raise FividError("no runs given")
     band = _check_band(band, datasets)
-    settings = RunSettings(band=band, nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
+    settings = RunSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
                            tare=None if tare is None else tuple(float(x) for x in tare),
-                           mains_frequency=mains_frequency, confidence=confidence)
+                           mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence)
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
                                    for ds in datasets]
     used = [r for r in analyses if r.used]
@@ -341,8 +344,7 @@ def identify_friction_law(
     law = PerturbedCoulombLaw(mu0, shape.frequency, law_shape, model, band, injection=injection,
                               reference_velocity=v_ref)
     recorded = {
-        "band": band, "nperseg": nperseg or "auto", "tolerance": tolerance, "min_normal_force": min_normal_force,
-        "tare": settings.tare, "mains_frequency": mains_frequency,
+        "band": band, **settings.to_dict(),
         "transfer_function": "none" if transfer_function is None else "given",
         "shape_method": shape_method, "smoothing_octaves": smoothing_octaves, "forms": ",".join(forms),
         "weighting": weighting, "injection": injection, "confidence": confidence,

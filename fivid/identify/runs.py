@@ -28,19 +28,18 @@ import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
 
-__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins"]
+__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
+           "default_nperseg"]
 
 _log = logging.getLogger("fivid")
 
 
 @dataclass(frozen=True)
 class RunSettings:
-    """Settings of the per-run analysis (all recorded in the law file).
+    """Settings of the per-run analysis (all recorded in the law file); the band is passed separately.
 
     Parameters
     ----------
-    band : (float, float) or None
-        Valid band [Hz]; None: ``(DEFAULT_BAND_LOW, min(DEFAULT_BAND_HIGH, 0.4 fs))``.
     nperseg : int or None
         Welch segment length [samples]; None: :func:`default_nperseg`.
     tolerance : float
@@ -60,7 +59,6 @@ class RunSettings:
         Level of every interval.
     """
 
-    band: tuple | None = None
     nperseg: int | None = None
     tolerance: float = 0.05
     min_normal_force: float = 0.1
@@ -70,16 +68,17 @@ class RunSettings:
     n_batches: int = 20
     confidence: float = 0.95
 
-    def to_attrs(self) -> dict:
-        """Flat attributes for a netCDF file."""
+    def to_dict(self) -> dict:
+        """The settings as plain values (recorded in the law file and the JSON report)."""
         return {
-            "setting_tolerance": self.tolerance,
-            "setting_min_normal_force": self.min_normal_force,
-            "setting_tare": "none" if self.tare is None else f"{self.tare[0]:g} {self.tare[1]:g} s",
-            "setting_mains_frequency": -1.0 if self.mains_frequency is None else float(self.mains_frequency),
-            "setting_noise_correction": int(self.noise_correction),
-            "setting_n_batches": self.n_batches,
-            "setting_confidence": self.confidence,
+            "nperseg": self.nperseg or "auto",
+            "tolerance": self.tolerance,
+            "min_normal_force": self.min_normal_force,
+            "tare": self.tare,
+            "mains_frequency": self.mains_frequency,
+            "noise_correction": self.noise_correction,
+            "n_batches": self.n_batches,
+            "confidence": self.confidence,
         }
 
 
@@ -229,7 +228,11 @@ def _replace_lines(frequency, psd, mask):
     return out
 
 
-def _batch_means_interval(x, n_batches, confidence):
+def batch_means_interval(x, n_batches, confidence):
+    """Mean of ``x`` and its batch-means interval: ``mean ± t_{B-1} sd(batch means)/sqrt(B)``.
+
+    Returns (mean, (lower, upper)); the batches are ``n_batches`` equal consecutive parts of ``x``.
+    """
     from scipy import stats
 
     b = int(n_batches)
@@ -329,7 +332,7 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
     mu = ft_w / fn_w
     if np.mean(mu) < 0:  # friction force recorded with the opposite sign convention
         mu = -mu
-    res.mu_mean, res.mu_mean_ci = _batch_means_interval(mu, settings.n_batches, settings.confidence)
+    res.mu_mean, res.mu_mean_ci = batch_means_interval(mu, settings.n_batches, settings.confidence)
     mup = mu - res.mu_mean
     res.mu_rms_total = float(np.sqrt(np.mean(mup**2)))
     nperseg = settings.nperseg or default_nperseg(fs, mup.size)
