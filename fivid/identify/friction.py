@@ -21,7 +21,7 @@ import numpy as np
 
 from fivid.errors import DataQualityError, FividError
 from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
-from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, choose_form, fit_amplitude_forms
+from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
 from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, RunAnalysis, RunSettings, analyse_run
 from fivid.identify.shape import SpectralShape, identify_shape
 
@@ -68,7 +68,8 @@ class FrictionIdentification:
             "law_across_runs": self.law_across_runs,
             "amplitude_model": amp,
             "selection": {"rule": SELECTION_RULE, "chosen": m.form, "why": self.why},
-            "candidate_forms": [f.to_json() for f in self.form_fits],
+            "candidate_forms": [dict(f.to_json(), akaike_weight=akaike_weights(self.form_fits).get(f.form))
+                                for f in self.form_fits],
             "shape": {
                 "method": self.shape_method,
                 "smoothing_octaves": self.shape.smoothing_octaves,
@@ -90,9 +91,10 @@ class FrictionIdentification:
             f"{self.mu0_ci[1]:.5f}) from {len(used)} of {len(self.runs)} runs",
             f"band {self.band[0]:g}-{self.band[1]:g} Hz; amplitude form {self.law.amplitude_model.form}: {self.why}",
         ]
+        weights = akaike_weights(self.form_fits)
         for f in self.form_fits:
             if f.fitted:
-                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  "
+                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights[f.form]:.3f}  "
                              f"R2 {f.diagnostics.get('r_squared') or float('nan'):.3f}")
             else:
                 lines.append(f"  {f.form:22s} not fitted: {f.reason}")
