@@ -205,3 +205,32 @@ def test_convected_spectra_collapse_at_the_reference_velocity():
     # treated as uniform injection, the three corners (750, 1500, 3000 Hz) smear into a shallower shape
     smeared = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG).shape.rolloff_params
     assert smeared["order"] < 2.0 - 10 * smeared["order_stderr"]
+
+
+def test_force_chain_transfer_function_is_divided_out():
+    """μp seen through a force chain H (a resonance at 4 kHz) is recovered when H is given."""
+    import xarray as xr
+
+    from fivid.friction import PerturbedCoulombLaw
+    from synthetic_friction_runs import SHAPE, SHAPE_F
+
+    law = true_law()
+
+    def h2(f):
+        r = f / 4000.0
+        return 1.0 / ((1 - r**2) ** 2 + (2 * 0.2 * r) ** 2)
+
+    s = law.shape  # normalised on SHAPE_F
+    ratio = np.trapezoid(s * h2(SHAPE_F), SHAPE_F)
+    seen = law.scaled(np.sqrt(ratio))
+    seen = PerturbedCoulombLaw(law.mu0, SHAPE_F, SHAPE * h2(SHAPE_F), seen.amplitude_model, law.band)
+    runs = [synthetic_run(seen, velocity=v, roughness=0.4e-6, normal_load=5.0, seed=20 + i, run_id=f"T{i}")
+            for i, v in enumerate((0.005, 0.02))]
+    f = np.linspace(0.0, 12800.0, 2049)
+    tf = xr.DataArray(np.sqrt(h2(f)), dims="frequency", coords={"frequency": f})
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, transfer_function=tf)
+    raw = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    for r, q in zip(res.runs, raw.runs):
+        truth = band_amplitude(law, r.sliding_velocity, r.roughness_ra, r.normal_load)
+        assert abs(r.mu_rms - truth) < Z * r.mu_rms_stderr, (r.mu_rms, truth, r.mu_rms_stderr)
+        assert q.mu_rms - truth > 10 * q.mu_rms_stderr  # the resonance amplifies the band RMS when not removed
