@@ -7,8 +7,8 @@ step on the default rig (stencil K(u + beta v), central-difference update, const
 Coulomb friction, energy bookkeeping, records) during a preload-and-slide run; ``speedup_vs_scipy_csr``
 against a plain scipy loop doing the same arithmetic (``K @ (u + beta v)`` and the lumped-mass update) on the
 same model; ``fraction_of_bare_stencil`` against the fastest bare stencil + update kernel written here for
-the same mesh (every node of every block with one interior stencil on ghost-padded arrays, unsigned
-indices, no contact or constraints), whose own ``bare_stencil_dof_updates_per_s`` is printed too, with a
+the same mesh (every node of every block with one interior stencil on ghost-padded arrays, the
+rectangular-element sparsity (13 terms per force), unsigned indices, no contact or constraints), whose own ``bare_stencil_dof_updates_per_s`` is printed too, with a
 ``prange`` variant (``bare_stencil_parallel_dof_updates_per_s``) to show whether two threads pay at this size.
 Also the wall time to simulate 0.1 s of the coarse and of the default rig: measured (coarse, full mode) or
 projected from the measured step rate (``*_projected``).
@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def _bare_kernels():
     from numba import njit, prange
 
-    from fivid.solver._kernels import _uniform_component
+    from fivid.solver._kernels import _rect_component
 
     @njit(cache=False)
     def bare_steps(nsteps, dt, alpha, beta, npd, blocks, c_uni, minv, u, v, w, f):
@@ -38,8 +38,8 @@ def _bare_kernels():
             wx = w[:npd]
             wy = w[npd:]
             for b in range(blocks.shape[0]):
-                _uniform_component(wx, wy, f[:npd], c_uni[b], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
-                _uniform_component(wx, wy, f[npd:], c_uni[b], 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+                _rect_component(wx, wy, f[:npd], c_uni[b], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+                _rect_component(wx, wy, f[npd:], c_uni[b], 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
             for d in range(n):
                 vn = v[d] + dt * (-minv[d] * f[d] - alpha * v[d])
                 v[d] = vn
@@ -55,8 +55,8 @@ def _bare_kernels():
             wy = w[npd:]
             for b in range(blocks.shape[0]):
                 for a in prange(2):
-                    _uniform_component(wx, wy, f[a * npd:(a + 1) * npd], c_uni[b], a, blocks[b, 0], blocks[b, 1],
-                                       blocks[b, 2], blocks[b, 3])
+                    _rect_component(wx, wy, f[a * npd:(a + 1) * npd], c_uni[b], a, blocks[b, 0], blocks[b, 1],
+                                    blocks[b, 2], blocks[b, 3])
             for d in prange(n):
                 vn = v[d] + dt * (-minv[d] * f[d] - alpha * v[d])
                 v[d] = vn

@@ -127,6 +127,44 @@ def _uniform_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
 
 
 @njit(cache=True, fastmath={"contract"})
+def _rect_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
+    """As :func:`_uniform_component` for a patch of rectangular elements, whose cross-coupling (xy) with the
+    axis neighbours and the node itself vanishes: 13 terms instead of 18."""
+    st = uint64(stride)
+    one = uint64(1)
+    # own-component coefficient of neighbour position p (0..8, row-major from (-1, -1)): c[4p + 3a];
+    # cross-component: c[4p + a + 1], non-zero only at the four corners
+    s0 = c[3 * a]
+    s1 = c[4 + 3 * a]
+    s2 = c[8 + 3 * a]
+    s3 = c[12 + 3 * a]
+    s4 = c[16 + 3 * a]
+    s5 = c[20 + 3 * a]
+    s6 = c[24 + 3 * a]
+    s7 = c[28 + 3 * a]
+    s8 = c[32 + 3 * a]
+    x0 = c[a + 1]
+    x2 = c[8 + a + 1]
+    x6 = c[24 + a + 1]
+    x8 = c[32 + a + 1]
+    if a == 0:
+        ws = wx
+        wo = wy
+    else:
+        ws = wy
+        wo = wx
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for i in range(ncols):
+            m = b + uint64(i)
+            s = m - st
+            n = m + st
+            fo[m] = (s0 * ws[s - one] + x0 * wo[s - one] + s1 * ws[s] + s2 * ws[s + one] + x2 * wo[s + one]
+                     + s3 * ws[m - one] + s4 * ws[m] + s5 * ws[m + one]
+                     + s6 * ws[n - one] + x6 * wo[n - one] + s7 * ws[n] + s8 * ws[n + one] + x8 * wo[n + one])
+
+
+@njit(cache=True, fastmath={"contract"})
 def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
     """``f = K_blocks w`` by the per-block 3x3 stencils (every node of every block is written).
 
@@ -138,9 +176,10 @@ def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
         Output forces [N] (same layout).
     npd : int
         Length of one component (nodes plus padding on both sides).
-    blocks : int64 ndarray (n_patch, 4)
-        Patches of nodes sharing one stencil: ``first x-index, columns, rows, row stride``
-        (the interior and the four edges without corners of each uniform block).
+    blocks : int64 ndarray (n_patch, 5)
+        Patches of nodes sharing one stencil: ``first x-index, columns, rows, row stride, rectangular``
+        (the interior and the four edges without corners of each uniform block; rectangular: the xy
+        couplings with the axis neighbours vanish and are skipped).
     c_uni : ndarray (n_patch, 36)
         Stencil of each patch [N m-1].
     lst_idx, lst_stride : int64 ndarray (n_list,)
@@ -155,8 +194,12 @@ def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
     fy = f[npd:]
     for b in range(blocks.shape[0]):
         c = c_uni[b]
-        _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
-        _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+        if blocks[b, 4]:
+            _rect_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+            _rect_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+        else:
+            _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+            _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
     one = uint64(1)
     for r in range(lst_idx.shape[0]):
         p = uint64(lst_idx[r])
