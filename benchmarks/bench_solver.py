@@ -27,28 +27,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _bare_kernels():
+    """The bare stencil + update loop, compiled serial and with ``prange`` (same body; prange runs as range
+    in the serial compilation)."""
     from numba import njit, prange
 
     from fivid.solver._kernels import _rect_component
 
-    @njit(cache=False)
-    def bare_steps(nsteps, dt, alpha, beta, npd, blocks, c_uni, minv, u, v, w, f):
-        n = u.shape[0]
-        for _ in range(nsteps):
-            wx = w[:npd]
-            wy = w[npd:]
-            for b in range(blocks.shape[0]):
-                _rect_component(wx, wy, f[:npd], c_uni[b], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
-                _rect_component(wx, wy, f[npd:], c_uni[b], 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
-            for d in range(n):
-                vn = v[d] + dt * (-minv[d] * f[d] - alpha * v[d])
-                v[d] = vn
-                ud = u[d] + dt * vn
-                u[d] = ud
-                w[d] = ud + beta * vn
-
-    @njit(cache=False, parallel=True)
-    def bare_steps_parallel(nsteps, dt, alpha, beta, npd, blocks, c_uni, minv, u, v, w, f):
+    def steps(nsteps, dt, alpha, beta, npd, blocks, c_uni, minv, u, v, w, f):
         n = u.shape[0]
         for _ in range(nsteps):
             wx = w[:npd]
@@ -64,7 +49,7 @@ def _bare_kernels():
                 u[d] = ud
                 w[d] = ud + beta * vn
 
-    return bare_steps, bare_steps_parallel
+    return njit(cache=False)(steps), njit(cache=False, parallel=True)(steps)
 
 
 def _bare_layout(model, st):

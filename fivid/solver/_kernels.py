@@ -275,6 +275,32 @@ def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
 
 
 @njit(cache=True)
+def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg):
+    """x-indices of slave ``k`` and of the two nodes of its current master segment."""
+    p = slave_pair[k]
+    return slave_node[k], master_nodes[master_ptr[p] + seg[k]], master_nodes[master_ptr[p] + seg[k] + 1]
+
+
+@njit(cache=True)
+def _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, fx, fy):
+    """Correct position and velocity of slave ``sn`` by the contact force ``(fx, fy)`` [N] over one step and of
+    the master nodes ``a``, ``b`` by ``-N0`` and ``-N1`` times it (zero inverse mass: constrained, not moved)."""
+    dt2 = dt * dt
+    u[sn] += dt2 * minv_c[sn] * fx
+    v[sn] += dt * minv_c[sn] * fx
+    u[sn + npd] += dt2 * minv_c[sn + npd] * fy
+    v[sn + npd] += dt * minv_c[sn + npd] * fy
+    u[a] -= dt2 * minv_c[a] * n0 * fx
+    v[a] -= dt * minv_c[a] * n0 * fx
+    u[a + npd] -= dt2 * minv_c[a + npd] * n0 * fy
+    v[a + npd] -= dt * minv_c[a + npd] * n0 * fy
+    u[b] -= dt2 * minv_c[b] * n1 * fx
+    v[b] -= dt * minv_c[b] * n1 * fx
+    u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
+    v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+
+
+@njit(cache=True)
 def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
                   seg, geo, lam, cstate, mu, max_iter, tol):
     """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
@@ -316,26 +342,11 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
             lam[k, 1] = 0.0
             cstate[k] = 0
             continue
-        p = slave_pair[k]
-        a = master_nodes[master_ptr[p] + seg[k]]
-        b = master_nodes[master_ptr[p] + seg[k] + 1]
-        sn = slave_node[k]
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
         n0 = geo[k, 0]
         n1 = geo[k, 1]
-        fx = ln * geo[k, 2] + lt * geo[k, 4]
-        fy = ln * geo[k, 3] + lt * geo[k, 5]
-        u[sn] += dt2 * minv_c[sn] * fx
-        v[sn] += dt * minv_c[sn] * fx
-        u[sn + npd] += dt2 * minv_c[sn + npd] * fy
-        v[sn + npd] += dt * minv_c[sn + npd] * fy
-        u[a] -= dt2 * minv_c[a] * n0 * fx
-        v[a] -= dt * minv_c[a] * n0 * fx
-        u[a + npd] -= dt2 * minv_c[a + npd] * n0 * fy
-        v[a + npd] -= dt * minv_c[a + npd] * n0 * fy
-        u[b] -= dt2 * minv_c[b] * n1 * fx
-        v[b] -= dt * minv_c[b] * n1 * fx
-        u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
-        v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+        _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
+                             ln * geo[k, 3] + lt * geo[k, 5])
     sweeps = 0
     for it in range(max_iter):
         sweeps = it + 1
@@ -343,10 +354,7 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
         for k in range(ns):
             if geo[k, 6] == 0.0:
                 continue
-            p = slave_pair[k]
-            a = master_nodes[master_ptr[p] + seg[k]]
-            b = master_nodes[master_ptr[p] + seg[k] + 1]
-            sn = slave_node[k]
+            sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
             n0 = geo[k, 0]
             n1 = geo[k, 1]
             nx = geo[k, 2]
@@ -385,20 +393,7 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
             if ln_new == 0.0:
                 state = 0
             dtn = lt_new - lt
-            fx = dn * nx + dtn * tx
-            fy = dn * ny + dtn * ty
-            u[sn] += dt2 * minv_c[sn] * fx
-            v[sn] += dt * minv_c[sn] * fx
-            u[sn + npd] += dt2 * minv_c[sn + npd] * fy
-            v[sn + npd] += dt * minv_c[sn + npd] * fy
-            u[a] -= dt2 * minv_c[a] * n0 * fx
-            v[a] -= dt * minv_c[a] * n0 * fx
-            u[a + npd] -= dt2 * minv_c[a + npd] * n0 * fy
-            v[a + npd] -= dt * minv_c[a + npd] * n0 * fy
-            u[b] -= dt2 * minv_c[b] * n1 * fx
-            v[b] -= dt * minv_c[b] * n1 * fx
-            u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
-            v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+            _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, dn * nx + dtn * tx, dn * ny + dtn * ty)
             lam[k, 0] = ln_new
             lam[k, 1] = lt_new
             cstate[k] = state
@@ -543,9 +538,7 @@ def run_steps(
                     if cstate[k] == 0:
                         rec_contact[r, p, 4] += 1.0
                         continue
-                    a = master_nodes[master_ptr[p] + seg[k]]
-                    b = master_nodes[master_ptr[p] + seg[k] + 1]
-                    sn = slave_node[k]
+                    sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
                     n0 = geo[k, 0]
                     n1 = geo[k, 1]
                     qs = cnode_slot[sn]
