@@ -10,8 +10,9 @@ from solver_models import block_on_base, cantilever
 EPS = np.finfo(float).eps
 
 
-@pytest.mark.parametrize("config", ["configs/models/triboair_coarse.yaml", cantilever(mapped=True), block_on_base()],
-                         ids=["rig-coarse", "mapped-block", "block-on-base"])
+@pytest.mark.parametrize("config", ["configs/models/triboair_coarse.yaml", cantilever(mapped=True),
+                                    cantilever(sheared=True), block_on_base()],
+                         ids=["rig-coarse", "mapped-block", "parallelogram-block", "block-on-base"])
 def test_stencil_equals_assembled_stiffness(root, config):
     """K u by the stencil equals fivid.fe's assembled CSR K u to round-off.
 
@@ -37,7 +38,12 @@ def test_mapped_block_uses_per_node_coefficients():
     st = block_stencils(load_model(cantilever(mapped=True)))
     assert st.blocks.shape[0] == 0 and st.lst_idx.size == 68
     st = block_stencils(load_model(cantilever()))
-    assert st.blocks.shape[0] == 1 and st.lst_idx.size == 2 * (17 + 4) - 4
+    assert st.blocks.shape[0] == 5 and st.lst_idx.size == 4  # interior + 4 edges; corners listed
+    # rectangles: the 13-term stencil in the interior; at an edge one element row is missing and the xy
+    # couplings no longer cancel: full 18 terms
+    assert st.blocks[:, 4].tolist() == [1, 0, 0, 0, 0]
+    st = block_stencils(load_model(cantilever(sheared=True)))
+    assert st.blocks.shape[0] == 5 and not st.blocks[:, 4].any()  # parallelograms: uniform, full 18 terms
 
 
 def _prepare(model, n_int, n_sub, dt):
@@ -66,7 +72,7 @@ def _run(fn, model, st, ka, fric, n_int, n_sub, dt, u0, v0):
     status, done = fn(
         0, n_int * n_sub, dt, model.rayleigh_alpha, model.rayleigh_beta, n_sub, st.npd,
         st.blocks, st.c_uni, st.lst_idx, st.lst_stride, st.lst_coef, ka.mass, ka.minv, ka.spr_dof, ka.spr_kc,
-        ka.con_dof, ka.con_kind, ka.con_par, ka.con_react,
+        ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
         ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
         ka.seg.copy(), np.zeros((ns, 7)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
         100, 1e-12, fric.mu, fric.rate, np.zeros(ns), np.zeros((ka.cnodes.size, 4)), ka.cnode_slot, ka.cnodes,

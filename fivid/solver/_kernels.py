@@ -10,12 +10,13 @@ Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / i
 - ``w = u + beta*v`` is kept up to date by the update pass, so one stencil pass gives
   ``f = K (u + beta v)`` (stiffness-proportional damping folded in).
 - Stencil coefficient ``((dj+1)*3 + (di+1))*4 + 2*a + b`` couples dof ``a`` of node ``p`` with dof ``b`` of
-  node ``p + dj*(nx+1) + di``; uniform blocks share one set for their interior nodes, the other nodes
-  are listed with their own coefficients.
+  node ``p + dj*(nx+1) + di``; in a uniform block the interior nodes share one set and so do the nodes of
+  each edge (corners excluded): five patches; corners and mapped blocks are listed node by node.
 - Hot loops index with unsigned integers: numba then emits no negative-index wraparound, which
   otherwise blocks vectorisation (measured: 6x slower stencil).
-- constrained dofs ``con_dof`` with ``con_kind`` 0 fixed, 1 displacement ramp, 2 velocity ramp and
-  ``con_par = (amplitude, t_start, ramp_time)``; the smooth ramp is ``r(s) = s - sin(2 pi s)/(2 pi)``.
+- constrained dofs ``con_dof`` belong to motion groups ``con_grp``; ``grp_par[g] = (kind, amplitude, t_start,
+  ramp_time)`` with kind 0 fixed, 1 displacement ramp, 2 velocity ramp (one velocity evaluation per group
+  and step, not per dof); the smooth ramp is ``r(s) = s - sin(2 pi s)/(2 pi)``.
 
 Nothing is allocated inside the time loop.
 """
@@ -40,7 +41,10 @@ D_ALPHA = 1  # mass-proportional damping dissipation
 W_EXT = 2  # work of the constraint reactions (imposed motions)
 W_CN = 3  # work of the normal contact forces (<= 0: impact losses)
 W_CT = 4  # work of the tangential contact forces (<= 0: friction dissipation)
-N_ACC = 5
+GS_SWEEPS = 5  # total Gauss-Seidel sweeps
+GS_MAX = 6  # largest number of sweeps in one step
+GS_CAPPED = 7  # steps that reached the sweep limit
+N_ACC = 8
 
 # output record columns (rec array, one row per output interval)
 R_FT = 0  # reaction, tangential sum, interval average [N]
@@ -86,9 +90,10 @@ def constrained_velocity(kind, amp, t0, tr, t, dt):
 
 
 @njit(cache=True, fastmath={"contract"})
-def _uniform_component(wx, wy, fo, c, a, off, nx, ny):
-    """One force component ``a`` of the interior nodes of a uniform block (unsigned indices: no wraparound)."""
-    st = uint64(nx + 1)
+def _uniform_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
+    """Force component ``a`` on a rectangular patch of nodes sharing one stencil ``c`` (unsigned indices: no
+    negative-index wraparound, so the row loop vectorises)."""
+    st = uint64(stride)
     one = uint64(1)
     k = 2 * a
     c0 = c[k]
@@ -109,9 +114,9 @@ def _uniform_component(wx, wy, fo, c, a, off, nx, ny):
     c29 = c[k + 29]
     c32 = c[k + 32]
     c33 = c[k + 33]
-    for j in range(1, ny):
-        b = uint64(off + j * (nx + 1))
-        for i in range(1, nx):
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for i in range(ncols):
             m = b + uint64(i)
             s = m - st
             n = m + st
@@ -119,6 +124,44 @@ def _uniform_component(wx, wy, fo, c, a, off, nx, ny):
                      + c9 * wy[s + one] + c12 * wx[m - one] + c13 * wy[m - one] + c16 * wx[m] + c17 * wy[m]
                      + c20 * wx[m + one] + c21 * wy[m + one] + c24 * wx[n - one] + c25 * wy[n - one]
                      + c28 * wx[n] + c29 * wy[n] + c32 * wx[n + one] + c33 * wy[n + one])
+
+
+@njit(cache=True, fastmath={"contract"})
+def _rect_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
+    """As :func:`_uniform_component` for a patch of rectangular elements, whose cross-coupling (xy) with the
+    axis neighbours and the node itself vanishes: 13 terms instead of 18."""
+    st = uint64(stride)
+    one = uint64(1)
+    # own-component coefficient of neighbour position p (0..8, row-major from (-1, -1)): c[4p + 3a];
+    # cross-component: c[4p + a + 1], non-zero only at the four corners
+    s0 = c[3 * a]
+    s1 = c[4 + 3 * a]
+    s2 = c[8 + 3 * a]
+    s3 = c[12 + 3 * a]
+    s4 = c[16 + 3 * a]
+    s5 = c[20 + 3 * a]
+    s6 = c[24 + 3 * a]
+    s7 = c[28 + 3 * a]
+    s8 = c[32 + 3 * a]
+    x0 = c[a + 1]
+    x2 = c[8 + a + 1]
+    x6 = c[24 + a + 1]
+    x8 = c[32 + a + 1]
+    if a == 0:
+        ws = wx
+        wo = wy
+    else:
+        ws = wy
+        wo = wx
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for i in range(ncols):
+            m = b + uint64(i)
+            s = m - st
+            n = m + st
+            fo[m] = (s0 * ws[s - one] + x0 * wo[s - one] + s1 * ws[s] + s2 * ws[s + one] + x2 * wo[s + one]
+                     + s3 * ws[m - one] + s4 * ws[m] + s5 * ws[m + one]
+                     + s6 * ws[n - one] + x6 * wo[n - one] + s7 * ws[n] + s8 * ws[n + one] + x8 * wo[n + one])
 
 
 @njit(cache=True, fastmath={"contract"})
@@ -133,12 +176,14 @@ def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
         Output forces [N] (same layout).
     npd : int
         Length of one component (nodes plus padding on both sides).
-    blocks : int64 ndarray (n_uniform, 3)
-        ``first index (pad + node_offset), nx, ny`` of each uniform block: its interior nodes.
-    c_uni : ndarray (n_uniform, 36)
-        Interior stencil of each uniform block [N m-1].
+    blocks : int64 ndarray (n_patch, 5)
+        Patches of nodes sharing one stencil: ``first x-index, columns, rows, row stride, rectangular``
+        (the interior and the four edges without corners of each uniform block; rectangular: the xy
+        couplings with the axis neighbours vanish and are skipped).
+    c_uni : ndarray (n_patch, 36)
+        Stencil of each patch [N m-1].
     lst_idx, lst_stride : int64 ndarray (n_list,)
-        Every other node (block boundaries, mapped blocks): x-index and row stride ``nx + 1``.
+        Every other node (block corners, mapped blocks): x-index and row stride ``nx + 1``.
     lst_coef : ndarray (n_list, 36)
         Their stencils [N m-1]; neighbours outside the block have zero coefficients (the padding
         keeps their indices in bounds).
@@ -149,8 +194,12 @@ def block_forces(w, f, npd, blocks, c_uni, lst_idx, lst_stride, lst_coef):
     fy = f[npd:]
     for b in range(blocks.shape[0]):
         c = c_uni[b]
-        _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2])
-        _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2])
+        if blocks[b, 4]:
+            _rect_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+            _rect_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+        else:
+            _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+            _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
     one = uint64(1)
     for r in range(lst_idx.shape[0]):
         p = uint64(lst_idx[r])
@@ -226,6 +275,32 @@ def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
 
 
 @njit(cache=True)
+def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg):
+    """x-indices of slave ``k`` and of the two nodes of its current master segment."""
+    p = slave_pair[k]
+    return slave_node[k], master_nodes[master_ptr[p] + seg[k]], master_nodes[master_ptr[p] + seg[k] + 1]
+
+
+@njit(cache=True)
+def _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, fx, fy):
+    """Correct position and velocity of slave ``sn`` by the contact force ``(fx, fy)`` [N] over one step and of
+    the master nodes ``a``, ``b`` by ``-N0`` and ``-N1`` times it (zero inverse mass: constrained, not moved)."""
+    dt2 = dt * dt
+    u[sn] += dt2 * minv_c[sn] * fx
+    v[sn] += dt * minv_c[sn] * fx
+    u[sn + npd] += dt2 * minv_c[sn + npd] * fy
+    v[sn + npd] += dt * minv_c[sn + npd] * fy
+    u[a] -= dt2 * minv_c[a] * n0 * fx
+    v[a] -= dt * minv_c[a] * n0 * fx
+    u[a + npd] -= dt2 * minv_c[a + npd] * n0 * fy
+    v[a + npd] -= dt * minv_c[a + npd] * n0 * fy
+    u[b] -= dt2 * minv_c[b] * n1 * fx
+    v[b] -= dt * minv_c[b] * n1 * fx
+    u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
+    v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+
+
+@njit(cache=True)
 def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
                   seg, geo, lam, cstate, mu, max_iter, tol):
     """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
@@ -234,10 +309,11 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
     node penetrates its master segment and the tangential multiplier obeys Coulomb's law
     ``|lam_t| <= mu lam_n`` (stick: zero relative tangential increment over the step). Normal and
     tangential multipliers of all slave nodes are iterated together by projected Gauss-Seidel until the
-    largest multiplier change is below ``tol`` times the largest multiplier.
+    largest correction of a sweep moves no node pair by more than ``tol`` [m].
 
     Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
-    force on slave ``k`` along ``n`` and ``t`` (the master nodes get ``-N_j`` times it); ``cstate[k]`` 0 open,
+    force on slave ``k`` along ``n`` and ``t``, on entry the previous step's values (warm start: applied first,
+    then projected and iterated, so the converged result does not depend on it beyond the tolerance) (the master nodes get ``-N_j`` times it); ``cstate[k]`` 0 open,
     1 stick, 2 slip; ``geo[k] = (N0, N1, nx, ny, tx, ty, inside)``. Returns the number of sweeps.
     """
     ns = slave_node.shape[0]
@@ -256,21 +332,29 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
         geo[k, 4] = tx
         geo[k, 5] = ty
         geo[k, 6] = 1.0 if inside else 0.0
-        lam[k, 0] = 0.0
-        lam[k, 1] = 0.0
-        cstate[k] = 0
+    # warm start: apply the previous step's multipliers (re-projected by the first sweep); in steady sliding
+    # they change little per step, so the projected Gauss-Seidel needs a few sweeps instead of tens
+    for k in range(ns):
+        ln = lam[k, 0]
+        lt = lam[k, 1]
+        if geo[k, 6] == 0.0 or ln <= 0.0:
+            lam[k, 0] = 0.0
+            lam[k, 1] = 0.0
+            cstate[k] = 0
+            continue
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
+        n0 = geo[k, 0]
+        n1 = geo[k, 1]
+        _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
+                             ln * geo[k, 3] + lt * geo[k, 5])
     sweeps = 0
     for it in range(max_iter):
         sweeps = it + 1
         change = 0.0
-        scale = 0.0
         for k in range(ns):
             if geo[k, 6] == 0.0:
                 continue
-            p = slave_pair[k]
-            a = master_nodes[master_ptr[p] + seg[k]]
-            b = master_nodes[master_ptr[p] + seg[k] + 1]
-            sn = slave_node[k]
+            sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
             n0 = geo[k, 0]
             n1 = geo[k, 1]
             nx = geo[k, 2]
@@ -309,28 +393,37 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
             if ln_new == 0.0:
                 state = 0
             dtn = lt_new - lt
-            fx = dn * nx + dtn * tx
-            fy = dn * ny + dtn * ty
-            u[sn] += dt2 * minv_c[sn] * fx
-            v[sn] += dt * minv_c[sn] * fx
-            u[sn + npd] += dt2 * minv_c[sn + npd] * fy
-            v[sn + npd] += dt * minv_c[sn + npd] * fy
-            u[a] -= dt2 * minv_c[a] * n0 * fx
-            v[a] -= dt * minv_c[a] * n0 * fx
-            u[a + npd] -= dt2 * minv_c[a + npd] * n0 * fy
-            v[a + npd] -= dt * minv_c[a + npd] * n0 * fy
-            u[b] -= dt2 * minv_c[b] * n1 * fx
-            v[b] -= dt * minv_c[b] * n1 * fx
-            u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
-            v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+            _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, dn * nx + dtn * tx, dn * ny + dtn * ty)
             lam[k, 0] = ln_new
             lam[k, 1] = lt_new
             cstate[k] = state
-            change = max(change, abs(dn), abs(dtn))
-            scale = max(scale, ln_new, abs(lt_new))
-        if change <= tol * scale:
+            # convergence measured as the displacement the last increments moved the node pair by: the
+            # positions carry round-off eps |x| ~ 1e-17 m, i.e. multiplier noise eps |x| / (dt^2 w), so a
+            # relative multiplier tolerance can be unreachable at small dt
+            change = max(change, abs(dn) * wn, abs(dtn) * wt)
+        if change <= tol:
             break
     return sweeps
+
+
+@njit(cache=True, fastmath={"contract", "reassoc"})
+def _predictor(u, v, w, f, mass, minv, dt, alpha, beta):
+    """Central-difference predictor over all dofs with ``w = u + beta v``; returns the work increments / dt of
+    the internal forces and of the alpha damping (mid-step velocities). Reassociation lets the two sums
+    vectorise (no NaN/inf assumptions: the guards still see them)."""
+    wint = 0.0
+    dal = 0.0
+    for d in range(u.shape[0]):
+        vo = v[d]
+        vn = vo + dt * (-minv[d] * f[d] - alpha * vo)
+        vm = 0.5 * (vo + vn)
+        wint += f[d] * vm
+        dal += alpha * mass[d] * vo * vm
+        v[d] = vn
+        ud = u[d] + dt * vn
+        u[d] = ud
+        w[d] = ud + beta * vn
+    return wint, dal
 
 
 @njit(cache=True)
@@ -338,7 +431,7 @@ def run_steps(
     step0, nsteps, dt, alpha, beta, n_sub, npd,
     blocks, c_uni, lst_idx, lst_stride, lst_coef, mass, minv,
     spr_dof, spr_kc,
-    con_dof, con_kind, con_par, con_react,
+    con_dof, con_grp, grp_par, grp_v, con_react,
     X, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, minv_c, seg, geo, lam, cstate,
     gs_max_iter, gs_tol, mu_tab, mu_rate, mu_now, vold_c, cnode_slot, cnodes,
     sens_node, sens_dir,
@@ -383,28 +476,20 @@ def run_steps(
                 vold_c[q, 0] = v[nd]
                 vold_c[q, 1] = v[nd + npd]
             # ---- predictor over all dofs, fused with the energy increments and w = u + beta v
-            wint = 0.0
-            dal = 0.0
-            for d in range(n):
-                vo = v[d]
-                vn = vo + dt * (-minv[d] * f[d] - alpha * vo)
-                vm = 0.5 * (vo + vn)
-                wint += f[d] * vm
-                dal += alpha * mass[d] * vo * vm
-                v[d] = vn
-                ud = u[d] + dt * vn
-                u[d] = ud
-                w[d] = ud + beta * vn
+            wint, dal = _predictor(u, v, w, f, mass, minv, dt, alpha, beta)
             # ---- constrained dofs: undo the free update, impose the motion, reaction = m a + f + alpha m v
             wext = 0.0
             rt = 0.0
             rn = 0.0
+            for g in range(grp_par.shape[0]):
+                kind = int(grp_par[g, 0])
+                grp_v[g, 0] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t - dt, dt)
+                grp_v[g, 1] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t, dt)
             for c in range(con_dof.shape[0]):
                 d = con_dof[c]
                 vwrong = v[d]
-                kind = con_kind[c]
-                vo = constrained_velocity(kind, con_par[c, 0], con_par[c, 1], con_par[c, 2], t - dt, dt)
-                vn = constrained_velocity(kind, con_par[c, 0], con_par[c, 1], con_par[c, 2], t, dt)
+                vo = grp_v[con_grp[c], 0]
+                vn = grp_v[con_grp[c], 1]
                 u[d] += dt * (vn - vwrong)
                 v[d] = vn
                 w[d] = u[d] + beta * vn
@@ -434,8 +519,12 @@ def run_steps(
                     nd = cnodes[q]
                     vold_c[q, 2] = v[nd]
                     vold_c[q, 3] = v[nd + npd]
-                contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes,
-                              pair_sign, seg, geo, lam, cstate, mu_now, gs_max_iter, gs_tol)
+                sweeps = contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes,
+                                       pair_sign, seg, geo, lam, cstate, mu_now, gs_max_iter, gs_tol)
+                acc[GS_SWEEPS] += sweeps
+                acc[GS_MAX] = max(acc[GS_MAX], sweeps)
+                if sweeps >= gs_max_iter:
+                    acc[GS_CAPPED] += 1.0
                 # the contact correction changed the mid-step velocity of the contact nodes: complete the
                 # internal-force and alpha-damping work with it (f and alpha m v_old times the velocity change)
                 for q in range(cnodes.shape[0]):
@@ -449,9 +538,7 @@ def run_steps(
                     if cstate[k] == 0:
                         rec_contact[r, p, 4] += 1.0
                         continue
-                    a = master_nodes[master_ptr[p] + seg[k]]
-                    b = master_nodes[master_ptr[p] + seg[k] + 1]
-                    sn = slave_node[k]
+                    sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
                     n0 = geo[k, 0]
                     n1 = geo[k, 1]
                     qs = cnode_slot[sn]

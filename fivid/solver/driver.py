@@ -14,7 +14,7 @@ import numpy as np
 
 from fivid.errors import ConfigError, FividError
 
-__all__ = ["SimulationDiverged", "RunSettings", "simulate"]
+__all__ = ["SimulationDiverged", "RunSettings", "PreparedRun", "simulate", "prepare_run"]
 
 log = logging.getLogger("fivid")
 
@@ -45,6 +45,28 @@ def _positive(name, value, *, allow_zero=False):
     if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
         raise ConfigError(f"{name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}")
     return v
+
+
+@dataclass(frozen=True)
+class PreparedRun:
+    """A run ready for the time loop: model, stencils, kernel arrays, friction table, settings, schedule."""
+
+    model: object
+    stencils: object
+    arrays: object
+    friction: object
+    settings: RunSettings
+    schedule: object
+    preload: object
+    wrap: dict
+
+    def run(self, *, progress=None):
+        """Integrate and wrap the RunDataset (see :func:`simulate`)."""
+        from fivid.solver.integrate import integrate
+        from fivid.solver.output import run_dataset
+
+        raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
+        return run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
 
 
 def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None,
@@ -90,7 +112,8 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         zero-phase FIR low-pass (anti-aliasing) to ``sample_rate``.
     run_id : str, optional
     gs_max_iterations, gs_tolerance
-        Contact Gauss-Seidel limits (relative multiplier change).
+        Contact Gauss-Seidel limits: sweeps, and the largest node-pair correction of the last sweep as a
+        fraction of the shortest master segment.
     record_state : bool
         Also return the final displacement and velocity (global dofs) in ``attrs`` -- for tests.
 
@@ -107,6 +130,19 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
     SimulationDiverged
         NaN or runaway energy (step, time, node).
     """
+    prepared = prepare_run(
+        model, law=law, mu=mu, sliding_velocity=sliding_velocity, normal_load=normal_load, roughness_ra=roughness_ra,
+        duration=duration, sample_rate=sample_rate, seed=seed, time_step=time_step, safety=safety,
+        settle_time=settle_time, preload_time=preload_time, base_ramp_time=base_ramp_time, oversample=oversample,
+        run_id=run_id, gs_max_iterations=gs_max_iterations, gs_tolerance=gs_tolerance, record_state=record_state)
+    return prepared.run(progress=progress)
+
+
+def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None, duration,
+                sample_rate, seed=0, time_step=None, safety=0.9, settle_time=1e-3, preload_time=None,
+                base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100, gs_tolerance=1e-10,
+                record_state=False) -> PreparedRun:
+    """Validate the settings and build everything :func:`simulate` integrates (same parameters)."""
     from fivid.fe.model import Model, load_model
     from fivid.solver.stencil import block_stencils
     from fivid.solver.timestep import stable_step
@@ -145,8 +181,14 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
     n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
     dt = t_int / n_sub
 
+    if law is not None:
+        mu_pairs = [float(getattr(law, "mu0", 0.0))] * len(model.contacts)
+    else:
+        mu_pairs = [float(mu) if mu is not None else c.mu for c in model.contacts]
+    mu_slave = np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)]) \
+        if model.contacts else np.zeros(0)
     schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
-                                         settle_time)
+                                         settle_time, mu_slave)
     total = schedule.transient_end + duration
     n_out = max(1, math.ceil(total * sample_rate - 1e-9))
     n_int = n_out * oversample
@@ -167,17 +209,12 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
                           normal_load=normal_load, seed=seed)
     settings = RunSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int, int(gs_max_iterations),
                            float(gs_tolerance))
-    from fivid.solver.integrate import integrate
-
-    raw = integrate(model, st, ka, fric, settings, progress=progress)
-    from fivid.solver.output import run_dataset
-
-    return run_dataset(model, raw, settings, schedule, fric, preload, law=law, mu=mu, seed=seed,
-                       sliding_velocity=abs(v_signed), normal_load=normal_load, roughness_ra=roughness_ra,
-                       sample_rate=sample_rate, run_id=run_id, record_state=record_state)
+    return PreparedRun(model, st, ka, fric, settings, schedule, preload, dict(
+        law=law, mu=mu, seed=seed, sliding_velocity=abs(v_signed), normal_load=normal_load,
+        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state))
 
 
-def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time):
+def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):
     """The loading sequence, the transducer signs and the preload (None without a target load)."""
     from fivid.solver.preload import preload_displacement
     from fivid.solver.setup import Schedule
@@ -200,7 +237,7 @@ def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time
         weights = np.zeros(model.n_dofs)
         weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
         preload = preload_displacement(model, normal_load, normal_weights=weights, load_dofs=load.dofs,
-                                       direction=direction)
+                                       direction=direction, mu=mu_slave)
         load_disp = direction * preload.displacement  # preload solved for u = delta * direction on the clamp
     base_start = (load_ramp + settle_time) if load is not None else 0.0
     base_velocity = None

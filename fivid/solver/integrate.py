@@ -27,6 +27,8 @@ class RawRecords:
     u: np.ndarray
     v: np.ndarray
     ke0: float
+    acc: np.ndarray
+    steps: int
 
 
 def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
@@ -43,8 +45,8 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     v = st.to_kernel(model.initial_velocity())
     # constrained dofs start at their prescribed velocity at t = -dt/2 (zero for clamps and ramps)
     for c, d in enumerate(ka.con_dof):
-        p = ka.con_par[c]
-        v[d] = K.constrained_velocity(ka.con_kind[c], p[0], p[1], p[2], -dt, dt)
+        p = ka.grp_par[ka.con_grp[c]]
+        v[d] = K.constrained_velocity(int(p[0]), p[1], p[2], p[3], -dt, dt)
     beta = float(model.rayleigh_beta)
     w = u + beta * v
     f = np.zeros_like(u)
@@ -67,6 +69,13 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     # chunk: about 3e7 dof-steps (~0.1-0.3 s of wall time) per kernel call
     chunk = max(1, int(3e7 // max(1, 2 * st.npd * n_sub)))
     seg = ka.seg.copy()
+    # Gauss-Seidel tolerance: relative to the shortest master segment [m]
+    seg_len = np.inf
+    for p in range(ka.master_ptr.size - 1):
+        nodes = ka.master_nodes[ka.master_ptr[p]:ka.master_ptr[p + 1]]
+        seg_len = min(seg_len, float(np.hypot(np.diff(ka.X[nodes]), np.diff(ka.X[nodes + st.npd])).min()))
+    seg_len = seg_len if np.isfinite(seg_len) else 1.0
+    gs_tol = settings.gs_tolerance * seg_len
     mu_tab = np.ascontiguousarray(fric.mu)
     with tqdm(total=n_int, disable=None if progress is None else not progress, unit="sample",
               desc="fivid simulate", leave=False) as bar:
@@ -77,10 +86,10 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, n_sub, st.npd,
                 st.blocks, st.c_uni, st.lst_idx, st.lst_stride, st.lst_coef, ka.mass, ka.minv,
                 ka.spr_dof, ka.spr_kc,
-                ka.con_dof, ka.con_kind, ka.con_par, ka.con_react,
+                ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
                 ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
                 seg, geo, lam, cstate,
-                settings.gs_max_iterations, settings.gs_tolerance, mu_tab, float(fric.rate), mu_now, vold_c,
+                settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
                 ka.cnode_slot, ka.cnodes,
                 ka.sens_node, ka.sens_dir,
                 u, v, w, f, scratch, acc, react_acc,
@@ -90,7 +99,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 raise SimulationDiverged(_diagnosis(model, st, status, diag, dt, settings, u, v))
             r0 += nr
             bar.update(nr)
-    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0)
+    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, acc, n_int * n_sub)
 
 
 def _diagnosis(model, st, status, diag, dt, settings, u, v) -> str:

@@ -126,12 +126,17 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "omega_max": settings.omega_max,
         "oversample": q,
         "transient_end": schedule.transient_end,
+        "base_start": schedule.base_start,
         "transient_description": "time < transient_end: preload ramp, settling and base-velocity ramp",
         "preload_displacement": float(schedule.load_displacement) if schedule.load_displacement is not None else np.nan,
         "rayleigh_alpha": float(model.rayleigh_alpha),
         "rayleigh_beta": float(model.rayleigh_beta),
         "contact_method": "node-to-segment, forward-increment Lagrange multipliers, Coulomb stick/slip, Gauss-Seidel",
         "contact_gs_tolerance": settings.gs_tolerance,
+        "contact_gs_mean_sweeps": float(raw.acc[K.GS_SWEEPS] / max(raw.steps, 1)),
+        "contact_gs_max_sweeps": int(raw.acc[K.GS_MAX]),
+        "contact_gs_steps_at_limit": int(raw.acc[K.GS_CAPPED]),
+        "steps": int(raw.steps),
     })
     if roughness_ra is None:
         ds.attrs["roughness_ra_note"] = "not given: recorded as 0"

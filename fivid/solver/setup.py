@@ -64,8 +64,8 @@ class KernelArrays:
     spr_dof: np.ndarray
     spr_kc: np.ndarray
     con_dof: np.ndarray
-    con_kind: np.ndarray
-    con_par: np.ndarray
+    con_grp: np.ndarray
+    grp_par: np.ndarray
     con_react: np.ndarray
     con_global: np.ndarray
     slave_node: np.ndarray
@@ -133,6 +133,10 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
                         f"reactions.{r.name}: node {int(node)} component {'xy'[comp]} is not constrained; a force "
                         "transducer must sit on clamped or driven dofs")
                 con_react[slot[d], col] = sign
+    # motion groups: dofs sharing (kind, amplitude, start, ramp) get one velocity evaluation per step
+    rows = np.column_stack([kind[con_global], par[con_global]]).astype(float)
+    grp_par, grp = np.unique(rows, axis=0, return_inverse=True) if rows.size else (np.zeros((0, 4)), np.zeros(0))
+    grp = np.asarray(grp).ravel()
     minv_c = minv.copy()
     minv_c[st.dof_index(con_global)] = 0.0
     # ---- springs
@@ -163,8 +167,8 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     return KernelArrays(
         mass=mass, minv=minv, minv_c=minv_c, X=st.to_kernel(model.coords.ravel()),
         spr_dof=_idx(spr_dof), spr_kc=np.ascontiguousarray(spr_kc),
-        con_dof=_idx(st.dof_index(con_global)), con_kind=_idx(kind[con_global]),
-        con_par=np.ascontiguousarray(par[con_global]), con_react=con_react, con_global=con_global,
+        con_dof=_idx(st.dof_index(con_global)), con_grp=_idx(grp), grp_par=np.ascontiguousarray(grp_par),
+        con_react=con_react, con_global=con_global,
         slave_node=_idx(st.node_index(slave_global)), slave_pair=_idx(slave_pair), slave_global=slave_global,
         master_ptr=_idx(ptr), master_nodes=_idx(st.node_index(_idx(master))),
         pair_sign=np.ones(len(model.contacts)), seg=seg,

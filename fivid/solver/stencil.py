@@ -36,12 +36,14 @@ class BlockStencils:
         Zero entries before node 0 (and after the last node) in each component half.
     npd : int
         Length of one component half, ``n_nodes + 2*pad``.
-    blocks : ndarray of int64, shape (n_uniform, 3)
-        ``pad + node_offset, nx, ny`` of each uniform block (its interior nodes use ``c_uni``).
-    c_uni : ndarray, shape (n_uniform, 36)
-        Interior coefficients [N m-1].
+    blocks : ndarray of int64, shape (n_patch, 5)
+        Patches of nodes sharing one stencil, ``first x-index, columns, rows, row stride, rectangular``:
+        the interior and each edge (corners excluded) of every uniform block; ``rectangular`` = 1 when the
+        xy couplings with the axis neighbours vanish (rectangular elements: 13 terms per force instead of 18).
+    c_uni : ndarray, shape (n_patch, 36)
+        Patch coefficients [N m-1].
     lst_idx, lst_stride : ndarray of int64, shape (n_list,)
-        x-index and row stride of every other node (block boundaries, mapped blocks).
+        x-index and row stride of every other node (corners of uniform blocks, all nodes of mapped blocks).
     lst_coef : ndarray, shape (n_list, 36)
         Their coefficients [N m-1].
     """
@@ -90,8 +92,9 @@ def block_stencils(model) -> BlockStencils:
     """Stencil coefficients of every block of ``model`` (springs and constraints not included).
 
     A block is uniform when all its element stiffnesses agree to ``1e-12`` of their largest entry
-    (float resolution of the element integration, ~10 ulp): one interior coefficient set is then exact.
-    Blocks with fewer than 3x3 nodes have no interior and are listed node by node.
+    (float resolution of the element integration, ~10 ulp): its interior nodes then share one coefficient
+    set, and so do the nodes of each edge (neighbours outside the block get zero coefficients; the padding
+    keeps their indices in bounds). Blocks with fewer than 3x3 nodes are listed node by node.
     """
     from fivid.fe.assembly import block_element_stiffness
 
@@ -105,9 +108,19 @@ def block_stencils(model) -> BlockStencils:
         c = _node_coefficients(ke).reshape(block.ny + 1, block.nx + 1, 36)
         listed = np.ones((block.ny + 1, block.nx + 1), dtype=bool)
         if uniform:
-            listed[1:-1, 1:-1] = False
-            uni_rows.append((pad + block.node_offset, block.nx, block.ny))
-            uni_coef.append(c[1, 1])
+            nx, ny, stride = block.nx, block.ny, block.nx + 1
+            o = pad + block.node_offset
+            for (j, i), cols, rows in (((1, 1), nx - 1, ny - 1), ((0, 1), nx - 1, 1), ((ny, 1), nx - 1, 1),
+                                       ((1, 0), 1, ny - 1), ((1, nx), 1, ny - 1)):
+                cc = c[j, i].reshape(9, 2, 2)
+                # rectangular elements: no xy coupling with the axis neighbours and the node itself (exactly
+                # zero up to the Gauss-sum round-off, ~1e-18 of the diagonal), the kernel skips those terms
+                cross = np.abs(cc[[1, 3, 4, 5, 7]][:, [0, 1], [1, 0]])
+                rect = int(cross.max() <= 1e-12 * np.abs(cc).max())
+                uni_rows.append((o + j * stride + i, cols, rows, stride, rect))
+                uni_coef.append(c[j, i])
+            listed[:, :] = False
+            listed[[0, 0, -1, -1], [0, -1, 0, -1]] = True
         nodes = block.node_numbers()[listed]
         lst_idx.append(pad + nodes)
         lst_stride.append(np.full(nodes.size, block.nx + 1))
@@ -116,7 +129,7 @@ def block_stencils(model) -> BlockStencils:
         n_nodes=model.n_nodes,
         pad=pad,
         npd=npd,
-        blocks=np.array(uni_rows, dtype=np.int64).reshape(-1, 3),
+        blocks=np.array(uni_rows, dtype=np.int64).reshape(-1, 5),
         c_uni=np.array(uni_coef, dtype=float).reshape(-1, 36),
         lst_idx=np.concatenate(lst_idx).astype(np.int64),
         lst_stride=np.concatenate(lst_stride).astype(np.int64),
