@@ -176,6 +176,11 @@ def test_unusable_runs_are_excluded_with_reasons():
     assert "not > 0" in reasons["N"]
     assert reasons["R"].startswith("not in steady sliding")
     assert sum(r.used for r in res.runs) == 2
+    # a 2 s run has a steady window of ~1.15 s: shorter than two Welch segments of 16384 samples (0.64 s)
+    short = synthetic_run(law, velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=10, run_id="S", duration=2.0)
+    res = identify_friction_law(good + [short], band=ANALYSIS_BAND, nperseg=16384)
+    assert [r.run_id for r in res.runs if not r.used] == ["S"]
+    assert res.runs[-1].reason.startswith("steady window too short")
     with pytest.raises(DataQualityError, match="no usable run among 2"):
         identify_friction_law([zero, neg], band=ANALYSIS_BAND, nperseg=NPERSEG)
 

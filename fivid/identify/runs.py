@@ -338,6 +338,10 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
     nperseg = settings.nperseg or default_nperseg(fs, mup.size)
     da = xr.DataArray(mup, dims="time", coords={"time": t[win]}, name="friction_perturbation",
                       attrs={"units": "1", "run_id": run_id})
+    if mup.size < 2 * nperseg:
+        res.reason = (f"steady window too short: {mup.size} samples ({t1 - t0:.4g} s) for Welch segments of "
+                      f"{nperseg} samples (at least two are needed; lower nperseg or record longer)")
+        return res
     p = welch_psd(da, nperseg=nperseg, fs=fs, confidence=settings.confidence)
     f = np.asarray(p["frequency"].values, float)
     dof = float(p.attrs["equivalent_degrees_of_freedom"])
