@@ -94,8 +94,9 @@ class FrictionIdentification:
         weights = akaike_weights(self.form_fits)
         for f in self.form_fits:
             if f.fitted:
+                r2 = f.diagnostics.get("r_squared")
                 lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights[f.form]:.3f}  "
-                             f"R2 {f.diagnostics.get('r_squared') or float('nan'):.3f}")
+                             f"R2 {float('nan') if r2 is None else r2:.3f}")
             else:
                 lines.append(f"  {f.form:22s} not fitted: {f.reason}")
         for r in self.runs:
