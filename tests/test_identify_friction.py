@@ -239,3 +239,21 @@ def test_force_chain_transfer_function_is_divided_out():
         truth = band_amplitude(law, r.sliding_velocity, r.roughness_ra, r.normal_load)
         assert abs(r.mu_rms - truth) < Z * r.mu_rms_stderr, (r.mu_rms, truth, r.mu_rms_stderr)
         assert q.mu_rms - truth > 10 * q.mu_rms_stderr  # the resonance amplifies the band RMS when not removed
+
+
+def test_rolloff_shape_and_ols_options(linear_case):
+    law, runs, res = linear_case
+    alt = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, shape_method="rolloff",
+                                weighting="none")
+    np.testing.assert_allclose(alt.law.shape, alt.shape.rolloff, rtol=1e-12)
+    assert alt.settings["weighting"] == "none" and alt.settings["shape_method"] == "rolloff"
+    # the law's PSD is the fitted roll-off itself (150 and 1500 Hz are Welch bins: no interpolation)
+    fc, order = alt.shape.rolloff_params["corner_frequency"], alt.shape.rolloff_params["order"]
+    f = np.array([150.0, 1500.0])
+    p = alt.law.psd(f, 0.01, 0.4e-6)
+    expected = (1 + (150.0 / fc) ** (2 * order)) / (1 + (1500.0 / fc) ** (2 * order))
+    assert p[1] / p[0] == pytest.approx(expected, rel=1e-9)
+    # and the fitted corner is the true one: stderr ≈ 0.4 %, x sqrt(2) bin correlation, 99.9 % -> 2 %
+    assert fc == pytest.approx(1500.0, rel=0.02)
+    with pytest.raises(FividError, match="shape_method"):
+        identify_friction_law(runs[:2], band=ANALYSIS_BAND, shape_method="spline")
