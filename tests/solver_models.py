@@ -58,15 +58,17 @@ def impacting_bars(*, length=0.01, n=40, v0=1.0, gap=1e-5):
     }
 
 
-def cantilever(*, nx=16, ny=3, v0=0.5, mapped=False, beta=0.0, spring=None):
+def cantilever(*, nx=16, ny=3, v0=0.5, mapped=False, sheared=False, beta=0.0, spring=None):
     """A steel cantilever 32 x 6 mm clamped on the left, initial transverse velocity ``v0``; optionally a
-    trapezoidal (mapped) outline and a spring to ground at the tip."""
-    top_right = ["32 mm", "5 mm"] if mapped else ["32 mm", "6 mm"]
+    trapezoidal (mapped) or parallelogram (sheared: uniform, not rectangular) outline and a spring to ground
+    at the tip."""
+    top_right = ["32 mm", "5 mm"] if mapped else ["34 mm", "6 mm"] if sheared else ["32 mm", "6 mm"]
+    top_left = ["2 mm", "6 mm"] if sheared else ["0 mm", "6 mm"]
     cfg = {
         "name": "cantilever",
         "plane": "stress",
         "materials": {"steel": STEEL},
-        "bodies": {"beam": {"corners": [["0 mm", "0 mm"], ["32 mm", "0 mm"], top_right, ["0 mm", "6 mm"]],
+        "bodies": {"beam": {"corners": [["0 mm", "0 mm"], ["32 mm", "0 mm"], top_right, top_left],
                             "divisions": [nx, ny], "material": "steel", "thickness": "5 mm", "clamp": ["left"],
                             "initial_velocity": ["0 m/s", f"{v0} m/s"]}},
         "damping": {"alpha": "0 s-1", "beta": f"{beta} s"},

@@ -55,9 +55,13 @@ def test_linear_form_refuses_unknown_roughness():
         linear_model()(0.01, 3.2e-6)
 
 
-def test_load_form_needs_normal_load():
+def test_missing_factors_are_named():
     with pytest.raises(FividError, match="normal_load"):
         power_model()(0.01, RA)
+    with pytest.raises(FividError, match=r"depends on roughness_ra: pass roughness_ra > 0 \(got none\)"):
+        power_model()(0.01, None, 5.0)
+    with pytest.raises(FividError, match="depends on the roughness"):
+        linear_model()(0.01, None)
 
 
 def test_psd_integrates_to_amplitude_squared():
@@ -131,7 +135,7 @@ def test_law_file_round_trip(tmp_path):
 
 
 def test_bad_law_files(tmp_path):
-    with pytest.raises(FividError, match="no such law file"):
+    with pytest.raises(FividError, match="no such file"):
         load_law(tmp_path / "missing.nc")
     (tmp_path / "junk.nc").write_text("not netcdf")
     with pytest.raises(SchemaError, match="cannot read"):
@@ -140,3 +144,32 @@ def test_bad_law_files(tmp_path):
     ds.to_netcdf(tmp_path / "noshape.nc")
     with pytest.raises(SchemaError, match="missing shape"):
         load_law(tmp_path / "noshape.nc")
+
+
+def test_law_file_round_trip_property(tmp_path_factory):
+    """Any law (form, coefficients, band, injection) survives write/load with the same sha256 and values."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    @settings(max_examples=25, deadline=None)
+    @given(
+        form=st.sampled_from(["linear", "power"]),
+        scale=st.floats(0.1, 10.0),
+        mu0=st.floats(0.0, 1.0),
+        lo=st.floats(0.0, 500.0),
+        width=st.floats(100.0, 10000.0),
+        injection=st.sampled_from(["uniform", "per_node", "convected"]),
+    )
+    def check(form, scale, mu0, lo, width, injection):
+        model = linear_model() if form == "linear" else power_model()
+        f = np.linspace(lo, lo + width, 50)
+        law = PerturbedCoulombLaw(mu0, f, 1.0 + np.cos(f / width), model, (lo, lo + width), injection=injection,
+                                  reference_velocity=0.01 if injection == "convected" else None).scaled(scale)
+        path = tmp_path_factory.mktemp("law") / "law.nc"
+        back = load_law(write_law(law, path))
+        assert back.sha256 == law.sha256
+        kw = dict(normal_load=5.0) if form == "power" else {}
+        assert back.amplitude(0.01, 0.8e-6, **kw) == law.amplitude(0.01, 0.8e-6, **kw)
+        np.testing.assert_array_equal(back.psd(f, 0.01, 0.8e-6, **kw), law.psd(f, 0.01, 0.8e-6, **kw))
+
+    check()

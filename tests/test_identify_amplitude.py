@@ -7,6 +7,7 @@ from statsmodels.stats.outliers_influence import OLSInfluence
 
 from fivid.errors import FividError
 from fivid.identify import choose_form, fit_amplitude_forms
+from fivid.identify.amplitude_fit import akaike_weights
 
 V = np.array([0.002, 0.005, 0.01, 0.02] * 2)
 RA = np.array([0.4e-6] * 4 + [1.6e-6] * 4)
@@ -58,6 +59,11 @@ def test_parsimony_within_two_aic_units():
     assert chosen.aic - best.aic < 2
     assert chosen.n_params == min(f.n_params for f in fits if f.fitted and f.aic - best.aic < 2)
     assert chosen.form in why
+    w = akaike_weights(fits)
+    assert sum(w.values()) == pytest.approx(1.0, rel=1e-12)
+    # weights are exp(-dAIC/2) normalised: their ratios give the AIC differences back
+    f0, f1 = [f for f in fits if f.fitted][:2]
+    assert np.log(w[f0.form] / w[f1.form]) == pytest.approx(-(f0.aic - f1.aic) / 2, rel=1e-9)
 
 
 def test_wls_uses_the_estimator_errors():

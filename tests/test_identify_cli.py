@@ -69,3 +69,27 @@ def test_single_run_prints_the_per_run_result(run_files, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "no amplitude law across runs can be fitted" in text
     assert "run C0" in text and out.exists()
+
+
+def test_inverse_with_an_unknown_run_is_bad_input(run_files, tmp_path, capsys, root):
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    status = main(["identify", *run_files, "-o", str(tmp_path / "l.nc"), "--band", "100", "5000",
+                   "--inverse", str(model), "--inverse-run", "NOPE"])
+    assert status == 2
+    assert "--inverse-run NOPE: no such run" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_law_file_drives_fivid_simulate(run_files, tmp_path, root):
+    """Done-when of issue 6: 'fivid identify' writes a law file that 'fivid simulate --law' uses."""
+    import xarray as xr
+
+    law_path = tmp_path / "law.nc"
+    assert main(["identify", *run_files, "-o", str(law_path), "--band", "100", "5000", "--tare", "0", "0.5"]) == 0
+    sim = tmp_path / "sim.nc"
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    status = main(["simulate", str(model), "--law", str(law_path), "--velocity", "10 mm/s", "--load", "5 N",
+                   "--roughness", "0.4 um", "--duration", "0.02 s", "-o", str(sim)])
+    assert status == 0
+    with xr.open_dataset(sim) as ds:
+        assert load_law(law_path).sha256 in str(ds.attrs)

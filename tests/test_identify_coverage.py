@@ -46,3 +46,26 @@ def test_intervals_cover_the_truth_at_the_nominal_rate():
     lo, _ = _bounds(N_SEEDS)
     assert hits["mu0"] >= lo
     assert np.all(hits["coeff"] >= lo)
+
+
+@pytest.mark.slow
+def test_power_law_intervals_cover_the_truth():
+    """The log-log WLS power law with a load factor: its 95 % intervals over 20 seeds (12 runs each)."""
+    law = true_law("power_law_load")
+    truth = dict(zip(law.amplitude_model.names, law.amplitude_model.coefficients))
+    truth["log_prefactor"] += 0.5 * np.log(band_fraction(law))  # A is the band RMS
+    n_seeds = 20
+    hits = np.zeros(4, int)
+    chosen = 0
+    for seed in range(n_seeds):
+        runs = run_grid(law, seed=500 + seed, velocities=(0.002, 0.005, 0.02), roughnesses=(0.4e-6, 1.6e-6),
+                        loads=(2.0, 8.0), duration=2.4)
+        res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+        pl = next(f for f in res.form_fits if f.form == "power_law_load")
+        t = np.array([truth[n] for n in pl.model.names])
+        hits += (pl.conf_int[:, 0] <= t) & (t <= pl.conf_int[:, 1])
+        chosen += res.law.amplitude_model.form == "power_law_load"
+    print("power-law coverage", dict(zip(pl.model.names, hits.tolist())), "of", n_seeds, "; chosen", chosen)
+    lo, _ = _bounds(n_seeds)
+    assert np.all(hits >= lo)
+    assert chosen >= n_seeds - 2  # the generating form wins the AIC comparison

@@ -176,6 +176,11 @@ def test_unusable_runs_are_excluded_with_reasons():
     assert "not > 0" in reasons["N"]
     assert reasons["R"].startswith("not in steady sliding")
     assert sum(r.used for r in res.runs) == 2
+    # a 2 s run has a steady window of ~1.15 s: shorter than two Welch segments of 16384 samples (0.64 s)
+    short = synthetic_run(law, velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=10, run_id="S", duration=2.0)
+    res = identify_friction_law(good + [short], band=ANALYSIS_BAND, nperseg=16384)
+    assert [r.run_id for r in res.runs if not r.used] == ["S"]
+    assert res.runs[-1].reason.startswith("steady window too short")
     with pytest.raises(DataQualityError, match="no usable run among 2"):
         identify_friction_law([zero, neg], band=ANALYSIS_BAND, nperseg=NPERSEG)
 
@@ -190,3 +195,65 @@ def test_bad_band_and_units():
     bad["friction_force"] = bad["friction_force"].assign_attrs(units="kN")
     with pytest.raises(SchemaError, match="'friction_force' has units 'kN'; expected 'N'"):
         identify_friction_law([bad])
+
+
+def test_convected_spectra_collapse_at_the_reference_velocity():
+    """A frozen field convected at V has a temporal corner ∝ V; mapped to V_ref the spectra collapse."""
+    law = true_law(injection="convected")  # corner 1.5 kHz, order 2 at V_ref = 10 mm/s
+    runs = [synthetic_run(law, velocity=v, roughness=0.4e-6, normal_load=5.0, seed=i, run_id=f"V{i}")
+            for i, v in enumerate((0.005, 0.01, 0.02))]
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, injection="convected")
+    assert res.law.reference_velocity == pytest.approx(0.01, rel=1e-12)  # geometric mean of the velocities
+    p = res.shape.rolloff_params
+    assert abs(p["corner_frequency"] - 1500.0) < Z * np.sqrt(2) * p["corner_frequency_stderr"]
+    assert abs(p["order"] - 2.0) < Z * np.sqrt(2) * p["order_stderr"]
+    # treated as uniform injection, the three corners (750, 1500, 3000 Hz) smear into a shallower shape
+    smeared = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG).shape.rolloff_params
+    assert smeared["order"] < 2.0 - 10 * smeared["order_stderr"]
+
+
+def test_force_chain_transfer_function_is_divided_out():
+    """μp seen through a force chain H (a resonance at 4 kHz) is recovered when H is given."""
+    import xarray as xr
+
+    from fivid.friction import PerturbedCoulombLaw
+    from synthetic_friction_runs import SHAPE, SHAPE_F
+
+    law = true_law()
+
+    def h2(f):
+        r = f / 4000.0
+        return 1.0 / ((1 - r**2) ** 2 + (2 * 0.2 * r) ** 2)
+
+    s = law.shape  # normalised on SHAPE_F
+    ratio = np.trapezoid(s * h2(SHAPE_F), SHAPE_F)
+    seen = law.scaled(np.sqrt(ratio))
+    seen = PerturbedCoulombLaw(law.mu0, SHAPE_F, SHAPE * h2(SHAPE_F), seen.amplitude_model, law.band)
+    runs = [synthetic_run(seen, velocity=v, roughness=0.4e-6, normal_load=5.0, seed=20 + i, run_id=f"T{i}")
+            for i, v in enumerate((0.005, 0.02))]
+    f = np.linspace(0.0, 12800.0, 2049)
+    tf = xr.DataArray(np.sqrt(h2(f)), dims="frequency", coords={"frequency": f})
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, transfer_function=tf)
+    raw = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    for r, q in zip(res.runs, raw.runs):
+        truth = band_amplitude(law, r.sliding_velocity, r.roughness_ra, r.normal_load)
+        assert abs(r.mu_rms - truth) < Z * r.mu_rms_stderr, (r.mu_rms, truth, r.mu_rms_stderr)
+        assert q.mu_rms - truth > 10 * q.mu_rms_stderr  # the resonance amplifies the band RMS when not removed
+
+
+def test_rolloff_shape_and_ols_options(linear_case):
+    law, runs, res = linear_case
+    alt = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, shape_method="rolloff",
+                                weighting="none")
+    np.testing.assert_allclose(alt.law.shape, alt.shape.rolloff, rtol=1e-12)
+    assert alt.settings["weighting"] == "none" and alt.settings["shape_method"] == "rolloff"
+    # the law's PSD is the fitted roll-off itself (150 and 1500 Hz are Welch bins: no interpolation)
+    fc, order = alt.shape.rolloff_params["corner_frequency"], alt.shape.rolloff_params["order"]
+    f = np.array([150.0, 1500.0])
+    p = alt.law.psd(f, 0.01, 0.4e-6)
+    expected = (1 + (150.0 / fc) ** (2 * order)) / (1 + (1500.0 / fc) ** (2 * order))
+    assert p[1] / p[0] == pytest.approx(expected, rel=1e-9)
+    # and the fitted corner is the true one: stderr ≈ 0.4 %, x sqrt(2) bin correlation, 99.9 % -> 2 %
+    assert fc == pytest.approx(1500.0, rel=0.02)
+    with pytest.raises(FividError, match="shape_method"):
+        identify_friction_law(runs[:2], band=ANALYSIS_BAND, shape_method="spline")

@@ -10,8 +10,9 @@ from solver_models import block_on_base, cantilever
 EPS = np.finfo(float).eps
 
 
-@pytest.mark.parametrize("config", ["configs/models/triboair_coarse.yaml", cantilever(mapped=True), block_on_base()],
-                         ids=["rig-coarse", "mapped-block", "block-on-base"])
+@pytest.mark.parametrize("config", ["configs/models/triboair_coarse.yaml", cantilever(mapped=True),
+                                    cantilever(sheared=True), block_on_base()],
+                         ids=["rig-coarse", "mapped-block", "parallelogram-block", "block-on-base"])
 def test_stencil_equals_assembled_stiffness(root, config):
     """K u by the stencil equals fivid.fe's assembled CSR K u to round-off.
 
@@ -38,6 +39,11 @@ def test_mapped_block_uses_per_node_coefficients():
     assert st.blocks.shape[0] == 0 and st.lst_idx.size == 68
     st = block_stencils(load_model(cantilever()))
     assert st.blocks.shape[0] == 5 and st.lst_idx.size == 4  # interior + 4 edges; corners listed
+    # rectangles: the 13-term stencil in the interior; at an edge one element row is missing and the xy
+    # couplings no longer cancel: full 18 terms
+    assert st.blocks[:, 4].tolist() == [1, 0, 0, 0, 0]
+    st = block_stencils(load_model(cantilever(sheared=True)))
+    assert st.blocks.shape[0] == 5 and not st.blocks[:, 4].any()  # parallelograms: uniform, full 18 terms
 
 
 def _prepare(model, n_int, n_sub, dt):

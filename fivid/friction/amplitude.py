@@ -56,6 +56,9 @@ def roughness_level_index(roughness, levels) -> np.ndarray:
     """
     roughness = np.atleast_1d(np.asarray(roughness, dtype=float))
     levels = np.asarray(levels, dtype=float)
+    if not np.all(np.isfinite(roughness)):
+        raise FividError("this amplitude law depends on the roughness (one line per roughness level): pass "
+                         "roughness_ra [m]")
     rel = np.abs(roughness[:, None] - levels[None, :]) / levels[None, :]
     idx = np.argmin(rel, axis=1)
     bad = rel[np.arange(roughness.size), idx] > ROUGHNESS_LEVEL_RTOL
@@ -90,8 +93,8 @@ def amplitude_design_matrix(form, terms, velocity, roughness, normal_load, rough
     if form not in AMPLITUDE_FORMS:
         raise FividError(f"amplitude form {form!r} is not one of {', '.join(AMPLITUDE_FORMS)}")
     v, ra, fn = np.broadcast_arrays(
-        np.atleast_1d(np.asarray(velocity, dtype=float)),
-        np.atleast_1d(np.asarray(roughness, dtype=float)),
+        np.atleast_1d(np.asarray(np.nan if velocity is None else velocity, dtype=float)),
+        np.atleast_1d(np.asarray(np.nan if roughness is None else roughness, dtype=float)),
         np.atleast_1d(np.asarray(np.nan if normal_load is None else normal_load, dtype=float)),
     )
     n = v.size
@@ -128,7 +131,9 @@ def amplitude_design_matrix(form, terms, velocity, roughness, normal_load, rough
             if term == "normal_load":
                 _need_load(values, form)
             if np.any(~(values > 0)):
-                raise FividError(f"amplitude form {form!r} needs {term} > 0; got {values[~(values > 0)][0]!r}")
+                bad = values[~(values > 0)][0]
+                raise FividError(f"amplitude form {form!r} depends on {term}: pass {term} > 0 (got "
+                                 f"{'none' if np.isnan(bad) else repr(float(bad))})")
             cols.append(np.log(values / REFERENCE_SCALES[term]))
             names.append(name)
     return np.column_stack(cols), names

@@ -176,16 +176,10 @@ def load_law(path: str | os.PathLike):
     """
     import hashlib
 
-    import xarray as xr
+    from fivid.io.netcdf import read_run
 
     path = Path(path)
-    if not path.is_file():
-        raise FividError(f"no such law file: {str(path)!r}")
-    try:
-        with xr.open_dataset(path, engine="netcdf4") as ds:
-            ds = ds.load()
-    except (OSError, ValueError) as exc:
-        raise SchemaError(f"cannot read {str(path)!r} as netCDF ({exc})") from None
+    ds = read_run(path, validate=False)  # the same opening and error messages as a run file
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
     return law_from_dataset(ds, source=f"{path.name} sha256:{digest}")
 

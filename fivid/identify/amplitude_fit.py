@@ -38,7 +38,7 @@ from fivid.friction.amplitude import (
     amplitude_design_matrix,
 )
 
-__all__ = ["FormFit", "fit_amplitude_forms", "choose_form", "distinct_levels", "SELECTION_RULE"]
+__all__ = ["FormFit", "fit_amplitude_forms", "choose_form", "akaike_weights", "distinct_levels", "SELECTION_RULE"]
 
 SELECTION_RULE = (
     "minimum AIC on the amplitude scale (power laws: log-likelihood of ln A plus the Jacobian -sum ln A); "
@@ -283,3 +283,14 @@ def choose_form(fits: list[FormFit]) -> tuple[FormFit | None, str]:
     if others:
         why += f"; dAIC of the others: {others}"
     return chosen, why
+
+
+def akaike_weights(fits: list[FormFit]) -> dict:
+    """Akaike weights ``exp(-dAIC/2) / sum`` of the fitted forms: the relative support of each by the data."""
+    ok = [f for f in fits if f.fitted and np.isfinite(f.aic)]
+    if not ok:
+        return {}
+    best = min(f.aic for f in ok)
+    raw = {f.form: np.exp(-(f.aic - best) / 2) for f in ok}
+    total = sum(raw.values())
+    return {k: float(v / total) for k, v in raw.items()}

@@ -21,7 +21,7 @@ import numpy as np
 
 from fivid.errors import DataQualityError, FividError
 from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
-from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, choose_form, fit_amplitude_forms
+from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
 from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, RunAnalysis, RunSettings, analyse_run
 from fivid.identify.shape import SpectralShape, identify_shape
 
@@ -68,7 +68,8 @@ class FrictionIdentification:
             "law_across_runs": self.law_across_runs,
             "amplitude_model": amp,
             "selection": {"rule": SELECTION_RULE, "chosen": m.form, "why": self.why},
-            "candidate_forms": [f.to_json() for f in self.form_fits],
+            "candidate_forms": [dict(f.to_json(), akaike_weight=akaike_weights(self.form_fits).get(f.form))
+                                for f in self.form_fits],
             "shape": {
                 "method": self.shape_method,
                 "smoothing_octaves": self.shape.smoothing_octaves,
@@ -90,10 +91,12 @@ class FrictionIdentification:
             f"{self.mu0_ci[1]:.5f}) from {len(used)} of {len(self.runs)} runs",
             f"band {self.band[0]:g}-{self.band[1]:g} Hz; amplitude form {self.law.amplitude_model.form}: {self.why}",
         ]
+        weights = akaike_weights(self.form_fits)
         for f in self.form_fits:
             if f.fitted:
-                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  "
-                             f"R2 {f.diagnostics.get('r_squared') or float('nan'):.3f}")
+                r2 = f.diagnostics.get("r_squared")
+                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights[f.form]:.3f}  "
+                             f"R2 {float('nan') if r2 is None else r2:.3f}")
             else:
                 lines.append(f"  {f.form:22s} not fitted: {f.reason}")
         for r in self.runs:
@@ -230,6 +233,7 @@ def identify_friction_law(
     min_normal_force: float = 0.1,
     tare=None,
     mains_frequency: float | None = 50.0,
+    noise_correction: bool = True,
     transfer_function=None,
     shape_method: str = "smoothed",
     smoothing_octaves: float = 1.0 / 6.0,
@@ -257,6 +261,8 @@ def identify_friction_law(
         Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
     mains_frequency : float or None, default 50.0
         Mains harmonics standing out of the PSD are interpolated over [Hz]; None disables.
+    noise_correction : bool, default True
+        With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
     transfer_function : xarray.DataArray, optional
         Force-chain transfer function on dim ``frequency`` [Hz]; the μp PSD is divided by ``|H|^2``.
     shape_method : {"smoothed", "rolloff"}
@@ -297,9 +303,9 @@ def identify_friction_law(
     if not datasets:
         raise FividError("no runs given")
     band = _check_band(band, datasets)
-    settings = RunSettings(band=band, nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
+    settings = RunSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
                            tare=None if tare is None else tuple(float(x) for x in tare),
-                           mains_frequency=mains_frequency, confidence=confidence)
+                           mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence)
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
                                    for ds in datasets]
     used = [r for r in analyses if r.used]
@@ -341,8 +347,7 @@ def identify_friction_law(
     law = PerturbedCoulombLaw(mu0, shape.frequency, law_shape, model, band, injection=injection,
                               reference_velocity=v_ref)
     recorded = {
-        "band": band, "nperseg": nperseg or "auto", "tolerance": tolerance, "min_normal_force": min_normal_force,
-        "tare": settings.tare, "mains_frequency": mains_frequency,
+        "band": band, **settings.to_dict(),
         "transfer_function": "none" if transfer_function is None else "given",
         "shape_method": shape_method, "smoothing_octaves": smoothing_octaves, "forms": ",".join(forms),
         "weighting": weighting, "injection": injection, "confidence": confidence,

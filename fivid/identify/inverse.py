@@ -133,10 +133,21 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
             reason = (f"|level difference| {abs(d):.3f} dB < {tolerance_db} dB" if abs(d) < tolerance_db
                       else "level difference not significant against the PSD estimation uncertainty")
             break
+        if len(history) >= 2 and _slope(history) is not None and _slope(history) < 0.2:
+            reason = (f"the simulated level hardly responds to the amplitude (slope {_slope(history):.3f} dB/dB): "
+                      "the friction perturbation does not dominate the simulated response in this band")
+            break
         g = _next_scale(history)
     return InverseAmplitude(run_id=run_id, band=tuple(band), forward_amplitude=a_fwd, scale=g,
                             inverse_amplitude=g * a_fwd, converged=converged, reason=reason, iterations=history,
                             peaks=peaks)
+
+
+def _slope(history):
+    """d(level difference)/d(20 log10 g) between the last two iterations, or None."""
+    x = [20 * np.log10(h["scale"]) for h in history[-2:]]
+    d = [h["level_diff_db"] for h in history[-2:]]
+    return None if x[1] == x[0] else (d[1] - d[0]) / (x[1] - x[0])
 
 
 def _next_scale(history) -> float:
@@ -144,10 +155,9 @@ def _next_scale(history) -> float:
     x = [20 * np.log10(h["scale"]) for h in history]
     d = [h["level_diff_db"] for h in history]
     slope = 1.0
-    if len(x) >= 2 and x[-1] != x[-2]:
-        s = (d[-1] - d[-2]) / (x[-1] - x[-2])
-        if 0.2 < s < 5.0:
-            slope = s
+    s = _slope(history) if len(history) >= 2 else None
+    if s is not None and 0.2 < s < 5.0:
+        slope = s
     return float(10 ** ((x[-1] - d[-1] / slope) / 20))
 
 

@@ -28,19 +28,18 @@ import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
 
-__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins"]
+__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
+           "default_nperseg"]
 
 _log = logging.getLogger("fivid")
 
 
 @dataclass(frozen=True)
 class RunSettings:
-    """Settings of the per-run analysis (all recorded in the law file).
+    """Settings of the per-run analysis (all recorded in the law file); the band is passed separately.
 
     Parameters
     ----------
-    band : (float, float) or None
-        Valid band [Hz]; None: ``(DEFAULT_BAND_LOW, min(DEFAULT_BAND_HIGH, 0.4 fs))``.
     nperseg : int or None
         Welch segment length [samples]; None: :func:`default_nperseg`.
     tolerance : float
@@ -60,7 +59,6 @@ class RunSettings:
         Level of every interval.
     """
 
-    band: tuple | None = None
     nperseg: int | None = None
     tolerance: float = 0.05
     min_normal_force: float = 0.1
@@ -70,16 +68,17 @@ class RunSettings:
     n_batches: int = 20
     confidence: float = 0.95
 
-    def to_attrs(self) -> dict:
-        """Flat attributes for a netCDF file."""
+    def to_dict(self) -> dict:
+        """The settings as plain values (recorded in the law file and the JSON report)."""
         return {
-            "setting_tolerance": self.tolerance,
-            "setting_min_normal_force": self.min_normal_force,
-            "setting_tare": "none" if self.tare is None else f"{self.tare[0]:g} {self.tare[1]:g} s",
-            "setting_mains_frequency": -1.0 if self.mains_frequency is None else float(self.mains_frequency),
-            "setting_noise_correction": int(self.noise_correction),
-            "setting_n_batches": self.n_batches,
-            "setting_confidence": self.confidence,
+            "nperseg": self.nperseg or "auto",
+            "tolerance": self.tolerance,
+            "min_normal_force": self.min_normal_force,
+            "tare": self.tare,
+            "mains_frequency": self.mains_frequency,
+            "noise_correction": self.noise_correction,
+            "n_batches": self.n_batches,
+            "confidence": self.confidence,
         }
 
 
@@ -175,7 +174,9 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     (near 0 Hz the floor window is clipped to the bins above 0 Hz):
     the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
-    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``).
+    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``). A line is narrow: the peak must also exceed,
+    by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
+    broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
 
     Returns
     -------
@@ -202,14 +203,16 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     ok = (near.min(axis=1) >= 1) & (near.max(axis=1) < f.size)
     if not ok.any():
         return mask
-    fk, near, around = fk[ok], near[ok], around[ok]
+    fk, centre, near, around = fk[ok], centre[ok], near[ok], around[ok]
     in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
     n_tested = int(in_lobe.sum())
     chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
     threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
     floor = np.median(p[around], axis=1)
+    shoulder = np.median(p[np.clip(centre[:, None] + np.array([-5, -4, 4, 5])[None, :], 1, f.size - 1)], axis=1)
     peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
-    for i in np.nonzero((floor > 0) & (peak > threshold * floor))[0]:
+    line = (floor > 0) & (peak > threshold * floor) & (peak > threshold * shoulder)
+    for i in np.nonzero(line)[0]:
         mask[near[i][in_lobe[i]]] = True
     return mask
 
@@ -225,7 +228,11 @@ def _replace_lines(frequency, psd, mask):
     return out
 
 
-def _batch_means_interval(x, n_batches, confidence):
+def batch_means_interval(x, n_batches, confidence):
+    """Mean of ``x`` and its batch-means interval: ``mean ± t_{B-1} sd(batch means)/sqrt(B)``.
+
+    Returns (mean, (lower, upper)); the batches are ``n_batches`` equal consecutive parts of ``x``.
+    """
     from scipy import stats
 
     b = int(n_batches)
@@ -325,12 +332,16 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
     mu = ft_w / fn_w
     if np.mean(mu) < 0:  # friction force recorded with the opposite sign convention
         mu = -mu
-    res.mu_mean, res.mu_mean_ci = _batch_means_interval(mu, settings.n_batches, settings.confidence)
+    res.mu_mean, res.mu_mean_ci = batch_means_interval(mu, settings.n_batches, settings.confidence)
     mup = mu - res.mu_mean
     res.mu_rms_total = float(np.sqrt(np.mean(mup**2)))
     nperseg = settings.nperseg or default_nperseg(fs, mup.size)
     da = xr.DataArray(mup, dims="time", coords={"time": t[win]}, name="friction_perturbation",
                       attrs={"units": "1", "run_id": run_id})
+    if mup.size < 2 * nperseg:
+        res.reason = (f"steady window too short: {mup.size} samples ({t1 - t0:.4g} s) for Welch segments of "
+                      f"{nperseg} samples (at least two are needed; lower nperseg or record longer)")
+        return res
     p = welch_psd(da, nperseg=nperseg, fs=fs, confidence=settings.confidence)
     f = np.asarray(p["frequency"].values, float)
     dof = float(p.attrs["equivalent_degrees_of_freedom"])

@@ -181,8 +181,14 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
     dt = t_int / n_sub
 
+    if law is not None:
+        mu_pairs = [float(getattr(law, "mu0", 0.0))] * len(model.contacts)
+    else:
+        mu_pairs = [float(mu) if mu is not None else c.mu for c in model.contacts]
+    mu_slave = np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)]) \
+        if model.contacts else np.zeros(0)
     schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
-                                         settle_time)
+                                         settle_time, mu_slave)
     total = schedule.transient_end + duration
     n_out = max(1, math.ceil(total * sample_rate - 1e-9))
     n_int = n_out * oversample
@@ -208,7 +214,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
         roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state))
 
 
-def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time):
+def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):
     """The loading sequence, the transducer signs and the preload (None without a target load)."""
     from fivid.solver.preload import preload_displacement
     from fivid.solver.setup import Schedule
@@ -231,7 +237,7 @@ def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time
         weights = np.zeros(model.n_dofs)
         weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
         preload = preload_displacement(model, normal_load, normal_weights=weights, load_dofs=load.dofs,
-                                       direction=direction)
+                                       direction=direction, mu=mu_slave)
         load_disp = direction * preload.displacement  # preload solved for u = delta * direction on the clamp
     base_start = (load_ramp + settle_time) if load is not None else 0.0
     base_velocity = None

@@ -47,6 +47,16 @@ def register(subparsers) -> None:
     p.add_argument("--damping-band", nargs=2, type=float, metavar=("F_LO", "F_HI"),
                    help="band [Hz] searched for resonance peaks (default: the friction band)")
     p.add_argument("--damping-peaks", type=int, default=4, help="number of resonance peaks to use (default 4)")
+    p.add_argument("--inverse", metavar="MODEL.yaml",
+                   help="also run the inverse route of seed 001 with this FE model: scale the amplitude until the "
+                   "simulated acceleration level matches the measured one (reported beside the forward estimate)")
+    p.add_argument("--inverse-band", nargs=2, type=float, metavar=("F_LO", "F_HI"),
+                   help="band [Hz] of the level match (default: the friction band)")
+    p.add_argument("--inverse-run", action="append", metavar="RUN_ID",
+                   help="run(s) to match (repeatable; default: the first used run)")
+    p.add_argument("--inverse-duration", type=float, default=0.1,
+                   help="steady-sliding time simulated per iteration [s] (default 0.1)")
+    p.add_argument("--inverse-iterations", type=int, default=4, help="maximum iterations (default 4)")
     p.set_defaults(func=_run)
 
 
@@ -83,6 +93,8 @@ def _run(args) -> int:
         band = tuple(args.damping_band) if args.damping_band else result.band
         damping = identify_damping(load_runs(args.runs), band=band, n_peaks=args.damping_peaks)
         report["damping"] = damping.to_json()
+    if args.inverse:
+        report["inverse"] = _inverse(args, result)
     result.write(args.output, overwrite=args.overwrite)
     log.info("wrote %s", args.output)
     if damping is not None:
@@ -97,5 +109,30 @@ def _run(args) -> int:
         print(result.summary())
         if damping is not None:
             print(damping.summary())
+        for inv in report.get("inverse", []):
+            print(f"inverse route, run {inv['run_id']}: amplitude forward {inv['forward_amplitude']:.4g}, inverse "
+                  f"{inv['inverse_amplitude']:.4g} (scale {inv['scale']:.3g}; {inv['reason']})")
         print(f"wrote {args.output}")
     return 0
+
+
+def _inverse(args, result) -> list:
+    from fivid.errors import FividError
+    from fivid.fe import load_model
+    from fivid.identify import inverse_amplitude_scale
+    from fivid.identify.friction import load_runs
+
+    model = load_model(args.inverse)
+    datasets = {str(ds.attrs.get("run_id")): ds for ds in load_runs(args.runs)}
+    used = [r.run_id for r in result.runs if r.used]
+    wanted = args.inverse_run or used[:1]
+    unknown = [r for r in wanted if r not in datasets]
+    if unknown:
+        raise FividError(f"--inverse-run {', '.join(unknown)}: no such run; runs: {', '.join(datasets)}")
+    band = tuple(args.inverse_band) if args.inverse_band else result.band
+    out = []
+    for run_id in wanted:
+        res = inverse_amplitude_scale(result.law, datasets[run_id], model, band=band, duration=args.inverse_duration,
+                                      max_iterations=args.inverse_iterations)
+        out.append(res.to_json())
+    return out
