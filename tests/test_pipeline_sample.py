@@ -118,6 +118,11 @@ def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path):
     again = json.loads((out / "summary.json").read_text())
     assert again["cache"]["ran"] == 0 and again["cache"]["cached"] == again["cache"]["tasks"]
     assert (out / "report.html").stat().st_size > 100_000
+    from test_report_render import browser_check  # the real report in real headless Chromium
+
+    seen = browser_check(out / "report.html", tmp_path / "chromium-profile")
+    assert seen["errors"] == [] and seen["failed"] == [] and len(seen["images"]) == 2 + 6 + 1
+    assert all(img["ok"] for img in seen["images"]), seen["images"]
 
     # killed while the dask workers simulate (--force redoes everything), then run again: the same results
     first = {p.relative_to(out): p.read_bytes() for p in (out / "scores").glob("*.json")}
