@@ -66,7 +66,7 @@ class Context:
     digests: dict = field(default_factory=dict)
     tasks: dict = field(default_factory=dict)
     data: dict = field(default_factory=dict)
-    blocked: bool = False  # dry run: an upstream stage has work to do, so keys downstream are unknown
+    pending: set = field(default_factory=set)  # dry run: stages with work to do (their outputs' keys are unknown)
 
     @property
     def config(self):
@@ -81,15 +81,32 @@ class Context:
         return Path(self.tasks[stage][task].outputs[label])
 
 
+def _upstream(name: str) -> set:
+    """Every stage ``name`` needs, directly or through others."""
+    from fivid.pipeline.config import STAGE_REQUIRES
+
+    out: set = set()
+    todo = list(STAGE_REQUIRES[name])
+    while todo:
+        s = todo.pop()
+        if s not in out:
+            out.add(s)
+            todo.extend(STAGE_REQUIRES[s])
+    return out
+
+
 def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
     """Plan, look up and run one stage; returns dry-run lines."""
     from fivid.pipeline.stages import STAGES
 
     stage = STAGES[name]
     t0 = time.perf_counter()
-    if ctx.blocked:
+    # the report shows every earlier stage's outputs (modal too, which it does not require)
+    waits = sorted(ctx.pending if name == "report" else _upstream(name) & ctx.pending)
+    if waits:
         stats.note = "waits for upstream stages"
-        return [f"  {name:9s} runs after the stages above (its inputs are not computed yet)"]
+        ctx.pending.add(name)
+        return [f"  {name:9s} runs after {', '.join(waits)} (its inputs are not computed yet)"]
     tasks = stage.plan(ctx)
     ctx.tasks[name] = {t.name: t for t in tasks}
     todo = []
@@ -108,7 +125,7 @@ def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
         lines = [f"  {name:9s} {len(tasks)} task(s): {len(tasks) - len(todo)} cached, {len(todo)} to run"]
         lines += [f"      would run {t.name}" for t in todo]
         if todo:
-            ctx.blocked = True
+            ctx.pending.add(name)
         else:
             stage.collect(ctx, tasks)
         return lines
