@@ -124,6 +124,21 @@ def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path):
     assert seen["errors"] == [] and seen["failed"] == [] and len(seen["images"]) == 2 + 6 + 1
     assert all(img["ok"] for img in seen["images"]), seen["images"]
 
+    # a stricter threshold: exit 3 for the scheduler, and only the report is redone (everything else cached)
+    import yaml
+
+    strict = yaml.safe_load((root / "configs/runs/sample.yaml").read_text())
+    strict["inputs"]["folder"] = str(root / "sample_data/twin")
+    strict["model"] = str(root / "configs/models/triboair_coarse.yaml")
+    strict["thresholds"]["lsd_db"] = {"max": 0.5}  # below the Welch scatter of ~2 dB: must fail
+    (tmp_path / "strict.yaml").write_text(yaml.safe_dump(strict))
+    assert main(["run", str(root / "pipelines/calibration.yaml"), "--config", str(tmp_path / "strict.yaml"),
+                 "--output", str(out), "--no-progress"]) == 3
+    below = json.loads((out / "summary.json").read_text())
+    assert below["status"] == "below_threshold" and below["cache"]["ran"] == 1
+    assert {c["score"] for c in below["checks"] if not c["pass"]} == {"lsd_db"}
+    assert "FAIL" in (out / "report.html").read_text()
+
     # killed while the dask workers simulate (--force redoes everything), then run again: the same results
     first = {p.relative_to(out): p.read_bytes() for p in (out / "scores").glob("*.json")}
     first_sims = _numeric(out / "sims")
