@@ -6,7 +6,8 @@ Measured in the same run:
 * ``modes_s``: the first 30 modes of the default model (configs/models/triboair.yaml; --quick: the coarse
   variant) by shift-invert Lanczos, against ``lu_s``, one sparse LU of ``K - sigma M`` (the unavoidable core of
   shift-invert): ``modes_over_lu`` says how many factorisation-equivalents the whole modal analysis costs.
-* ``cea_s``: a 51-point μ sweep (0..1) on the modal basis (20 modes reported, basis 60), against the full-order
+* ``cea_s``: a 51-point μ sweep (0..1) on the modal basis (20 modes reported, 60 modes plus the contact-load
+  static responses), assembly and basis included, against the full-order
   alternative: one shift-invert Arnoldi of the non-symmetric state-space pencil at a single μ
   (``full_order_point_s``), times 51. ``cea_speedup`` = 51 * full_order_point_s / cea_s.
 """

@@ -127,6 +127,7 @@ def test_global_matrices_rigid_motions_total_mass_and_point_masses():
     ones_x = np.tile([1.0, 0.0], m.n_nodes)
     assert ml[0::2].sum() == pytest.approx(total, rel=1e-12) and ml[1::2].sum() == pytest.approx(total, rel=1e-12)
     assert ones_x @ (Mc @ ones_x) == pytest.approx(total, rel=1e-12)
+    np.testing.assert_allclose(ml, np.asarray(Mc.sum(axis=1)).ravel(), rtol=1e-12)  # global row-sum lumping
     node = m.point_masses[0].node
     assert np.allclose(m.coords[node], [0.05, 0.01])
 
