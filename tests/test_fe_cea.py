@@ -49,12 +49,17 @@ def _hoffmann(m, k1, k2, k3, c):
 
 
 @pytest.mark.parametrize("damped", [False, True])
-def test_two_dof_mode_coupling_threshold_matches_closed_form(damped):
+@pytest.mark.parametrize("belt", [+1, -1], ids=["belt+x", "belt-x"])
+def test_two_dof_mode_coupling_threshold_matches_closed_form(damped, belt):
+    """Belt moving in -x is the mirror image (x -> -x) of the +x case with k1 and k2 swapped: same threshold."""
     m, k1, k2, k3, c = 1.0, 1.0e6, 1.6e6, 0.8e6, 20.0
     K_s, contact, M, C, mu_c, mu_c_damped = _hoffmann(m, k1, k2, k3, c)
+    if belt < 0:
+        K_s, contact, *_ = _hoffmann(m, k2, k1, k3, c)
+        contact = ContactLinearisation(contact.G_n, contact.G_t, contact.stiffness, -contact.direction, contact.pair)
     K = K_s + contact.normal_stiffness_matrix().toarray()
     Kf = contact.friction_stiffness_matrix().toarray()
-    assert np.allclose(Kf, [[0.0, k3], [0.0, 0.0]])  # normal displacement drives the tangential force only
+    assert np.allclose(Kf, [[0.0, belt * k3], [0.0, 0.0]])  # normal displacement drives the tangential force only
     proj = project_on_modes(K, M, C if damped else 0 * C, Kf)
     mu = np.linspace(0.0, 2.0, 41)
     res = complex_eigenvalue_sweep(proj, mu)

@@ -6,12 +6,13 @@ become penalty normal springs ``K_n`` and the friction force ``mu p`` adds the n
 
     M u'' + C u' + (K + K_n + mu K_f) u = 0.
 
-The equation is projected on the ``m`` lowest mass-normalised modes ``Phi`` of the frictionless
-system ``(K + K_n, M)`` (``q = Phi^T M u``), which turns it into an ``m``-dof dense problem with
-``M_r = I``; the state-space eigenvalues ``lambda = sigma + i omega`` are computed at each μ.
+The equation is projected on the lowest mass-normalised modes of the frictionless system
+``(K + K_n, M)``, enriched with the static responses to unit loads at the contact nodes and
+re-diagonalised (Rayleigh-Ritz), which turns it into an ``m``-dof dense problem with ``M_r = I``;
+the state-space eigenvalues ``lambda = sigma + i omega`` are computed at each μ.
 A mode is unstable when ``sigma > 0`` (negative modal damping). Each mode is followed along the μ
 sweep by matching eigenvectors (MAC) between consecutive μ; its critical μ is the first crossing of
-``sigma = 0``, refined by bisection; its partner is the mode it coalesces with (closest frequency at
+``sigma = 0``, refined by root finding (Brent); its partner is the mode it coalesces with (closest frequency at
 the crossing).
 """
 
@@ -147,7 +148,7 @@ def _mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int | None = None,
-                             refine: bool = True) -> dict:
+                             refine: bool = True, progress=None) -> dict:
     """Eigenvalues of a projected system along a μ sweep, each mode followed by eigenvector continuity.
 
     Parameters
@@ -160,6 +161,8 @@ def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int |
         a modal basis is truncation-affected and not worth the root finding.
     refine : bool
         Refine each critical μ by root finding (Brent) between the sweep points that bracket it.
+    progress : callable, optional
+        Called with the number of μ points done after each one (e.g. ``tqdm.update``).
 
     Returns
     -------
@@ -181,6 +184,8 @@ def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int |
     order = np.lexsort((l0.imag, l0.imag == 0))  # oscillating modes by frequency, then over-damped ones
     lam[0], q_prev = l0[order], q0[:, order]
     vecs.append(q_prev)
+    if progress is not None:
+        progress(1)
     for k in range(1, mu.size):
         lk, qk = projection.eigen(mu[k])
         cost = 1.0 - _mac(q_prev, qk)
@@ -188,6 +193,8 @@ def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int |
         lam[k, rows] = lk[cols]
         q_prev = qk[:, cols]
         vecs.append(q_prev)
+        if progress is not None:
+            progress(1)
     # Threshold on Re(lambda): the dense eigen solver's backward error is ~eps*||A||, and near a
     # coalescence (a defective double eigenvalue) the eigenvalue error grows to ~sqrt(eps)*||A||;
     # ||A|| ~ omega_max of the scaled state matrix. Real parts above this are instability, not noise.
@@ -209,11 +216,11 @@ def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int |
             r0, r1 = lam[k - 1, i].real, lam[k, i].real
             critical[i] = mu[k - 1] + (mu[k] - mu[k - 1]) * (tol - r0) / (r1 - r0)
             continue
-        critical[i] = _bisect_critical(projection, mu[k - 1], mu[k], lam[k - 1, i], lam[k, i], tol)
+        critical[i] = _refine_critical(projection, mu[k - 1], mu[k], lam[k - 1, i], lam[k, i], tol)
     return {"mu": mu, "eigenvalues": lam, "critical_mu": critical, "partner": partner, "tolerance": tol}
 
 
-def _bisect_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -> float:
+def _refine_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -> float:
     """Root of ``Re(lambda(mu)) - tol`` in ``[a, b]`` (Brent), following the eigenvalue nearest the path lam_a -> lam_b."""
     from scipy.optimize import brentq
 
@@ -227,7 +234,7 @@ def _bisect_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -
 
 def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | None = None,
                                 damping: bool = True, augment: bool = True, velocities: dict | None = None,
-                                refine: bool = True):
+                                refine: bool = True, progress=None):
     """CEA of ``model`` over the friction coefficients ``mu``.
 
     Parameters
@@ -249,7 +256,9 @@ def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | 
     velocities : dict, optional
         Body name -> rigid velocity [m s-1] overriding the base motion for the sliding direction.
     refine : bool
-        Bisect each critical μ to machine precision (otherwise linear interpolation on the sweep).
+        Refine each critical μ by root finding (otherwise linear interpolation on the sweep).
+    progress : callable, optional
+        Called with 1 after each μ point (e.g. ``tqdm.update``).
 
     Returns
     -------
@@ -288,7 +297,7 @@ def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | 
     # Many dense eigen problems of size 2 n_basis: one BLAS thread each is faster than a threaded BLAS fighting
     # over the cores for such small matrices (measured 10-25x slower on a loaded 2-core machine).
     with threadpool_limits(limits=1, user_api="blas"):
-        res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine)
+        res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine, progress=progress)
     n = min(n_modes, proj.n)
     lam = res["eigenvalues"][:, :n]
     partner = np.where(res["partner"][:n] < n, res["partner"][:n], -1)

@@ -61,8 +61,12 @@ def run(args) -> int:
     if args.output:
         check_writable(args.output, overwrite=args.overwrite)
     model = load_model(args.model)
-    ds = complex_eigenvalue_analysis(model, mu, n_modes=args.n_modes, n_basis=args.basis,
-                                     damping=not args.no_damping)
+    from tqdm import tqdm
+
+    # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
+    with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
+        ds = complex_eigenvalue_analysis(model, mu, n_modes=args.n_modes, n_basis=args.basis,
+                                         damping=not args.no_damping, progress=bar.update)
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
     result = cea_to_json(ds)
