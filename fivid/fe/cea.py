@@ -168,7 +168,8 @@ def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int |
     -------
     dict
         ``eigenvalues`` (n_mu, m) complex [s-1], modes ordered by frequency at ``mu[0]``;
-        ``critical_mu`` (m,) [-], NaN when ``Re(lambda) <= tol`` over the whole sweep;
+        ``critical_mu`` (m,) [-], NaN when ``Re(lambda) <= tol`` over the whole sweep, ``mu[0]`` when
+        already unstable there;
         ``partner`` (m,) int, the mode closest in frequency at the crossing (-1 if stable);
         ``tolerance`` [s-1], the threshold on ``Re(lambda)`` (see below).
     """
@@ -306,7 +307,7 @@ def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | 
             "frequency": (("mu", "mode"), lam.imag / (2 * np.pi), {"units": "Hz", "long_name": "damped frequency Im(lambda)/(2 pi)"}),
             "real_part": (("mu", "mode"), lam.real, {"units": "s-1", "long_name": "real part of the eigenvalue (> 0: unstable)"}),
             "damping_ratio": (("mu", "mode"), -lam.real / np.abs(lam), {"units": "1", "long_name": "modal damping ratio -Re/|lambda|"}),
-            "critical_mu": ("mode", res["critical_mu"][:n], {"units": "1", "long_name": "friction coefficient at which Re(lambda) crosses 0 (NaN: stable over the sweep)"}),
+            "critical_mu": ("mode", res["critical_mu"][:n], {"units": "1", "long_name": "friction coefficient at which Re(lambda) crosses 0 (NaN: stable over the sweep; the first mu if already unstable there)"}),
             "partner": ("mode", partner + np.where(partner >= 0, 1, 0), {"long_name": "mode number of the coalescing partner (-1: stable, or the partner is not among the reported modes)"}),
         },
         coords={
