@@ -21,3 +21,16 @@ def test_help_lists_commands():
 
 def test_no_command_is_bad_input():
     assert main([]) == 2
+
+
+def test_main_restores_the_fivid_logger():
+    import logging
+
+    log = logging.getLogger("fivid")
+    before = (list(log.handlers), log.level, log.propagate)
+    main([])
+    try:
+        main(["--version"])
+    except SystemExit:
+        pass
+    assert (list(log.handlers), log.level, log.propagate) == before
