@@ -23,14 +23,11 @@ def test_no_command_is_bad_input():
     assert main([]) == 2
 
 
-def test_main_restores_the_fivid_logger():
+def test_main_restores_the_fivid_logger(tmp_path):
     import logging
 
     log = logging.getLogger("fivid")
     before = (list(log.handlers), log.level, log.propagate)
-    main([])
-    try:
-        main(["--version"])
-    except SystemExit:
-        pass
+    status = main(["-vv", "ingest", str(tmp_path / "missing.csv"), "-o", str(tmp_path)])
+    assert status == 2
     assert (list(log.handlers), log.level, log.propagate) == before
