@@ -11,7 +11,8 @@ Quality checks before fitting (each a :class:`~fivid.errors.DataQualityError`):
 * drift: per-cycle mean displacement spread over more than 25 % of the peak amplitude (an open loop
   biases the area by about ``F_s * drift``, i.e. ``drift / (4 a)`` relative, > 6 % at 25 %);
 * clipping: a run of identical samples at the signal's extreme lasting more than 2 % of a cycle
-  (a sampled sinusoid stays within one quantum of its peak for ~0.5 % of a cycle at 16 bits).
+  (a sampled sinusoid stays within one quantum of its peak for ~0.5 % of a cycle at 16 bits; a
+  measured slip plateau is noisy, a noise-free simulated one is rejected like a clipped signal).
 """
 
 from __future__ import annotations
@@ -131,7 +132,8 @@ def check_loop_quality(displacement, force, *, file=None) -> np.ndarray:
             if run > MAX_CLIP_FRACTION * samples_per_cycle:
                 raise DataQualityError(
                     f"{name} looks clipped: {run} consecutive samples at its extreme {level:.6g} (SI) "
-                    f"(> {MAX_CLIP_FRACTION:.0%} of a {samples_per_cycle:.0f}-sample cycle); check the sensor range",
+                    f"(> {MAX_CLIP_FRACTION:.0%} of a {samples_per_cycle:.0f}-sample cycle); check the sensor range "
+                    "(noise-free simulated slip plateaus look the same: add the measurement noise)",
                     file=file, column=name)
     means = np.array([x[a:b].mean() for a, b in zip(starts[:-1], starts[1:])])
     amps = np.array([np.ptp(x[a:b]) / 2 for a, b in zip(starts[:-1], starts[1:])])
