@@ -45,6 +45,8 @@ class PeriodicSolution:
         Complex amplitudes of the contact force [N].
     iterations : int
         Newton iterations used.
+    slipping : ndarray of bool, shape (n_samples,)
+        Whether the contact slips at each AFT sample of the period.
     """
 
     frequency: float
@@ -52,6 +54,7 @@ class PeriodicSolution:
     measurement: np.ndarray
     force: np.ndarray
     iterations: int
+    slipping: np.ndarray
 
 
 class HarmonicBalance:
@@ -145,21 +148,34 @@ class HarmonicBalance:
         dfdu[init] = self.k * (self.basis[init] - self.basis.mean(axis=0))
         return coeffs, self.projection @ dfdu
 
-    def residual(self, u: np.ndarray, omega: float):
-        """Residual ``R`` [m] and Jacobian ``dR/du`` [1] of the harmonic-balance equations."""
+    def residual(self, u: np.ndarray, omega: float, *, frequency_derivative: bool = False):
+        """Residual ``R`` [m] and Jacobian ``dR/du`` [1] of the harmonic-balance equations.
+
+        With ``frequency_derivative`` also ``dR/dOmega`` [m s/rad] (by a forward difference of the
+        receptances only: the Jenkins force is rate independent, ``F(u)`` does not depend on ``Omega``;
+        step ``1e-7 Omega`` -> relative error ~1e-7 against the continuation's needs of ~1e-3).
+        """
         u_lin, h = self.linear_part(omega)
         coeffs, dcoeffs = self.contact_force(u)
-        return u - u_lin + h @ coeffs, np.eye(self.n_unknowns) + h @ dcoeffs
+        r = u - u_lin + h @ coeffs
+        jac = np.eye(self.n_unknowns) + h @ dcoeffs
+        if not frequency_derivative:
+            return r, jac
+        d = 1e-7 * omega
+        u_lin2, h2 = self.linear_part(omega + d)
+        return r, jac, ((u - u_lin2 + h2 @ coeffs) - r) / d
 
     def solution(self, u: np.ndarray, omega: float, iterations: int = 0) -> PeriodicSolution:
         """Package a solution vector ``u`` at ``Omega`` [rad/s]."""
-        coeffs, _ = self.contact_force(u, jacobian=False)
+        f, anchor = jenkins_periodic_force((self.basis @ u)[None, :], self.k, self.fs, n_passes=2)
+        coeffs = self.projection @ f[0]
         fc = coeffs[0::2] + 1j * coeffs[1::2]
         xc = u[0::2] + 1j * u[1::2]
         hw = self.harmonics * omega
         xm = -self.modal.receptance(hw, "measurement", "contact") * fc
         xm[0] += self.modal.receptance(omega, "measurement", "excitation") * self.p
-        return PeriodicSolution(frequency=omega / (2 * np.pi), contact=xc, measurement=xm, force=fc, iterations=iterations)
+        return PeriodicSolution(frequency=omega / (2 * np.pi), contact=xc, measurement=xm, force=fc, iterations=iterations,
+                                slipping=anchor[0] == -1)
 
     # --- solvers ------------------------------------------------------------------------------
     def solve(self, omega: float, u0=None, *, rtol: float = 1e-10, max_iterations: int = 50):
