@@ -10,8 +10,10 @@ perturbation ``(dq, dq', dz)`` of the modal coordinates and the slider position:
 Entering slip the slider jumps onto the slip surface, ``dz <- phi_c . dq`` (the saltation matrix of
 the switch ``k (x - z) = +-F_s``); leaving slip (a velocity reversal) needs no correction because the
 vector field is continuous there. The monodromy matrix is the ordered product of the interval
-propagators ``expm(A dt)`` and saltations; the orbit is stable when every multiplier has
-``|mu| <= 1`` (a fully stuck orbit has one multiplier exactly 1: the slider offset is neutral).
+propagators ``expm(A dt)`` and saltations (applied at both ends of each slip run: in slip
+``dz = phi_c . dq`` is a constraint); the orbit is stable when every multiplier has ``|mu| <= 1``
+(a fully stuck orbit has one multiplier exactly 1: the slider offset is neutral; a fully slipping
+one has a multiplier 0 for the slaved slider).
 Only the lowest modes enter (the higher ones are linear, damped and weakly coupled).
 """
 
@@ -76,12 +78,12 @@ def floquet_multipliers(modal, contact_stiffness: float, slipping, angular_frequ
     starts = np.concatenate([[0], edges])
     ends = np.concatenate([edges, [slipping.size]])
     mono = np.eye(2 * m + 1)
-    prev_slip = bool(slipping[-1])
     for s, e in zip(starts, ends):
-        slip = bool(slipping[s])
-        if slip and not prev_slip:
-            mono = salt @ mono
-        mono = np.linalg.matrix_power(e_slip if slip else e_stick, int(e - s)) @ mono
-        prev_slip = slip
+        if slipping[s]:
+            # entering slip: dz <- phi_c . dq; while slipping dz stays on phi_c . dq (a constraint,
+            # so re-projecting at the end of the run removes the spurious neutral direction of dz)
+            mono = salt @ np.linalg.matrix_power(e_slip, int(e - s)) @ salt @ mono
+        else:
+            mono = np.linalg.matrix_power(e_stick, int(e - s)) @ mono
     mu = np.linalg.eigvals(mono)
     return mu[np.argsort(-np.abs(mu))]
