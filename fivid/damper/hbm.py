@@ -98,6 +98,7 @@ class HarmonicBalance:
         self.basis[:, 0::2] = np.cos(ht)
         self.basis[:, 1::2] = -np.sin(ht)
         self.projection = (2.0 / n) * self.basis.T  # force samples -> [Re F_h, Im F_h]
+        self._basis_mean = self.basis.mean(axis=0)
         self.n_unknowns = 2 * self.harmonics.size
 
     @classmethod
@@ -112,8 +113,10 @@ class HarmonicBalance:
     def _real_block(self, h: np.ndarray) -> np.ndarray:
         """Block-diagonal real matrix of complex multiplication by ``h`` (one 2x2 block per harmonic)."""
         m = np.zeros((self.n_unknowns, self.n_unknowns))
-        for i, c in enumerate(h):
-            m[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[c.real, -c.imag], [c.imag, c.real]]
+        i = np.arange(0, self.n_unknowns, 2)
+        m[i, i] = m[i + 1, i + 1] = h.real
+        m[i, i + 1] = -h.imag
+        m[i + 1, i] = h.imag
         return m
 
     def linear_part(self, omega: float):
@@ -145,7 +148,7 @@ class HarmonicBalance:
         stick = a >= 0
         dfdu[stick] = self.k * (self.basis[stick] - self.basis[a[stick]])
         init = a == -2
-        dfdu[init] = self.k * (self.basis[init] - self.basis.mean(axis=0))
+        dfdu[init] = self.k * (self.basis[init] - self._basis_mean)
         return coeffs, self.projection @ dfdu
 
     def residual(self, u: np.ndarray, omega: float, *, frequency_derivative: bool = False):
@@ -178,7 +181,7 @@ class HarmonicBalance:
                                 slipping=anchor[0] == -1)
 
     # --- solvers ------------------------------------------------------------------------------
-    def solve(self, omega: float, u0=None, *, rtol: float = 1e-10, max_iterations: int = 50):
+    def solve(self, omega: float, u0=None, *, rtol: float = 1e-10, max_iterations: int = 20):
         """Newton-Raphson at a fixed ``Omega`` [rad/s].
 
         The residual is piecewise linear in ``u`` (the force is linear in ``u`` while the stick/slip
@@ -193,18 +196,42 @@ class HarmonicBalance:
         """
         u_lin, _ = self.linear_part(omega)
         scale = max(np.linalg.norm(u_lin), self.fs / self.k, 1e-300)
+        norm = np.inf
+        if u0 is not None:  # the given guess first (continuation), then the linear starts
+            u = np.array(u0, dtype=float)
+            out = self._newton(omega, u, *self.residual(u, omega), rtol * scale, rtol, max_iterations)
+            if out[0] is not None:
+                return out
+            norm = out[1]
+        # free contact and stuck contact, the smaller residual first
         starts = [self.linear_start(omega, stuck) for stuck in (False, True)]
-        if u0 is not None:
-            starts.append(np.array(u0, dtype=float))
-        # start from the best of: free contact, stuck contact, the given guess
-        tried = [(u, *self.residual(u, omega)) for u in starts]
-        u, r, j = min(tried, key=lambda t: np.linalg.norm(t[1]))
+        tried = sorted(((u, *self.residual(u, omega)) for u in starts), key=lambda t: np.linalg.norm(t[1]))
+        for u, r, j in tried:
+            out = self._newton(omega, u, r, j, rtol * scale, rtol, max_iterations)
+            if out[0] is not None:
+                return out
+            norm = min(norm, out[1])
+        # Newton can cycle between stick/slip patterns of the samples: MINPACK's hybrid method
+        # (trust region, same exact Jacobian) from the given guess or the best linear start
+        from scipy.optimize import root
+
+        u_start = np.array(u0, dtype=float) if u0 is not None else tried[0][0]
+        sol = root(lambda v: self.residual(v, omega), u_start, jac=True, method="hybr",
+                   options={"xtol": rtol, "maxfev": 50 * max_iterations})
+        r_end = self.residual(sol.x, omega)[0]
+        if np.linalg.norm(r_end) <= max(rtol * scale, rtol * np.linalg.norm(sol.x)):
+            return sol.x, int(sol.nfev)
+        norm = min(norm, np.linalg.norm(r_end))
+        raise FividError(f"harmonic balance did not converge at {omega / (2 * np.pi):.4g} Hz "
+                         f"(|R| = {norm:.3g} m after {max_iterations} iterations from each start); "
+                         "try more samples_per_period")
+
+    def _newton(self, omega, u, r, j, abs_tol, rtol, max_iterations):
         norm = np.linalg.norm(r)
         # |R| in metres against the response scale: float resolution x the condition of the Jacobian
         # (~1/(2 zeta) near a resonance) is ~1e-13, so 1e-10 is reachable and far below any physical tolerance
-        tol = rtol * max(scale, np.linalg.norm(u))
         for it in range(max_iterations + 1):
-            if norm <= tol:
+            if norm <= max(abs_tol, rtol * np.linalg.norm(u)):
                 return u, it
             du = np.linalg.solve(j, -r)
             step = 1.0
@@ -215,9 +242,7 @@ class HarmonicBalance:
                     break
                 step *= 0.5
             u, r, j, norm = u_new, r_new, j_new, np.linalg.norm(r_new)
-            tol = rtol * max(scale, np.linalg.norm(u))
-        raise FividError(f"harmonic balance did not converge at {omega / (2 * np.pi):.4g} Hz "
-                         f"(|R| = {norm:.3g} m after {max_iterations} iterations); try more samples_per_period")
+        return None, norm
 
     def sweep(self, frequencies, *, rtol: float = 1e-10):
         """Periodic solutions at the given frequencies [Hz], each started from the previous one.
@@ -227,9 +252,21 @@ class HarmonicBalance:
         list of PeriodicSolution
         """
         out = []
-        u = None
+        u, om_prev = None, None
         for f in np.asarray(frequencies, dtype=float):
             om = 2 * np.pi * f
-            u, it = self.solve(om, u, rtol=rtol)
+            u, it = self._reach(om, om_prev, u, rtol, depth=6)
             out.append(self.solution(u, om, it))
+            om_prev = om
         return out
+
+    def _reach(self, om, om_prev, u_prev, rtol, depth):
+        """Solve at ``om`` from the solution at ``om_prev``; on failure halve the frequency step."""
+        try:
+            return self.solve(om, u_prev, rtol=rtol)
+        except FividError:
+            if depth == 0 or om_prev is None:
+                raise
+        mid = 0.5 * (om + om_prev)
+        u_mid, _ = self._reach(mid, om_prev, u_prev, rtol, depth - 1)
+        return self._reach(om, mid, u_mid, rtol, depth - 1)
