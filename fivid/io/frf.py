@@ -15,18 +15,17 @@ The response is given either as ``amplitude`` (and optionally ``phase`` in deg o
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError, UnitError
+from fivid.io.hysteresis import numeric_columns, read_units_csv
 from fivid.units import conversion, is_compatible, parse_quantity
 
 __all__ = ["MeasuredFRF", "read_frf_csv"]
 
-_HEADER = re.compile(r"^\s*([A-Za-z_]\w*)\s*\[([^\]]*)\]\s*$")
 
 
 @dataclass(frozen=True)
@@ -74,25 +73,9 @@ def read_frf_csv(path) -> MeasuredFRF:
     path = Path(path)
     if not path.is_file():
         raise FividError("no such file", file=path)
-    lines = path.read_text(encoding="utf-8").splitlines()
-    meta = {}
-    i = 0
-    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
-        m = re.match(r"#\s*([^:]+):\s*(.*)$", lines[i])
-        if m:
-            meta[m.group(1).strip()] = m.group(2).strip()
-        i += 1
-    if i == len(lines):
-        raise SchemaError("no header line such as 'frequency [Hz],amplitude [m],phase [deg]'", file=path)
-    hline = i + 1
-    cols, units = {}, {}
-    for j, cell in enumerate(lines[i].split(",")):
-        m = _HEADER.match(cell)
-        if m is None:
-            raise UnitError(f"header cell {cell.strip()!r} has no unit; write it as 'name [unit]'",
-                            file=path, line=hline, column=cell.strip())
-        cols[m.group(1)] = j
-        units[m.group(1)] = m.group(2).strip()
+    meta, hline, header, body = read_units_csv(path, "frequency [Hz],amplitude [m],phase [deg]")
+    cols = {name: j for name, (j, _) in header.items()}
+    units = {name: unit for name, (_, unit) in header.items()}
     if "frequency" not in cols:
         raise SchemaError("missing column 'frequency [Hz]'", file=path, line=hline)
     if "amplitude" in cols:
@@ -111,16 +94,7 @@ def read_frf_csv(path) -> MeasuredFRF:
                         file=path, line=hline, column=value_cols[0])
     scale = conversion(resp_unit, si)[0]
     f_scale = _scale(units["frequency"], "Hz", path, hline, "frequency")
-    rows = []
-    for k, line in enumerate(lines[i + 1:], start=hline + 1):
-        if not line.strip():
-            continue
-        cells = line.split(",")
-        try:
-            rows.append([float(cells[cols[c]]) for c in ["frequency"] + value_cols])
-        except (ValueError, IndexError):
-            raise SchemaError(f"row is not numeric or too short: {line[:60]!r}", file=path, line=k) from None
-    arr = np.asarray(rows, dtype=float).reshape(-1, 1 + len(value_cols))
+    arr = numeric_columns(path, body, [cols[c] for c in ["frequency"] + value_cols])
     if arr.shape[0] < 2:
         raise DataQualityError(f"only {arr.shape[0]} frequency rows", file=path)
     freq = arr[:, 0] * f_scale

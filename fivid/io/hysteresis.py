@@ -29,7 +29,8 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError, SchemaError, UnitError
 from fivid.units import conversion
 
-__all__ = ["HysteresisRecord", "read_hysteresis", "read_hysteresis_csv", "read_hysteresis_json"]
+__all__ = ["HysteresisRecord", "read_hysteresis", "read_hysteresis_csv", "read_hysteresis_json", "read_units_csv",
+           "numeric_columns"]
 
 _HEADER = re.compile(r"^\s*([A-Za-z_][\w ]*?)\s*\[([^\]]*)\]\s*$")
 _CANONICAL = {"time": ("time", "s"), "displacement": ("displacement", "m"), "force": ("force", "N"),
@@ -117,8 +118,20 @@ def read_hysteresis_json(path) -> HysteresisRecord:
     return _finish(path, rows[:, 0] * st, rows[:, 1] * sx, rows[:, 2] * sf, meta)
 
 
-def read_hysteresis_csv(path) -> HysteresisRecord:
-    """Read a hysteresis CSV with ``name [unit]`` headers (see the module docstring)."""
+def read_units_csv(path, example_header: str):
+    """Split a CSV with ``# key: value`` metadata lines and a ``name [unit]`` header.
+
+    Returns
+    -------
+    meta : dict
+        Metadata from the comment lines.
+    header_line : int
+        1-based line number of the header.
+    header : dict
+        ``name -> (column index, unit string)``.
+    body : list of (int, str)
+        ``(line number, text)`` of the data lines.
+    """
     path = Path(path)
     lines = path.read_text(encoding="utf-8").splitlines()
     meta = {}
@@ -129,16 +142,36 @@ def read_hysteresis_csv(path) -> HysteresisRecord:
             meta[m.group(1).strip()] = m.group(2).strip()
         i += 1
     if i == len(lines):
-        raise SchemaError("no header line 'time [s],displacement [m],force [N]' found", file=path)
-    header_line = i + 1
-    cols = {}
-    scales = {}
+        raise SchemaError(f"no header line such as {example_header!r} found", file=path)
+    header = {}
     for j, cell in enumerate(lines[i].split(",")):
         m = _HEADER.match(cell)
         if m is None:
             raise UnitError(f"header cell {cell.strip()!r} has no unit; write it as 'name [unit]'",
-                            file=path, line=header_line, column=cell.strip())
-        name, unit = m.group(1).strip(), m.group(2).strip()
+                            file=path, line=i + 1, column=cell.strip())
+        header[m.group(1).strip()] = (j, m.group(2).strip())
+    body = [(k, line) for k, line in enumerate(lines[i + 1:], start=i + 2) if line.strip()]
+    return meta, i + 1, header, body
+
+
+def numeric_columns(path, body, indices) -> np.ndarray:
+    """The given column indices of the data lines as floats, shape (n_rows, len(indices))."""
+    data = []
+    for k, line in body:
+        cells = line.split(",")
+        try:
+            data.append([float(cells[j]) for j in indices])
+        except (ValueError, IndexError):
+            raise SchemaError(f"row is not numeric or too short: {line[:60]!r}", file=path, line=k) from None
+    return np.asarray(data, dtype=float).reshape(-1, len(indices))
+
+
+def read_hysteresis_csv(path) -> HysteresisRecord:
+    """Read a hysteresis CSV with ``name [unit]`` headers (see the module docstring)."""
+    path = Path(path)
+    meta, header_line, header, body = read_units_csv(path, "time [s],displacement [m],force [N]")
+    cols, scales = {}, {}
+    for name, (j, unit) in header.items():
         if name in _CANONICAL:
             canon, to = _CANONICAL[name]
             cols[canon] = j
@@ -148,16 +181,7 @@ def read_hysteresis_csv(path) -> HysteresisRecord:
     if missing:
         raise SchemaError(f"missing columns {missing}; the header needs time, displacement and force (with units)",
                           file=path, line=header_line)
-    data = []
-    for k, line in enumerate(lines[i + 1:], start=header_line + 1):
-        if not line.strip():
-            continue
-        cells = line.split(",")
-        try:
-            data.append([float(cells[cols[c]]) for c in ("time", "displacement", "force")])
-        except (ValueError, IndexError):
-            raise SchemaError(f"row is not numeric or too short: {line[:60]!r}", file=path, line=k) from None
-    arr = np.asarray(data, dtype=float).reshape(-1, 3)
+    arr = numeric_columns(path, body, [cols[c] for c in ("time", "displacement", "force")])
     return _finish(path, arr[:, 0] * scales["time"], arr[:, 1] * scales["displacement"],
                    arr[:, 2] * scales["force"], meta)
 
