@@ -114,31 +114,60 @@ def test_limits_free_and_stuck_beam(model1, slip_force, spring):
     assert f_r == pytest.approx(expected, abs=0.01)
 
 
-@pytest.mark.parametrize("normal_load, frequency", [(0.5, 22.0), (2.0, 60.0), (2.0, 90.0)])
-def test_hbm_against_newmark_time_domain(model1, normal_load, frequency):
-    hb = HarmonicBalance.from_model(model1, normal_load)
-    sol = hb.sweep([frequency])[0]
-    n_td = 512
-    td = steady_state_response(model1.modal, model1.contact_stiffness, model1.slip_force(normal_load), 2.0,
-                               frequency, steps_per_period=n_td)
+def _longest_stick_run(slipping):
+    stick = np.concatenate([~slipping, ~slipping])  # cyclic
+    run = best = 0
+    for v in stick:
+        run = run + 1 if v else 0
+        best = max(best, run)
+    return min(best, slipping.size)
+
+
+@pytest.mark.parametrize("config, normal_load, frequency", [
+    ("seed004_model1", 0.5, 22.0), ("seed004_model1", 2.0, 60.0), ("seed004_model1", 2.0, 90.0),
+    pytest.param("seed004_model2", 0.5, 60.0, marks=pytest.mark.slow),
+    pytest.param("seed004_model2", 10.0, 117.0, marks=pytest.mark.slow),
+])
+def test_hbm_against_newmark_time_domain(config, normal_load, frequency):
+    """HBM (harmonics 1..31, N = 1024) against the Newmark reference (1024 steps per period)."""
+    model = load_damper_model(CONFIGS / f"{config}.yaml")
+    fs = model.slip_force(normal_load)
+    n, n_td = 1024, 1024
+
+    def hbm(h_max):
+        hb = HarmonicBalance(model.modal, model.contact_stiffness, fs, 2.0, harmonics=tuple(range(1, h_max + 1, 2)),
+                             samples_per_period=n)
+        return hb, hb.sweep([frequency])[0]
+
+    hb, sol = hbm(31)
+    _, sol_half = hbm(15)
+    td = steady_state_response(model.modal, model.contact_stiffness, fs, 2.0, frequency, steps_per_period=n_td)
     assert td.converged
-    x_td = td.harmonic("measurement", 1)
-    # Tolerance from the discretisations:
-    # - harmonic truncation: contact-displacement content above the highest kept harmonic, measured
-    #   in the time-domain response (relative to the first harmonic);
-    # - AFT sampling: stick/slip switches located to 1/N of a period -> |H_mc| (4 F_s/pi)(2 pi/N);
-    # - Newmark average acceleration: period elongation (w dt)^2/12 of each mode; near a resonance with
-    #   damping zeta the amplitude moves by at most that / (2 zeta).
-    x1 = abs(td.harmonic("contact", 1))
-    content = np.sqrt(sum(abs(td.harmonic("contact", h)) ** 2 for h in range(hb.harmonics.max() + 2, 64, 2))) / x1
+    x_td = abs(td.harmonic("measurement", 1))
     om = 2 * np.pi * frequency
-    fs = model1.slip_force(normal_load)
-    aft = abs(model1.modal.receptance(om, "measurement", "contact")) * 4 * fs / np.pi * 2 * np.pi / hb.n_samples
+    # Tolerance, relative to |x_td|, from the discretisations:
+    # - harmonic truncation, two estimates added: (a) the contact-displacement content above harmonic 31
+    #   measured in the time-domain response; (b) twice the change from 15 to 31 harmonics (the switching
+    #   instants converge slowly in H, order ~0.7 for a Coulomb-like contact: see the Den Hartog test);
+    # - AFT sampling: the element is exact at the samples except that a reversal between samples is
+    #   missed, which offsets the slider by the overshoot k |x''| dt^2 / 8 (<= 2 F_s) for the stick run
+    #   that follows (<= n_s + 1 samples, two reversals per period): |dF_1| <= (2/N) 2 (n_s + 1) delta;
+    # - Newmark average acceleration: period elongation (w dt)^2/12; near a resonance with damping
+    #   zeta the amplitude moves by at most that / (2 zeta).
+    x1 = abs(td.harmonic("contact", 1))
+    content = np.sqrt(sum(abs(td.harmonic("contact", h)) ** 2 for h in range(33, n_td // 2, 2))) / x1
+    truncation = 2 * abs(abs(sol.measurement[0]) - abs(sol_half.measurement[0])) / x_td
+    overshoot = model.contact_stiffness * np.sum(hb.harmonics**2 * np.abs(sol.contact)) * (2 * np.pi / n) ** 2 / 8
+    delta = min(2 * fs, overshoot)
+    aft = abs(model.modal.receptance(om, "measurement", "contact")) * (2 / n) * 2 * (_longest_stick_run(sol.slipping) + 1)
+    aft *= delta / x_td
     newmark = (2 * np.pi / n_td) ** 2 / 12 / (2 * 0.005)
-    tol = content + aft / abs(x_td) + newmark
-    assert abs(abs(sol.measurement[0]) / abs(x_td) - 1) <= tol
+    tol = content + truncation + aft + newmark
+    assert abs(abs(sol.measurement[0]) / x_td - 1) <= tol
     # the time-domain loop is really stick-slip here (not a linear case)
     assert np.max(np.abs(td.force)) == pytest.approx(fs, rel=1e-12)
+    if config == "seed004_model1":
+        assert tol < 0.002  # sharp where the contact is soft (measured 0.04-0.14 %)
 
 
 def test_seed_frf_sequence_model1(model1):

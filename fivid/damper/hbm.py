@@ -17,6 +17,7 @@ Odd harmonics only: with symmetric forcing the steady loop is half-wave symmetri
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,8 @@ from fivid.damper.model import DamperModel
 from fivid.damper.modal import ModalModel
 from fivid.errors import FividError
 from fivid.friction.jenkins import jenkins_periodic_force
+
+_log = logging.getLogger("fivid")
 
 __all__ = ["HarmonicBalance", "PeriodicSolution"]
 
@@ -186,7 +189,9 @@ class HarmonicBalance:
 
         The residual is piecewise linear in ``u`` (the force is linear in ``u`` while the stick/slip
         pattern of the samples does not change), so Newton ends in a few iterations; a backtracking
-        line search on ``|R|`` guards the first ones.
+        line search on ``|R|`` guards the first ones. Starts: ``u0``, then the free and stuck linear
+        responses; then MINPACK ``hybr``; last, the best point is accepted if its residual is
+        below the AFT resolution (see the comment in the code), else :class:`FividError`.
 
         Returns
         -------
@@ -196,43 +201,55 @@ class HarmonicBalance:
         """
         u_lin, _ = self.linear_part(omega)
         scale = max(np.linalg.norm(u_lin), self.fs / self.k, 1e-300)
-        norm = np.inf
+        best = (None, np.inf)
         if u0 is not None:  # the given guess first (continuation), then the linear starts
             u = np.array(u0, dtype=float)
             out = self._newton(omega, u, *self.residual(u, omega), rtol * scale, rtol, max_iterations)
-            if out[0] is not None:
-                return out
-            norm = out[1]
+            if out[1] is not None:
+                return out[0], out[1]
+            best = min(best, (out[0], out[2]), key=lambda t: t[1])
         # free contact and stuck contact, the smaller residual first
         starts = [self.linear_start(omega, stuck) for stuck in (False, True)]
         tried = sorted(((u, *self.residual(u, omega)) for u in starts), key=lambda t: np.linalg.norm(t[1]))
         for u, r, j in tried:
             out = self._newton(omega, u, r, j, rtol * scale, rtol, max_iterations)
-            if out[0] is not None:
-                return out
-            norm = min(norm, out[1])
+            if out[1] is not None:
+                return out[0], out[1]
+            best = min(best, (out[0], out[2]), key=lambda t: t[1])
         # Newton can cycle between stick/slip patterns of the samples: MINPACK's hybrid method
-        # (trust region, same exact Jacobian) from the given guess or the best linear start
+        # (trust region, same exact Jacobian) from the best point so far
         from scipy.optimize import root
 
-        u_start = np.array(u0, dtype=float) if u0 is not None else tried[0][0]
-        sol = root(lambda v: self.residual(v, omega), u_start, jac=True, method="hybr",
+        sol = root(lambda v: self.residual(v, omega), best[0], jac=True, method="hybr",
                    options={"xtol": rtol, "maxfev": 50 * max_iterations})
-        r_end = self.residual(sol.x, omega)[0]
-        if np.linalg.norm(r_end) <= max(rtol * scale, rtol * np.linalg.norm(sol.x)):
+        r_end = np.linalg.norm(self.residual(sol.x, omega)[0])
+        if r_end <= max(rtol * scale, rtol * np.linalg.norm(sol.x)):
             return sol.x, int(sol.nfev)
-        norm = min(norm, np.linalg.norm(r_end))
+        best = min(best, (sol.x, r_end), key=lambda t: t[1])
+        # With a stiff contact the stick phases can be shorter than a sample: the sampled force then
+        # jumps (a reversal moves by one sample) and the discrete residual may have no exact root.
+        # Accept the best point when |R| is below that resolution: one sample's jump of 2 F_s at each
+        # of the two reversals changes every force harmonic by <= 8 F_s / N, and R by
+        # <= |H_cc(h Omega)|_2 8 F_s / N.
+        resolution = np.sqrt(np.sum(np.abs(self.modal.receptance(self.harmonics * omega, "contact", "contact")) ** 2))
+        resolution *= 8 * self.fs / self.n_samples
+        if best[1] <= resolution:
+            _log.debug("HBM at %.4g Hz: |R| = %.3g m accepted (AFT resolution %.3g m)", omega / (2 * np.pi), best[1],
+                       resolution)
+            return best[0], max_iterations
         raise FividError(f"harmonic balance did not converge at {omega / (2 * np.pi):.4g} Hz "
-                         f"(|R| = {norm:.3g} m after {max_iterations} iterations from each start); "
+                         f"(|R| = {best[1]:.3g} m, above the AFT resolution {resolution:.3g} m, from each start); "
                          "try more samples_per_period")
 
     def _newton(self, omega, u, r, j, abs_tol, rtol, max_iterations):
+        """Damped Newton; returns ``(u, iterations, |R|)`` with ``iterations`` None if not converged."""
         norm = np.linalg.norm(r)
+        best_u, best_norm = u, norm
         # |R| in metres against the response scale: float resolution x the condition of the Jacobian
         # (~1/(2 zeta) near a resonance) is ~1e-13, so 1e-10 is reachable and far below any physical tolerance
         for it in range(max_iterations + 1):
             if norm <= max(abs_tol, rtol * np.linalg.norm(u)):
-                return u, it
+                return u, it, norm
             du = np.linalg.solve(j, -r)
             step = 1.0
             while True:
@@ -242,7 +259,9 @@ class HarmonicBalance:
                     break
                 step *= 0.5
             u, r, j, norm = u_new, r_new, j_new, np.linalg.norm(r_new)
-        return None, norm
+            if norm < best_norm:
+                best_u, best_norm = u, norm
+        return best_u, None, best_norm
 
     def sweep(self, frequencies, *, rtol: float = 1e-10):
         """Periodic solutions at the given frequencies [Hz], each started from the previous one.
