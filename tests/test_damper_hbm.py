@@ -188,3 +188,22 @@ def test_seed_frf_sequence_model1(model1):
     assert np.all(np.diff(peaks) >= 0)
     inner = np.array(amps[1:-1])
     assert inner.min() < 0.2 * amps[-1] and inner.min() < 0.2 * amps[0]
+
+
+def test_aft_jacobian_is_exact(model1):
+    """The analytic Jacobian against central differences (the residual is piecewise linear: where the
+    stick/slip pattern of the samples does not change inside the step, differences are exact up to
+    rounding, ~eps |R| / h)."""
+    hb = HarmonicBalance.from_model(model1, 2.0)
+    om = 2 * np.pi * 60.0
+    u, _ = hb.solve(om)
+    sol = hb.solution(u, om)
+    assert 0 < sol.slipping.mean() < 1  # a stick-slip point
+    _, jac = hb.residual(u, om)
+    h = 1e-7 * np.linalg.norm(u)
+    fd = np.empty_like(jac)
+    for i in range(u.size):
+        e = np.zeros(u.size)
+        e[i] = h
+        fd[:, i] = (hb.residual(u + e, om)[0] - hb.residual(u - e, om)[0]) / (2 * h)
+    assert np.allclose(fd, jac, rtol=0, atol=1e-6 * np.abs(jac).max())
