@@ -40,8 +40,11 @@ class JenkinsLoopFit:
     slip_force, stiffness, force_offset : float
         ``F_s`` [N], ``k`` [N/m], constant force offset [N].
     slip_force_stderr, stiffness_stderr : float
-        Standard errors [N], [N/m] from the least-squares Jacobian (residuals treated as
-        independent; correlated residuals make them optimistic).
+        Standard errors [N], [N/m] from the least-squares Jacobian, inflated for serially correlated
+        residuals by the AR(1) factor ``sqrt((1 + rho) / (1 - rho))`` (``rho`` the lag-1
+        autocorrelation of the residuals; 1 for white residuals).
+    residual_autocorrelation : float
+        ``rho`` [1].
     cycle_amplitudes : ndarray
         Displacement amplitude of each full cycle [m].
     energy_per_cycle_measured, energy_per_cycle_model : ndarray
@@ -59,6 +62,7 @@ class JenkinsLoopFit:
     force_offset: float
     slip_force_stderr: float
     stiffness_stderr: float
+    residual_autocorrelation: float
     cycle_amplitudes: np.ndarray
     energy_per_cycle_measured: np.ndarray
     energy_per_cycle_model: np.ndarray
@@ -74,6 +78,7 @@ class JenkinsLoopFit:
             "stiffness": self.stiffness,
             "stiffness_stderr": self.stiffness_stderr,
             "force_offset": self.force_offset,
+            "residual_autocorrelation": self.residual_autocorrelation,
             "n_cycles": int(self.cycle_amplitudes.size),
             "energy_per_cycle_measured": float(np.mean(self.energy_per_cycle_measured)),
             "energy_per_cycle_model": float(np.mean(self.energy_per_cycle_model)),
@@ -190,10 +195,14 @@ def fit_jenkins_loop(displacement, force, *, file=None) -> JenkinsLoopFit:
     res = best.fun
     dof = max(res.size - 3, 1)
     s2 = float(res @ res) / dof
+    rc = res - res.mean()
+    rho = float(np.clip(np.sum(rc[1:] * rc[:-1]) / np.sum(rc * rc), 0.0, 0.999))
+    # AR(1) residuals: the variance of a mean-like estimate grows by (1 + rho) / (1 - rho)
+    inflation = np.sqrt((1 + rho) / (1 - rho))
     try:
         cov = s2 * np.linalg.inv(best.jac.T @ best.jac)
         # log-parameters: se(k) = k se(log k)
-        se_k, se_fs = k * np.sqrt(cov[0, 0]), fs * np.sqrt(cov[1, 1])
+        se_k, se_fs = k * np.sqrt(cov[0, 0]) * inflation, fs * np.sqrt(cov[1, 1]) * inflation
     except np.linalg.LinAlgError:
         se_k = se_fs = float("nan")
     fm = model(p)
@@ -203,6 +212,7 @@ def fit_jenkins_loop(displacement, force, *, file=None) -> JenkinsLoopFit:
     w_model = np.array([loop_energy(x[a:b + 1], fm[a:b + 1]) for a, b in cyc])
     return JenkinsLoopFit(
         slip_force=fs, stiffness=k, force_offset=off, slip_force_stderr=float(se_fs), stiffness_stderr=float(se_k),
+        residual_autocorrelation=rho,
         cycle_amplitudes=amps, energy_per_cycle_measured=w_meas, energy_per_cycle_model=w_model,
         energy_per_cycle_closed_form=jenkins_energy_per_cycle(amps, k, fs),
         rms_residual=float(np.sqrt(np.mean(res**2))),
