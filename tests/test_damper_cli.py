@@ -57,3 +57,13 @@ def test_frf_json(capsys):
 def test_frf_bad_load(capsys):
     assert main(["damper", "frf", str(CONFIGS / "seed004_model1.yaml"), "--normal-load", "-1"]) == 2
     assert "normal force" in capsys.readouterr().err
+
+
+def test_frf_arclength_json(capsys):
+    status = main(["damper", "frf", str(CONFIGS / "seed004_model1.yaml"), "--normal-load", "2", "--arclength", "--json"])
+    assert status == 0
+    curve = json.loads(capsys.readouterr().out)["curves"][0]
+    f = np.array(curve["frequency"])
+    assert f[0] == pytest.approx(15) and f[-1] == pytest.approx(130)
+    assert len(curve["stable"]) == len(curve["amplitude"]) == f.size
+    assert all(curve["stable"])

@@ -24,12 +24,16 @@ def register(subparsers) -> None:
     fit.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     fit.set_defaults(func=_fit)
     frf = sub.add_parser("frf", help="FRF of a damper model by harmonic balance",
-                         description="Harmonic-balance FRF (receptance at the sensor) of a damper model YAML at one "
-                         "or more normal loads, over the model's frequency range.")
+                         description="Harmonic-balance FRF (first-harmonic displacement and receptance at the sensor) of "
+                         "a damper model YAML at one or more normal loads, over the model's frequency range. Units: "
+                         "Hz, m, m/N, N.")
     frf.add_argument("model", help="damper model YAML (see configs/dampers/)")
     frf.add_argument("--normal-load", type=float, nargs="+", required=True, metavar="F",
                      help="normal load(s) [N]")
     frf.add_argument("--points", type=int, default=200, help="frequencies in the range (default 200)")
+    frf.add_argument("--arclength", action="store_true",
+                     help="follow the branch by arclength continuation (adaptive points, Floquet stability) "
+                     "instead of the fixed frequency grid")
     frf.add_argument("--json", action="store_true", help="print one JSON object instead of text")
     frf.set_defaults(func=_frf)
     p.set_defaults(func=lambda args: _usage(p))
@@ -63,6 +67,7 @@ def _fit(args: argparse.Namespace) -> int:
 def _frf(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from fivid.damper.continuation import continue_frequency_response
     from fivid.damper.hbm import HarmonicBalance
     from fivid.damper.model import load_damper_model
     from fivid.errors import FividError
@@ -74,19 +79,29 @@ def _frf(args: argparse.Namespace) -> int:
     freqs = np.linspace(*model.frequency_range, args.points)
     curves = []
     for fn in args.normal_load:
-        sols = HarmonicBalance.from_model(model, fn).sweep(freqs)
-        amp = np.array([abs(s.measurement[0]) for s in sols])
+        hb = HarmonicBalance.from_model(model, fn)
+        extra = {}
+        if args.arclength:
+            curve = continue_frequency_response(hb, *model.frequency_range)
+            f_c, amp = curve.frequency, curve.amplitude
+            extra = {"frequency": f_c, "stable": curve.stable, "max_floquet_multiplier": curve.max_multiplier}
+        else:
+            f_c = freqs
+            amp = np.array([abs(s.measurement[0]) for s in hb.sweep(freqs)])
         i = int(np.argmax(amp))
-        curves.append({"normal_load": fn, "slip_force": model.slip_force(fn), "peak_frequency": float(freqs[i]),
+        curves.append({"normal_load": fn, "slip_force": model.slip_force(fn), "peak_frequency": float(f_c[i]),
                        "peak_amplitude": float(amp[i]), "amplitude": amp,
-                       "receptance": amp / model.excitation_amplitude})
+                       "receptance": amp / model.excitation_amplitude, **extra})
     if args.json:
-        print(dumps_json({"model": model.name, "frequency": freqs, "curves": curves,
+        print(dumps_json({"model": model.name, "frequency": None if args.arclength else freqs, "curves": curves,
                           "units": {"frequency": "Hz", "amplitude": "m", "receptance": "m N-1",
                                     "normal_load": "N", "slip_force": "N"}}))
     else:
-        print(f"{model.name}: {args.points} frequencies {freqs[0]:g}-{freqs[-1]:g} Hz, "
-              f"first-harmonic displacement at the sensor")
+        grid = "arclength continuation" if args.arclength else f"{args.points} frequencies"
+        print(f"{model.name}: {grid} {freqs[0]:g}-{freqs[-1]:g} Hz, first-harmonic displacement at the sensor")
         for c in curves:
-            print(f"  Fn {c['normal_load']:g} N: peak {c['peak_amplitude']:.4g} m at {c['peak_frequency']:.4g} Hz")
+            line = f"  Fn {c['normal_load']:g} N: peak {c['peak_amplitude']:.4g} m at {c['peak_frequency']:.4g} Hz"
+            if args.arclength:
+                line += f", {len(c['amplitude'])} points, {int(np.sum(~c['stable']))} unstable"
+            print(line)
     return 0
