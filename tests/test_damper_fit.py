@@ -113,15 +113,14 @@ def test_unknown_units(tmp_path):
         read_hysteresis(p)
 
 
-def test_csv_without_units_or_columns(tmp_path):
+@pytest.mark.parametrize("text, error, match, line", [
+    ("time,displacement [m],force [N]\n0,0,0\n", UnitError, "has no unit", 1),
+    ("time [s],force [N]\n0,0\n", SchemaError, "missing columns", 1),
+    ("time [s],displacement [m],force [N]\n0,0,0\n1,x,0\n", SchemaError, "not numeric", 3),
+])
+def test_csv_without_units_or_columns(tmp_path, text, error, match, line):
     p = tmp_path / "a.csv"
-    p.write_text("time,displacement [m],force [N]\n0,0,0\n")
-    with pytest.raises(UnitError, match="has no unit"):
+    p.write_text(text)
+    with pytest.raises(error, match=match) as err:
         read_hysteresis(p)
-    p.write_text("time [s],force [N]\n0,0\n")
-    with pytest.raises(SchemaError, match="missing columns"):
-        read_hysteresis(p)
-    p.write_text("time [s],displacement [m],force [N]\n0,0,0\n1,x,0\n")
-    with pytest.raises(SchemaError) as err:
-        read_hysteresis(p)
-    assert err.value.line == 3
+    assert err.value.line == line

@@ -48,7 +48,7 @@ def test_recovers_model1(tmp_path, start):
     assert upd.n_points == 60
 
 
-def test_frf_reader_layouts_and_errors(tmp_path):
+def test_frf_reader_layouts(tmp_path):
     f = np.array([10.0, 20.0, 30.0])
     a = np.array([1e-5, 2e-5, 3e-5])
     m = read_frf_csv(_write_frf(tmp_path / "a.csv", f, a, 2, phase=[0.0, 90.0, 180.0]))
@@ -57,12 +57,15 @@ def test_frf_reader_layouts_and_errors(tmp_path):
     p = tmp_path / "b.csv"
     p.write_text("frequency [Hz],real [um],imag [um]\n10,1,2\n20,3,4\n")
     assert np.allclose(read_frf_csv(p).response, np.array([1 + 2j, 3 + 4j]) * 1e-6)
-    p.write_text("frequency [Hz],amplitude [N]\n10,1\n20,2\n")
-    with pytest.raises(UnitError, match="neither a displacement"):
-        read_frf_csv(p)
-    p.write_text("frequency [Hz],amplitude [m]\n20,1\n10,2\n")
-    with pytest.raises(DataQualityError, match="strictly increasing"):
-        read_frf_csv(p)
-    p.write_text("frequency [Hz],level [dB]\n10,1\n20,2\n")
-    with pytest.raises(SchemaError, match="amplitude"):
+
+
+@pytest.mark.parametrize("text, error, match", [
+    ("frequency [Hz],amplitude [N]\n10,1\n20,2\n", UnitError, "neither a displacement"),
+    ("frequency [Hz],amplitude [m]\n20,1\n10,2\n", DataQualityError, "strictly increasing"),
+    ("frequency [Hz],level [dB]\n10,1\n20,2\n", SchemaError, "amplitude"),
+])
+def test_frf_reader_errors(tmp_path, text, error, match):
+    p = tmp_path / "bad.csv"
+    p.write_text(text)
+    with pytest.raises(error, match=match):
         read_frf_csv(p)
