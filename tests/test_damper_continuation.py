@@ -79,3 +79,52 @@ def test_branch_is_stable_for_model1(model1):
     assert np.all(np.isfinite(curve.max_multiplier))
     assert curve.stable.all()
     assert np.max(curve.max_multiplier) <= 1 + 1e-9
+
+
+def _stick_pattern_envelope(stick):
+    """Stick runs widened and narrowed by one sample at each end (switch located to +-1 sample)."""
+    wide = np.roll(stick, 1) | stick | np.roll(stick, -1)
+    narrow = np.roll(stick, 1) & stick & np.roll(stick, -1)
+    return wide, narrow
+
+
+@pytest.mark.parametrize("normal_load, frequency", [(2.0, 60.0), (10.0, 95.0)])
+def test_floquet_multiplier_predicts_time_domain_decay(model1, normal_load, frequency):
+    """Perturb the Newmark steady state: the perturbation decays per period like the largest Floquet
+    multiplier (stick-slip orbits, where the multiplier is well below the free-beam value)."""
+    from fivid.damper._newmark_kernels import newmark_jenkins
+
+    fs, k = model1.slip_force(normal_load), model1.contact_stiffness
+    om = 2 * np.pi * frequency
+    n = 1024
+    hb = HarmonicBalance(model1.modal, k, fs, 2.0, harmonics=tuple(range(1, 32, 2)), samples_per_period=n)
+    sol = hb.sweep([frequency])[0]
+    assert 0.2 < sol.slipping.mean() < 0.9
+    mu = abs(floquet_multipliers(model1.modal, k, sol.slipping, om, n_modes=12)[0])
+    # tolerance: the stick/slip switches are known to +-1 sample; the multiplier with every stick run
+    # widened or narrowed by one sample bounds the effect
+    stick = ~sol.slipping
+    tol = max(abs(abs(floquet_multipliers(model1.modal, k, ~s, om, n_modes=12)[0]) - mu)
+              for s in _stick_pattern_envelope(stick))
+    w = model1.modal.natural_frequencies
+    args = (w**2, 2 * model1.modal.damping_ratios * w, model1.modal.contact, model1.modal.excitation,
+            model1.modal.measurement)
+    dt = 2 * np.pi / om / n
+    q, v, a, state = np.zeros(w.size), np.zeros(w.size), model1.modal.excitation * 2.0, np.zeros(2)
+    out = [np.empty(n) for _ in range(3)]
+    periods = 0
+    # to steady state: the transient decays like mu^n; settle until it is 1e-8 of the orbit, far below
+    # the 1e-4 perturbation
+    for periods in range(int(np.ceil(np.log(1e-8) / np.log(mu)))):
+        newmark_jenkins(*args, 2.0, om, dt, periods * n * dt, k, fs, q, v, a, state, *out)
+    runs = [[q.copy(), v.copy(), a.copy(), state.copy()] for _ in range(2)]
+    runs[1][0][0] += 1e-4 * np.max(np.abs(q))
+    dist = []
+    for p in range(50):
+        t0 = (periods + 1 + p) * n * dt
+        for rq, rv, ra, rs in runs:
+            newmark_jenkins(*args, 2.0, om, dt, t0, k, fs, rq, rv, ra, rs, *out)
+        dist.append(np.linalg.norm(np.concatenate([(runs[1][0] - runs[0][0]) * w, runs[1][1] - runs[0][1]])))
+    rate = (dist[45] / dist[15]) ** (1 / 30)
+    assert abs(rate - mu) <= tol
+    assert mu < np.exp(-0.005 * w[0] * 2 * np.pi / om) - 0.01  # friction adds damping to the orbit
