@@ -67,3 +67,8 @@ def test_frf_arclength_json(capsys):
     assert f[0] == pytest.approx(15) and f[-1] == pytest.approx(130)
     assert len(curve["stable"]) == len(curve["amplitude"]) == f.size
     assert all(curve["stable"])
+
+
+def test_damper_without_action_shows_help(capsys):
+    assert main(["damper"]) == 2
+    assert "fit" in capsys.readouterr().err

@@ -108,3 +108,24 @@ def test_iwan_energy_is_sum_of_elements():
 def test_bad_parameters(k, fs):
     with pytest.raises(FividError, match="must be finite and > 0"):
         jenkins_force(np.zeros(3), k, fs)
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    steps=st.lists(st.floats(-1.0, 1.0, allow_nan=False), min_size=2, max_size=200),
+    k=st.floats(1.0, 1e7),
+    fs=st.floats(1e-3, 1e3),
+)
+def test_kernel_matches_naive_reference_on_random_paths(steps, k, fs):
+    x = np.cumsum(steps) * (3 * fs / k)  # increments up to 3 slip displacements: stick and slip both occur
+    x -= x[0]
+    ref = _naive_jenkins(x, k, fs)
+    got = jenkins_force(x, k, fs)
+    assert np.all(np.abs(got) <= fs * (1 + 1e-15))
+    # the naive reference recomputes k (x - z) each step; the kernel accumulates increments: rounding
+    # ~ eps x (number of steps) x k |x|max
+    assert np.allclose(got, ref, rtol=0, atol=1e-15 * len(x) * k * np.max(np.abs(x)) + 1e-12 * fs)
