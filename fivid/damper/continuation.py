@@ -88,7 +88,10 @@ def continue_frequency_response(hb: HarmonicBalance, f_start: float, f_end: floa
         u, om = y[:n] * x_s, y[n] * om_s
         _, ju, jw = hb.residual(u, om, frequency_derivative=True)
         a = np.vstack([np.hstack([ju, (jw * om_s / x_s)[:, None]]), t_prev])
-        t = np.linalg.solve(a, np.concatenate([np.zeros(n), [1.0]]))
+        try:
+            t = np.linalg.solve(a, np.concatenate([np.zeros(n), [1.0]]))
+        except np.linalg.LinAlgError:
+            raise FividError(f"continuation: singular tangent system at {om / (2 * np.pi):.5g} Hz") from None
         t /= np.linalg.norm(t)
         if t @ t_prev < 0:
             t = -t
@@ -136,7 +139,10 @@ def _correct(hb, y_pred, t, x_s, om_s, *, max_iterations=10, rtol=1e-10):
         r, ju, jw = hb.residual(u, om, frequency_derivative=True)
         g = np.concatenate([r / x_s, [t @ (y - y_pred)]])
         a = np.vstack([np.hstack([ju, (jw * om_s / x_s)[:, None]]), t])
-        dy = np.linalg.solve(a, -g)
+        try:
+            dy = np.linalg.solve(a, -g)
+        except np.linalg.LinAlgError:
+            return None, it
         y = y + dy
         # scaled residual and update at float resolution x condition (see HarmonicBalance.solve)
         if np.linalg.norm(dy) <= rtol * max(1.0, np.linalg.norm(y)) * 1e2 and np.linalg.norm(r) / x_s <= rtol * 1e2:

@@ -250,7 +250,10 @@ class HarmonicBalance:
         for it in range(max_iterations + 1):
             if norm <= max(abs_tol, rtol * np.linalg.norm(u)):
                 return u, it, norm
-            du = np.linalg.solve(j, -r)
+            try:
+                du = np.linalg.solve(j, -r)
+            except np.linalg.LinAlgError:  # singular at this stick/slip pattern: let the caller restart
+                break
             step = 1.0
             while True:
                 u_new = u + step * du
