@@ -86,8 +86,11 @@ class JenkinsLoopFit:
             "energy_relative_error": float(np.mean(self.energy_per_cycle_model) / np.mean(self.energy_per_cycle_measured) - 1),
             "rms_residual": self.rms_residual,
             "r_squared": self.r_squared,
+            "cycles": [{"amplitude": float(a), "energy_measured": float(wm), "energy_model": float(wf)}
+                       for a, wm, wf in zip(self.cycle_amplitudes, self.energy_per_cycle_measured,
+                                            self.energy_per_cycle_model)],
             "units": {"slip_force": "N", "stiffness": "N m-1", "force_offset": "N", "energy_per_cycle": "J",
-                      "rms_residual": "N"},
+                      "rms_residual": "N", "amplitude": "m", "energy": "J"},
         }
 
 

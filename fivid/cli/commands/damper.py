@@ -93,7 +93,13 @@ def _frf(args: argparse.Namespace) -> int:
                        "peak_amplitude": float(amp[i]), "amplitude": amp,
                        "receptance": amp / model.excitation_amplitude, **extra})
     if args.json:
-        print(dumps_json({"model": model.name, "frequency": None if args.arclength else freqs, "curves": curves,
+        import hashlib
+        from pathlib import Path
+
+        sha = hashlib.sha256(Path(args.model).read_bytes()).hexdigest()
+        print(dumps_json({"model": model.name, "model_source": f"{Path(args.model).name} sha256:{sha}",
+                          "harmonics": list(model.harmonics), "samples_per_period": model.samples_per_period,
+                          "frequency": None if args.arclength else freqs, "curves": curves,
                           "units": {"frequency": "Hz", "amplitude": "m", "receptance": "m N-1",
                                     "normal_load": "N", "slip_force": "N"}}))
     else:
