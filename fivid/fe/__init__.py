@@ -1,0 +1,1 @@
+"""Finite-element models: meshes, element matrices, assembly, modal analysis."""
