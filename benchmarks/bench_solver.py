@@ -1,0 +1,172 @@
+"""Speed of the explicit contact solver (issue 5), as ratios measured in one run.
+
+    python benchmarks/bench_solver.py [--quick]
+
+Prints one JSON line: ``dofs``, ``steps``, ``dof_updates_per_s`` and ``ns_per_element_cycle`` of fivid's full
+step on the default rig (stencil K(u + beta v), central-difference update, constraints, contact with
+Coulomb friction, energy bookkeeping, records) during a preload-and-slide run; ``speedup_vs_scipy_csr``
+against a plain scipy loop doing the same arithmetic (``K @ (u + beta v)`` and the lumped-mass update) on the
+same model; ``fraction_of_bare_stencil`` against the fastest bare stencil + update kernel written here for
+the same mesh (every node of every block with one interior stencil on ghost-padded arrays, the
+rectangular-element sparsity (13 terms per force), unsigned indices, no contact or constraints), whose own ``bare_stencil_dof_updates_per_s`` is printed too, with a
+``prange`` variant (``bare_stencil_parallel_dof_updates_per_s``) to show whether two threads pay at this size.
+Also the wall time to simulate 0.1 s of the coarse and of the default rig: measured (coarse, full mode) or
+projected from the measured step rate (``*_projected``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bare_kernels():
+    """The bare stencil + update loop, compiled serial and with ``prange`` (same body; prange runs as range
+    in the serial compilation)."""
+    from numba import njit, prange
+
+    from fivid.solver._kernels import _rect_component
+
+    def steps(nsteps, dt, alpha, beta, npd, blocks, c_uni, minv, u, v, w, f):
+        n = u.shape[0]
+        for _ in range(nsteps):
+            wx = w[:npd]
+            wy = w[npd:]
+            for b in range(blocks.shape[0]):
+                for a in prange(2):
+                    _rect_component(wx, wy, f[a * npd:(a + 1) * npd], c_uni[b], a, blocks[b, 0], blocks[b, 1],
+                                    blocks[b, 2], blocks[b, 3])
+            for d in prange(n):
+                vn = v[d] + dt * (-minv[d] * f[d] - alpha * v[d])
+                v[d] = vn
+                ud = u[d] + dt * vn
+                u[d] = ud
+                w[d] = ud + beta * vn
+
+    return njit(cache=False)(steps), njit(cache=False, parallel=True)(steps)
+
+
+def _bare_layout(model, st):
+    """Ghost-padded copy of every block: one stencil patch covers all real nodes of the block."""
+    rows, off = [], 0
+    for block in model.blocks:
+        stride = block.nx + 3
+        rows.append((off + stride + 1, block.nx + 1, block.ny + 1, stride))
+        off += stride * (block.ny + 3)
+    blocks = np.array(rows, dtype=np.int64)
+    # the interior patch of each uniform block comes first in its group of five
+    c_uni = np.ascontiguousarray(st.c_uni[::5][: len(model.blocks)])
+    return off, blocks, c_uni
+
+
+def _time(fn, *args, repeat=3):
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn(*args)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="shorter runs (noisier numbers)")
+    args = ap.parse_args(argv)
+
+    from fivid.fe import load_model, lumped_mass, stiffness_matrix
+    from fivid.solver.driver import prepare_run
+    from fivid.solver.stencil import block_stencils
+
+    default = load_model(ROOT / "configs/models/triboair.yaml")
+    coarse = load_model(ROOT / "configs/models/triboair_coarse.yaml")
+    run_kw = dict(mu=0.3, sliding_velocity=0.01, normal_load=5.0, sample_rate=51200.0, preload_time=2e-4,
+                  settle_time=0.0, base_ramp_time=1e-4, progress=False)
+    # warm-up: load the cached kernels
+    prepare_run(coarse, duration=1e-4, **{k: v for k, v in run_kw.items() if k != "progress"}).run(progress=False)
+
+    # ---- the three loops on the same model, interleaved (the machine is shared: best of each over rounds)
+    duration = 1e-4 if args.quick else 5e-4
+    kw = {k: v for k, v in run_kw.items() if k != "progress"}
+    prep = prepare_run(default, duration=duration, **kw)
+    s = prep.settings
+    steps = s.n_intervals * s.steps_per_interval
+    n_dofs = default.n_dofs
+    n_el = sum(b.n_elements for b in default.blocks)
+    K = stiffness_matrix(default).tocsr()
+    m = lumped_mass(default)
+    minv = 1.0 / m
+    minv[default.fixed_dofs] = 0.0
+    dt, a, b = s.time_step, default.rayleigh_alpha, default.rayleigh_beta
+    n_scipy = min(steps, 3000 if args.quick else 20000)
+
+    def scipy_loop(n):
+        # the same arithmetic as a plain scipy program: K @ (u + beta v), lumped-mass central difference
+        u = np.zeros(n_dofs)
+        v = np.zeros(n_dofs)
+        for _ in range(n):
+            f = K @ (u + b * v)
+            v += dt * (-minv * f - a * v)
+            u += dt * v
+
+    st = block_stencils(default)
+    bare, bare_par = _bare_kernels()
+    npd, blocks, c_uni = _bare_layout(default, st)
+    arrays = [np.zeros(2 * npd) for _ in range(4)]
+    mb = np.full(2 * npd, minv[minv > 0].mean())
+    bare(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    bare_par(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    t_fivid = t_scipy = t_bare = t_par = np.inf
+    contact_active = False
+    for _ in range(2 if args.quick else 3):
+        t0 = time.perf_counter()
+        ds = prep.run(progress=False)
+        t_fivid = min(t_fivid, (time.perf_counter() - t0) / steps)
+        contact_active = float(ds.contact_normal_force.max()) > 0.0
+        t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
+        t_scipy = min(t_scipy, _time(scipy_loop, n_scipy, repeat=1) / n_scipy)
+        t_par = min(t_par, _time(bare_par, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
+
+    out = {
+        "benchmark": "solver",
+        "quick": bool(args.quick),
+        "model": "configs/models/triboair.yaml",
+        "dofs": n_dofs,
+        "elements": n_el,
+        "steps": steps,
+        "time_step_s": dt,
+        "contact_active": contact_active,
+        "contact_gs_mean_sweeps": ds.attrs["contact_gs_mean_sweeps"],
+        "dof_updates_per_s": n_dofs / t_fivid,
+        "ns_per_element_cycle": t_fivid / n_el * 1e9,
+        "scipy_csr_dof_updates_per_s": n_dofs / t_scipy,
+        "speedup_vs_scipy_csr": t_scipy / t_fivid,
+        "bare_stencil_dof_updates_per_s": n_dofs / t_bare,
+        "bare_stencil_parallel_dof_updates_per_s": n_dofs / t_par,
+        "fraction_of_bare_stencil": t_bare / t_fivid,
+        "wall_0p1s_default_projected_s": 0.1 / dt * t_fivid,
+    }
+    # ---- wall time to simulate 0.1 s
+    cprep = prepare_run(coarse, duration=1e-3 if args.quick else 0.1 - (2e-4 + 1e-4), **kw)
+    t0 = time.perf_counter()
+    cprep.run(progress=False)
+    cwall = time.perf_counter() - t0
+    csteps = cprep.settings.n_intervals * cprep.settings.steps_per_interval
+    ctotal = csteps * cprep.settings.time_step
+    if args.quick:
+        out["wall_0p1s_coarse_projected_s"] = cwall * 0.1 / ctotal
+    else:
+        out["wall_0p1s_coarse_s"] = cwall
+    out["coarse_dofs"] = coarse.n_dofs
+    out["coarse_dof_updates_per_s"] = coarse.n_dofs * csteps / cwall
+    print(json.dumps(out))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,32 @@
+"""Identification from measured runs: the friction law (forward route) and damping.
+
+- :func:`identify_friction_law` — μ0, the perturbation spectrum s(f), the amplitude law A(V, Ra, Fn)
+  in every candidate form with statistics and the chosen form (DESIGN §3, seeds 000/001).
+- :func:`identify_damping` — modal damping ratios from PSD/FRF peaks and a Rayleigh (α, β) fit.
+- :func:`inverse_amplitude_scale` — the inverse route of seed 001: the amplitude scale that makes the
+  simulated acceleration level match the measured one in a band.
+"""
+
+from fivid.identify.damping import DampingIdentification, RayleighFit, fit_rayleigh, identify_damping
+from fivid.identify.inverse import InverseAmplitude, inverse_amplitude_scale
+from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, choose_form, fit_amplitude_forms
+from fivid.identify.friction import FrictionIdentification, identify_friction_law
+from fivid.identify.runs import RunAnalysis, RunSettings, analyse_run
+
+__all__ = [
+    "identify_friction_law",
+    "identify_damping",
+    "inverse_amplitude_scale",
+    "InverseAmplitude",
+    "DampingIdentification",
+    "RayleighFit",
+    "fit_rayleigh",
+    "FrictionIdentification",
+    "fit_amplitude_forms",
+    "choose_form",
+    "FormFit",
+    "SELECTION_RULE",
+    "RunAnalysis",
+    "RunSettings",
+    "analyse_run",
+]

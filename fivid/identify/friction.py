@@ -1,0 +1,360 @@
+"""Forward identification of the friction law from measured runs (DESIGN §3, seeds 000 and 001).
+
+:func:`identify_friction_law` takes RunDatasets at several sliding velocities, roughnesses and loads
+and returns μ0 with its confidence interval, the normalised perturbation spectrum s(f), the per-run
+RMS amplitudes and the amplitude law A(V, Ra, Fn) fitted in every candidate form, with the chosen
+form and why. The result is a law file (:meth:`FrictionIdentification.to_dataset`, read back by
+:func:`fivid.friction.load_law`) and a JSON report (:meth:`FrictionIdentification.to_json`).
+
+μ0 across runs is the mean of the per-run means, with a Student-t interval on n − 1 degrees of
+freedom from their scatter (it covers both the estimation error and any real run-to-run spread);
+with a single run it is that run's batch-means interval.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fivid.errors import DataQualityError, FividError
+from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
+from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
+from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, RunAnalysis, RunSettings, analyse_run
+from fivid.identify.shape import SpectralShape, identify_shape
+
+__all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
+
+SHAPE_METHODS = ("smoothed", "rolloff")
+_log = logging.getLogger("fivid")
+
+
+@dataclass
+class FrictionIdentification:
+    """Everything :func:`identify_friction_law` found; ``law`` is the identified law object."""
+
+    law: PerturbedCoulombLaw
+    mu0: float
+    mu0_ci: tuple
+    band: tuple
+    runs: list
+    shape: SpectralShape
+    shape_method: str
+    form_fits: list
+    chosen: FormFit | None
+    why: str
+    law_across_runs: bool
+    messages: list = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def used_runs(self) -> list:
+        return [r for r in self.runs if r.used]
+
+    def to_json(self) -> dict:
+        """The JSON report: ``mu0``, ``mu0_ci``, ``amplitude_model``, ``candidate_forms``, ``runs``, ..."""
+        m = self.law.amplitude_model
+        ci = self.chosen.conf_int if self.chosen is not None else None
+        amp = m.to_dict()
+        if ci is not None:
+            amp["ci95"] = {n: [float(a), float(b)] for n, (a, b) in zip(m.names, ci)}
+        return {
+            "mu0": self.mu0,
+            "mu0_ci": list(self.mu0_ci),
+            "confidence": self.settings.get("confidence", 0.95),
+            "band": list(self.band),
+            "law_across_runs": self.law_across_runs,
+            "amplitude_model": amp,
+            "selection": {"rule": SELECTION_RULE, "chosen": m.form, "why": self.why},
+            "candidate_forms": [dict(f.to_json(), akaike_weight=akaike_weights(self.form_fits).get(f.form))
+                                for f in self.form_fits],
+            "shape": {
+                "method": self.shape_method,
+                "smoothing_octaves": self.shape.smoothing_octaves,
+                "n_frequencies": int(self.shape.frequency.size),
+                "rolloff": self.shape.rolloff_params,
+            },
+            "injection": self.law.injection,
+            "runs": [r.table_row() for r in self.runs],
+            "messages": list(self.messages),
+            "settings": dict(self.settings),
+            "law_sha256": self.law.sha256,
+        }
+
+    def summary(self) -> str:
+        """A few human-readable lines (what the CLI prints without --json)."""
+        used = self.used_runs
+        lines = [
+            f"mu0 = {self.mu0:.5f}  ({self.settings.get('confidence', 0.95):.0%} CI {self.mu0_ci[0]:.5f} .. "
+            f"{self.mu0_ci[1]:.5f}) from {len(used)} of {len(self.runs)} runs",
+            f"band {self.band[0]:g}-{self.band[1]:g} Hz; amplitude form {self.law.amplitude_model.form}: {self.why}",
+        ]
+        weights = akaike_weights(self.form_fits)
+        for f in self.form_fits:
+            if f.fitted:
+                r2 = f.diagnostics.get("r_squared")
+                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights[f.form]:.3f}  "
+                             f"R2 {float('nan') if r2 is None else r2:.3f}")
+            else:
+                lines.append(f"  {f.form:22s} not fitted: {f.reason}")
+        for r in self.runs:
+            state = "used" if r.used else f"excluded: {r.reason}"
+            lines.append(f"  run {r.run_id}: mu {r.mu_mean:.4f}, A {r.mu_rms:.3g} ± {r.mu_rms_stderr:.2g} ({state})")
+        lines += [f"note: {m}" for m in self.messages]
+        return "\n".join(lines)
+
+    def to_dataset(self):
+        """The law-file content (:func:`fivid.friction.law_dataset`) plus the per-run and candidate-form tables."""
+        import xarray as xr
+
+        from fivid.schema import new_history
+
+        conf = self.settings.get("confidence", 0.95)
+        attrs = {}
+        for k, v in self.settings.items():
+            if isinstance(v, dict):
+                attrs.update({f"setting_{k}_{kk}": _attr(vv) for kk, vv in v.items()})
+            else:
+                attrs[f"setting_{k}"] = _attr(v)
+        attrs.update({
+            "selection_rule": SELECTION_RULE,
+            "selection_why": self.why,
+            "law_across_runs": int(self.law_across_runs),
+            "shape_method": self.shape_method,
+            "messages": "\n".join(self.messages),
+            "source": "; ".join(f"{r.run_id}: {r.source}" for r in self.runs),
+            "history": new_history(f"identify: friction law from {len(self.used_runs)} of {len(self.runs)} runs"),
+        })
+        ds = law_dataset(self.law, mu0_ci=self.mu0_ci, confidence=conf, attrs=attrs)
+        if self.chosen is not None:
+            ds["amplitude_ci_lower"] = ("coefficient", self.chosen.conf_int[:, 0], {"confidence": conf})
+            ds["amplitude_ci_upper"] = ("coefficient", self.chosen.conf_int[:, 1], {"confidence": conf})
+        for name, values, long in (
+            ("shape_average", self.shape.average, "average of the runs' normalised PSDs"),
+            ("shape_smoothed", self.shape.smoothed, "fractional-octave smoothed shape"),
+            ("shape_rolloff", self.shape.rolloff, "parametric roll-off fit of the shape"),
+        ):
+            if values is not None:
+                ds[name] = ("frequency", values, {"units": "Hz-1", "long_name": long})
+        run = np.array([r.run_id for r in self.runs], dtype=object)
+        table = {
+            "run_sliding_velocity": ([r.sliding_velocity for r in self.runs], "m s-1"),
+            "run_roughness_ra": ([r.roughness_ra for r in self.runs], "m"),
+            "run_normal_load": ([r.normal_load for r in self.runs], "N"),
+            "run_mu_mean": ([r.mu_mean for r in self.runs], "1"),
+            "run_mu_mean_ci_lower": ([r.mu_mean_ci[0] for r in self.runs], "1"),
+            "run_mu_mean_ci_upper": ([r.mu_mean_ci[1] for r in self.runs], "1"),
+            "run_mu_rms": ([r.mu_rms for r in self.runs], "1"),
+            "run_mu_rms_stderr": ([r.mu_rms_stderr for r in self.runs], "1"),
+            "run_window_start": ([r.t_start for r in self.runs], "s"),
+            "run_window_stop": ([r.t_stop for r in self.runs], "s"),
+        }
+        for name, (values, units) in table.items():
+            ds[name] = ("run", np.asarray(values, float), {"units": units})
+        ds["run_used"] = ("run", np.array([r.used for r in self.runs], dtype=np.int8))
+        ds["run_reason"] = ("run", np.array([r.reason for r in self.runs], dtype=object))
+        ds = ds.assign_coords(run=("run", run))
+        forms = np.array([f.form for f in self.form_fits], dtype=object)
+        if forms.size:
+            ds = ds.assign_coords(form=("form", forms))
+            for name in ("aic", "aicc", "bic", "loglik"):
+                ds[f"form_{name}"] = ("form", np.array([getattr(f, name) for f in self.form_fits], float))
+            ds["form_n_params"] = ("form", np.array([f.n_params for f in self.form_fits], np.int32))
+            ds["form_fitted"] = ("form", np.array([f.fitted for f in self.form_fits], np.int8))
+            ds["form_reason"] = ("form", np.array([f.reason for f in self.form_fits], dtype=object))
+        return ds
+
+    def write(self, path, *, overwrite: bool = False):
+        """Write the law file atomically (:func:`fivid.friction.write_law`); returns the path."""
+        from fivid.friction import write_law
+
+        return write_law(self.to_dataset(), path, overwrite=overwrite)
+
+
+def _attr(v):
+    if v is None:
+        return "none"
+    if isinstance(v, (tuple, list)):
+        return " ".join(f"{x:g}" if isinstance(x, float) else str(x) for x in v)
+    if isinstance(v, bool):
+        return int(v)
+    return v
+
+
+def load_runs(runs) -> list:
+    """RunDatasets from a sequence of Datasets or netCDF paths (paths are read with :func:`fivid.io.read_run`)."""
+    from fivid.io import read_run
+    from fivid.schema import validate_run
+
+    out = []
+    for item in runs:
+        if isinstance(item, (str, os.PathLike)):
+            out.append(read_run(item))
+        else:
+            out.append(validate_run(item))
+    return out
+
+
+def _check_band(band, datasets):
+    rates = [float(ds.attrs["sample_rate"]) for ds in datasets]
+    nyquist = min(rates) / 2
+    if band is None:
+        return (DEFAULT_BAND_LOW, min(DEFAULT_BAND_HIGH, 0.4 * min(rates)))
+    lo, hi = (float(b) for b in band)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
+        raise FividError(f"band = ({lo:g}, {hi:g}) Hz; need 0 <= F_LO < F_HI")
+    if hi > nyquist:
+        slow = [ds.attrs.get("run_id") for ds, r in zip(datasets, rates) if r / 2 < hi]
+        raise FividError(
+            f"band upper edge {hi:g} Hz is beyond the Nyquist frequency {nyquist:g} Hz of run(s) "
+            f"{', '.join(map(str, slow))}; choose F_HI < {nyquist:g} Hz"
+        )
+    return lo, hi
+
+
+def _mu0_interval(used, confidence):
+    from scipy import stats
+
+    means = np.array([r.mu_mean for r in used])
+    if means.size == 1:
+        return float(means[0]), tuple(used[0].mu_mean_ci)
+    half = stats.t.ppf(0.5 + confidence / 2, means.size - 1) * means.std(ddof=1) / np.sqrt(means.size)
+    return float(means.mean()), (float(means.mean() - half), float(means.mean() + half))
+
+
+def identify_friction_law(
+    runs,
+    *,
+    band=None,
+    nperseg: int | None = None,
+    tolerance: float = 0.05,
+    min_normal_force: float = 0.1,
+    tare=None,
+    mains_frequency: float | None = 50.0,
+    noise_correction: bool = True,
+    transfer_function=None,
+    shape_method: str = "smoothed",
+    smoothing_octaves: float = 1.0 / 6.0,
+    forms=AMPLITUDE_FORMS,
+    weighting: str = "estimator",
+    injection: str = "uniform",
+    confidence: float = 0.95,
+) -> FrictionIdentification:
+    """Identify μ0, the perturbation spectrum and the amplitude law from measured runs.
+
+    Parameters
+    ----------
+    runs : sequence of xarray.Dataset or path
+        RunDatasets (SI units) or netCDF files written by ``fivid ingest``.
+    band : (float, float), optional
+        Valid band [Hz]; default 20 Hz to min(2 kHz, 0.4 fs) — set it to where the force chain
+        is dynamic-free (or give ``transfer_function``).
+    nperseg : int, optional
+        Welch segment length [samples]; default :func:`fivid.identify.runs.default_nperseg`.
+    tolerance : float, default 0.05
+        Relative velocity tolerance of the steady-sliding window [-].
+    min_normal_force : float, default 0.1
+        Runs with a mean normal force below this on the window are excluded [N].
+    tare : (float, float), optional
+        Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
+    mains_frequency : float or None, default 50.0
+        Mains harmonics standing out of the PSD are interpolated over [Hz]; None disables.
+    noise_correction : bool, default True
+        With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
+    transfer_function : xarray.DataArray, optional
+        Force-chain transfer function on dim ``frequency`` [Hz]; the μp PSD is divided by ``|H|^2``.
+    shape_method : {"smoothed", "rolloff"}
+        Which shape goes into the law (both are in the law file).
+    smoothing_octaves : float, default 1/6
+        Width of the log-frequency smoothing [octaves].
+    forms : sequence of str
+        Candidate amplitude forms.
+    weighting : {"estimator", "none"}
+        WLS with the per-run estimator variances as relative weights (default), or OLS.
+    injection : {"uniform", "per_node", "convected"}
+        Injection mode written into the law.
+    confidence : float, default 0.95
+        Level of every interval.
+
+    Returns
+    -------
+    FrictionIdentification
+
+    Raises
+    ------
+    FividError
+        Bad band (beyond Nyquist, empty), bad settings.
+    SchemaError
+        A run is not a valid RunDataset (missing forces, wrong units).
+    DataQualityError
+        No run is usable (each run's reason is listed).
+    """
+    from fivid.friction.laws import INJECTION_MODES
+
+    if shape_method not in SHAPE_METHODS:
+        raise FividError(f"shape_method {shape_method!r} is not one of {', '.join(SHAPE_METHODS)}")
+    if injection not in INJECTION_MODES:
+        raise FividError(f"injection {injection!r} is not one of {', '.join(INJECTION_MODES)}")
+    if not 0 < confidence < 1:
+        raise FividError(f"confidence = {confidence!r}; it must be in (0, 1)")
+    datasets = load_runs(runs)
+    if not datasets:
+        raise FividError("no runs given")
+    band = _check_band(band, datasets)
+    settings = RunSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
+                           tare=None if tare is None else tuple(float(x) for x in tare),
+                           mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence)
+    analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
+                                   for ds in datasets]
+    used = [r for r in analyses if r.used]
+    if not used:
+        reasons = "; ".join(f"{r.run_id}: {r.reason}" for r in analyses)
+        raise DataQualityError(f"no usable run among {len(analyses)}: {reasons}")
+    messages = [f"run {r.run_id} excluded: {r.reason}" for r in analyses if not r.used]
+    mu0, mu0_ci = _mu0_interval(used, confidence)
+    v_ref = float(np.exp(np.mean(np.log([r.sliding_velocity for r in used])))) if injection == "convected" else None
+    shape = identify_shape(used, band, smoothing_octaves=smoothing_octaves, injection=injection,
+                           reference_velocity=v_ref)
+    amplitude = np.array([r.mu_rms for r in used])
+    stderr = np.array([r.mu_rms_stderr for r in used])
+    if len(used) >= 2:
+        fits = fit_amplitude_forms([r.sliding_velocity for r in used], [r.roughness_ra for r in used],
+                                   [r.normal_load for r in used], amplitude, stderr, forms=forms,
+                                   weighting=weighting, confidence=confidence)
+        chosen, why = choose_form(fits)
+    else:
+        fits, chosen, why = [], None, ""
+    law_across_runs = chosen is not None
+    if chosen is not None:
+        model = chosen.model
+        for f in fits:
+            if not f.fitted and f.form != "constant":
+                messages.append(f"amplitude form {f.form} not fitted: {f.reason}")
+    else:
+        run = used[0]
+        why = (f"a single usable run ({run.run_id}): no amplitude law across runs can be fitted; the law "
+               "holds this run's band RMS as a constant, valid only at its velocity, roughness and load")
+        messages.append(why)
+        model = AmplitudeModel("constant", np.array([run.mu_rms]), ("amplitude",), np.array([run.mu_rms_stderr]),
+                               np.array([[run.mu_rms_stderr**2]]))
+    law_shape = shape.smoothed
+    if shape_method == "rolloff":
+        if shape.rolloff is None:
+            raise FividError(f"shape_method 'rolloff': {shape.rolloff_params.get('reason', 'the fit failed')}")
+        law_shape = shape.rolloff
+    law = PerturbedCoulombLaw(mu0, shape.frequency, law_shape, model, band, injection=injection,
+                              reference_velocity=v_ref)
+    recorded = {
+        "band": band, **settings.to_dict(),
+        "transfer_function": "none" if transfer_function is None else "given",
+        "shape_method": shape_method, "smoothing_octaves": smoothing_octaves, "forms": ",".join(forms),
+        "weighting": weighting, "injection": injection, "confidence": confidence,
+        "welch": dict(used[0].psd_attrs),
+    }
+    return FrictionIdentification(
+        law=law, mu0=mu0, mu0_ci=mu0_ci, band=band, runs=analyses, shape=shape, shape_method=shape_method,
+        form_fits=fits, chosen=chosen, why=why, law_across_runs=law_across_runs, messages=messages,
+        settings=recorded,
+    )

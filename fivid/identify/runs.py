@@ -1,0 +1,444 @@
+"""Per-run analysis of the friction coefficient: μ(t) = Ft/Fn on the steady-sliding window.
+
+For one RunDataset: optional tare (subtract force-sensor offsets measured on an unloaded interval),
+the steady-sliding window (:func:`fivid.signal.steady_sliding_window`), checks of the normal force,
+μ(t), its mean with a batch-means confidence interval, the Welch PSD of μp = μ − mean with mains
+lines removed and an optional force-chain transfer function divided out, and the band RMS A with
+its standard error. Runs that cannot be used are returned with ``used=False`` and a reason.
+
+Uncertainties
+-------------
+mean μ
+    Batch means (e.g. Law & Kelton): the window is cut into ``n_batches`` equal batches whose means
+    are nearly independent when a batch is much longer than the correlation time of μp; the interval
+    is ``mean ± t_{B-1} sd(batch means)/sqrt(B)``.
+band mean square A^2
+    For a Gaussian stationary process observed over T seconds, the band power estimate has variance
+    ``(1/T) ∫_band S(f)^2 df`` (the time average of x^2 has variance ``(1/T) ∫ S_1^2 df`` for a
+    one-sided S_1; Bendat & Piersol, Random Data, §8.2); S is replaced by its Welch estimate.
+    ``se(A) = se(A^2) / (2A)``.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fivid.errors import DataQualityError, FividError, SchemaError
+
+__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
+           "default_nperseg"]
+
+_log = logging.getLogger("fivid")
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """Settings of the per-run analysis (all recorded in the law file); the band is passed separately.
+
+    Parameters
+    ----------
+    nperseg : int or None
+        Welch segment length [samples]; None: :func:`default_nperseg`.
+    tolerance : float
+        Relative velocity tolerance of the steady-sliding window [-].
+    min_normal_force : float
+        Runs whose mean normal force on the window is below this [N] are excluded.
+    tare : (float, float) or None
+        Unloaded interval [s] whose mean forces are subtracted as sensor offsets.
+    mains_frequency : float or None
+        Mains frequency [Hz] whose harmonics are removed from the PSD when they stand out; None: off.
+    noise_correction : bool
+        With a tare interval, subtract the force-sensor noise PSD measured on it (see
+        :func:`analyse_run`).
+    n_batches : int
+        Batches of the batch-means interval of the mean μ.
+    confidence : float
+        Level of every interval.
+    """
+
+    nperseg: int | None = None
+    tolerance: float = 0.05
+    min_normal_force: float = 0.1
+    tare: tuple | None = None
+    mains_frequency: float | None = 50.0
+    noise_correction: bool = True
+    n_batches: int = 20
+    confidence: float = 0.95
+
+    def to_dict(self) -> dict:
+        """The settings as plain values (recorded in the law file and the JSON report)."""
+        return {
+            "nperseg": self.nperseg or "auto",
+            "tolerance": self.tolerance,
+            "min_normal_force": self.min_normal_force,
+            "tare": self.tare,
+            "mains_frequency": self.mains_frequency,
+            "noise_correction": self.noise_correction,
+            "n_batches": self.n_batches,
+            "confidence": self.confidence,
+        }
+
+
+DEFAULT_BAND_LOW = 20.0  # [Hz] above drift and the loading device's rigid-body modes
+DEFAULT_BAND_HIGH = 2000.0  # [Hz] placeholder for where a TRIBOAIR-like force chain is dynamic-free
+
+
+@dataclass
+class RunAnalysis:
+    """Result of :func:`analyse_run` for one run (all SI; μ quantities dimensionless)."""
+
+    run_id: str
+    sliding_velocity: float
+    roughness_ra: float
+    normal_load: float
+    source: str = ""
+    used: bool = False
+    reason: str = ""
+    t_start: float = np.nan
+    t_stop: float = np.nan
+    normal_force_mean: float = np.nan
+    mu_mean: float = np.nan
+    mu_mean_ci: tuple = (np.nan, np.nan)
+    mu_rms: float = np.nan
+    mu_rms_stderr: float = np.nan
+    mu_rms_total: float = np.nan
+    frequency: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    psd: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    mains_bins_removed: int = 0
+    noise_fraction: float = np.nan
+    psd_attrs: dict = field(default_factory=dict)
+
+    def table_row(self) -> dict:
+        """The per-run JSON record."""
+        return {
+            "run_id": self.run_id,
+            "source": self.source,
+            "sliding_velocity": self.sliding_velocity,
+            "roughness_ra": self.roughness_ra,
+            "normal_load": self.normal_load,
+            "used": self.used,
+            "reason": self.reason,
+            "window": [self.t_start, self.t_stop],
+            "normal_force_mean": self.normal_force_mean,
+            "mu_mean": self.mu_mean,
+            "mu_mean_ci": list(self.mu_mean_ci),
+            "mu_rms": self.mu_rms,
+            "mu_rms_stderr": self.mu_rms_stderr,
+            "mu_rms_total": self.mu_rms_total,
+            "mains_bins_removed": self.mains_bins_removed,
+            "noise_fraction": self.noise_fraction,
+        }
+
+
+def default_nperseg(sample_rate: float, n_samples: int) -> int:
+    """Default Welch segment length [samples] for a window of ``n_samples`` at ``sample_rate`` [Hz].
+
+    Returns the largest power of two ``m`` with ``fs / m >= 2 Hz`` (resolves mains harmonics
+    apart from the broadband floor) and ``m <= n / 16`` (at least ~31 half-overlapped segments),
+    and at least 256.
+    """
+    m = 256
+    while 2 * m <= n_samples / 16 and sample_rate / (2 * m) >= 2.0:
+        m *= 2
+    return m
+
+
+def band_weights(frequency: np.ndarray, band: tuple) -> np.ndarray:
+    """Trapezoid quadrature weights [Hz] of the bins inside ``band`` (0 outside).
+
+    The band edges are snapped to the bins nearest inside; the integral ``Σ w P`` is then the
+    trapezoid rule over ``[f_first, f_last]`` of the bins kept.
+    """
+    f = np.asarray(frequency, float)
+    df = f[1] - f[0]
+    inside = (f >= band[0] - 1e-9 * df) & (f <= band[1] + 1e-9 * df)
+    w = np.where(inside, df, 0.0)
+    idx = np.nonzero(inside)[0]
+    if idx.size >= 2:
+        w[idx[0]] = w[idx[-1]] = df / 2
+    return w
+
+
+def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2):
+    """Bins of mains harmonics that stand out of the broadband floor.
+
+    A Hann-windowed line at frequency ``f_k = k f_m`` puts its power into the bins within two bins
+    of ``f_k`` (the main lobe; 2.5 bins away the leakage is below −31 dB). For each harmonic in the
+    band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the median of the
+    bins 5 to 15 bins away on either side. A line is declared when the largest of them exceeds the
+    floor by more than a broadband bin would with probability ``p_false`` over the whole band
+    (near 0 Hz the floor window is clipped to the bins above 0 Hz):
+    the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
+    ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
+    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``). A line is narrow: the peak must also exceed,
+    by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
+    broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
+
+    Returns
+    -------
+    ndarray of bool
+        True for the bins to replace.
+    """
+    from scipy import stats
+
+    f = np.asarray(frequency, float)
+    p = np.asarray(psd, float)
+    df = f[1] - f[0]
+    mask = np.zeros(f.size, dtype=bool)
+    if mains_frequency is None:
+        return mask
+    k_lo = max(1, int(np.ceil((band[0] - 2 * df) / mains_frequency)))
+    k_hi = int(np.floor((band[1] + 2 * df) / mains_frequency))
+    fk = np.arange(k_lo, k_hi + 1) * mains_frequency
+    centre = np.rint(fk / df).astype(int)
+    offsets = np.arange(-3, 4)
+    near = centre[:, None] + offsets[None, :]  # candidate bins; kept where |f - f_k| <= 2 df
+    floor_off = np.r_[np.arange(-17, -6), np.arange(7, 18)]  # 5 to 15 bins beyond the +-2-bin lobe
+    # near 0 Hz and Nyquist the floor window is clipped to the spectrum (repeating its end bins)
+    around = np.clip(centre[:, None] + floor_off[None, :], 1, f.size - 1)
+    ok = (near.min(axis=1) >= 1) & (near.max(axis=1) < f.size)
+    if not ok.any():
+        return mask
+    fk, centre, near, around = fk[ok], centre[ok], near[ok], around[ok]
+    in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
+    n_tested = int(in_lobe.sum())
+    chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
+    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
+    floor = np.median(p[around], axis=1)
+    shoulder = np.median(p[np.clip(centre[:, None] + np.array([-5, -4, 4, 5])[None, :], 1, f.size - 1)], axis=1)
+    peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
+    line = (floor > 0) & (peak > threshold * floor) & (peak > threshold * shoulder)
+    for i in np.nonzero(line)[0]:
+        mask[near[i][in_lobe[i]]] = True
+    return mask
+
+
+def _replace_lines(frequency, psd, mask):
+    """Linear interpolation across masked bins from the nearest unmasked bins (never from 0 Hz)."""
+    if not mask.any():
+        return psd
+    out = psd.copy()
+    keep = ~mask
+    keep[0] = False
+    out[mask] = np.interp(frequency[mask], frequency[keep], psd[keep])
+    return out
+
+
+def batch_means_interval(x, n_batches, confidence):
+    """Mean of ``x`` and its batch-means interval: ``mean ± t_{B-1} sd(batch means)/sqrt(B)``.
+
+    Returns (mean, (lower, upper)); the batches are ``n_batches`` equal consecutive parts of ``x``.
+    """
+    from scipy import stats
+
+    b = int(n_batches)
+    m = x.size // b
+    means = x[: m * b].reshape(b, m).mean(axis=1)
+    half = stats.t.ppf(0.5 + confidence / 2, b - 1) * means.std(ddof=1) / np.sqrt(b)
+    return float(x.mean()), (float(x.mean() - half), float(x.mean() + half))
+
+
+def _check_units(ds, label):
+    for name in ("friction_force", "normal_force"):
+        if name not in ds.data_vars:
+            raise SchemaError(f"{label}: variable {name!r} is missing; a run needs friction_force and normal_force [N]")
+        units = ds[name].attrs.get("units")
+        if units != "N":
+            raise SchemaError(
+                f"{label}: variable {name!r} has units {units!r}; expected 'N' (re-ingest the run so that "
+                "forces are in newtons)"
+            )
+
+
+def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=None) -> RunAnalysis:
+    """μ(t) on the steady window of one run: mean with CI, PSD of μp in ``band``, band RMS with stderr.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A RunDataset (SI units).
+    settings : RunSettings
+    band : (float, float)
+        Valid band [Hz] (checked against the run's Nyquist frequency).
+    transfer_function : xarray.DataArray, optional
+        Force-chain transfer function over dim ``frequency`` [Hz] (complex or magnitude, [-]); the PSD
+        is divided by ``|H|^2`` interpolated to the Welch bins.
+
+    Returns
+    -------
+    RunAnalysis
+        ``used`` False with a ``reason`` for a run that is not in steady sliding or whose normal force
+        is near zero.
+
+    Raises
+    ------
+    SchemaError
+        Forces missing or not in newtons.
+    FividError
+        ``band`` beyond the run's Nyquist frequency.
+    """
+    import xarray as xr
+
+    from fivid.signal import steady_sliding_window, welch_psd
+
+    run_id = str(ds.attrs.get("run_id", "?"))
+    label = f"run {run_id!r}"
+    _check_units(ds, label)
+    res = RunAnalysis(
+        run_id=run_id,
+        sliding_velocity=float(ds.attrs.get("sliding_velocity", np.nan)),
+        roughness_ra=float(ds.attrs.get("roughness_ra", np.nan)),
+        normal_load=float(ds.attrs.get("normal_load", np.nan)),
+        source=str(ds.attrs.get("source", "")),
+    )
+    t = np.asarray(ds["time"].values, float)
+    fs = float(ds.attrs.get("sample_rate", 1.0 / np.mean(np.diff(t))))
+    if band[1] > fs / 2:
+        raise FividError(
+            f"{label}: band upper edge {band[1]:g} Hz is beyond the Nyquist frequency {fs / 2:g} Hz of this run "
+            f"(sample rate {fs:g} Hz); choose --band below {fs / 2:g} Hz"
+        )
+    if not res.normal_load > 0:
+        res.reason = f"nominal normal load {res.normal_load!r} N is not > 0"
+        return res
+    ft = np.asarray(ds["friction_force"].values, float)
+    fn = np.asarray(ds["normal_force"].values, float)
+    tare_sel = None
+    if settings.tare is not None:
+        ft, fn, tare_sel = _tare(t, ft, fn, settings, label)
+    try:
+        t0, t1 = steady_sliding_window(ds, tolerance=settings.tolerance)
+    except DataQualityError as exc:
+        res.reason = f"not in steady sliding: {exc.message}"
+        return res
+    res.t_start, res.t_stop = t0, t1
+    win = (t >= t0) & (t <= t1)
+    fn_w, ft_w = fn[win], ft[win]
+    res.normal_force_mean = float(fn_w.mean())
+    if not res.normal_force_mean >= settings.min_normal_force:
+        res.reason = (
+            f"normal force near zero: mean {res.normal_force_mean:.4g} N on the steady window "
+            f"(minimum {settings.min_normal_force:g} N)"
+        )
+        return res
+    lost = np.count_nonzero(fn_w <= 0)
+    if lost:
+        res.reason = f"contact lost: normal force <= 0 N at {lost} of {fn_w.size} samples of the steady window"
+        return res
+    mu = ft_w / fn_w
+    if np.mean(mu) < 0:  # friction force recorded with the opposite sign convention
+        mu = -mu
+    res.mu_mean, res.mu_mean_ci = batch_means_interval(mu, settings.n_batches, settings.confidence)
+    mup = mu - res.mu_mean
+    res.mu_rms_total = float(np.sqrt(np.mean(mup**2)))
+    nperseg = settings.nperseg or default_nperseg(fs, mup.size)
+    da = xr.DataArray(mup, dims="time", coords={"time": t[win]}, name="friction_perturbation",
+                      attrs={"units": "1", "run_id": run_id})
+    if mup.size < 2 * nperseg:
+        res.reason = (f"steady window too short: {mup.size} samples ({t1 - t0:.4g} s) for Welch segments of "
+                      f"{nperseg} samples (at least two are needed; lower nperseg or record longer)")
+        return res
+    p = welch_psd(da, nperseg=nperseg, fs=fs, confidence=settings.confidence)
+    f = np.asarray(p["frequency"].values, float)
+    dof = float(p.attrs["equivalent_degrees_of_freedom"])
+    values = np.asarray(p.values, float)
+    mask = mains_line_bins(f, values, dof, settings.mains_frequency, band)
+    values = _replace_lines(f, values, mask)
+    res.mains_bins_removed = int(np.count_nonzero(mask & (f >= band[0]) & (f <= band[1])))
+    noise = None
+    if tare_sel is not None and settings.noise_correction:
+        noise = _tare_noise_psd(t[tare_sel], ft[tare_sel], fn[tare_sel], res.mu_mean, res.normal_force_mean,
+                                f, nperseg, fs, band, settings)
+        if noise is not None:
+            noise_psd, tare_duration = noise
+            w_all = band_weights(f, band)
+            res.noise_fraction = float(np.sum(w_all * noise_psd) / max(np.sum(w_all * values), np.finfo(float).tiny))
+            values = np.maximum(values - noise_psd, 0.0)
+    if transfer_function is not None:
+        h2 = _transfer_magnitude_squared(transfer_function, f, band, label)
+        values = np.where(h2 > 0, values / np.where(h2 > 0, h2, 1.0), 0.0)
+    w = band_weights(f, band)
+    if np.count_nonzero(w) < 3:
+        raise FividError(
+            f"{label}: band {band[0]:g}-{band[1]:g} Hz holds {np.count_nonzero(w)} Welch bins "
+            f"(resolution {f[1] - f[0]:g} Hz); widen the band or use a longer nperseg"
+        )
+    a2 = float(np.sum(w * values))
+    duration = t1 - t0
+    var_a2 = float(np.sum(w * values**2)) / duration
+    if noise is not None:  # the subtracted noise estimate adds its own variance (same formula, tare length)
+        var_a2 += float(np.sum(w * noise[0] ** 2)) / noise[1]
+    res.mu_rms = float(np.sqrt(a2))
+    res.mu_rms_stderr = float(np.sqrt(var_a2) / (2 * res.mu_rms)) if a2 > 0 else np.nan
+    res.frequency, res.psd, res.weights = f, values, w
+    res.psd_attrs = {k: p.attrs[k] for k in ("nperseg", "noverlap", "window", "detrend", "equivalent_degrees_of_freedom",
+                                               "frequency_resolution") if k in p.attrs}
+    res.used = True
+    return res
+
+
+def _tare(t, ft, fn, settings, label):
+    """Subtract the mean forces of the tare interval (cut to whole mains periods, so hum averages out)."""
+    lo, hi = settings.tare
+    if settings.mains_frequency:
+        period = 1.0 / settings.mains_frequency
+        cycles = np.floor((hi - lo) / period)
+        if cycles >= 1:
+            hi = lo + cycles * period
+    sel = (t >= lo) & (t < hi)
+    if sel.sum() < 10:
+        raise FividError(
+            f"{label}: tare interval {settings.tare[0]:g}-{settings.tare[1]:g} s holds {int(sel.sum())} samples; "
+            f"the record spans {t[0]:g}-{t[-1]:g} s"
+        )
+    return ft - ft[sel].mean(), fn - fn[sel].mean(), sel
+
+
+def _tare_noise_psd(t, ft, fn, mu_mean, fn_mean, f, nperseg, fs, band, settings):
+    """Sensor-noise PSD of μ [Hz-1] on the grid ``f``, from the unloaded (tared) interval, or None.
+
+    With no load the sensors read only their noise e_t, e_n; during sliding these enter μ = Ft/Fn as
+    ``(e_t − μ e_n) / Fn`` to first order. Its Welch PSD on the tare interval (segments of up to
+    ``nperseg`` samples, at least 4 of them), with mains lines removed, is smoothed by a 1/3-octave
+    running median (the noise floor is broadband; the median ignores lines that were not removed)
+    divided by the median of χ²_ν/ν, ``chi2.ppf(0.5, ν)/ν``, which makes it unbiased for a smooth
+    floor; it is interpolated onto ``f``. Returns (psd, tare duration [s]).
+    """
+    import xarray as xr
+    from scipy import stats
+
+    from fivid.identify.shape import octave_median
+    from fivid.signal import welch_psd
+
+    m = nperseg
+    while m > 64 and 4 * m > t.size:
+        m //= 2
+    if 2 * m > t.size:
+        _log.info("tare interval of %d samples is too short for a noise PSD; no noise correction", t.size)
+        return None
+    e = (ft - mu_mean * fn) / fn_mean
+    da = xr.DataArray(e - e.mean(), dims="time", coords={"time": t}, name="sensor_noise", attrs={"units": "1"})
+    p = welch_psd(da, nperseg=m, fs=fs)
+    fq = np.asarray(p["frequency"].values, float)
+    v = np.asarray(p.values, float)
+    nu = float(p.attrs["equivalent_degrees_of_freedom"])
+    mask = mains_line_bins(fq, v, nu, settings.mains_frequency, (fq[1], fq[-1]))
+    v = _replace_lines(fq, v, mask)
+    v[1:] = octave_median(fq[1:], v[1:], 1.0 / 3.0) * nu / stats.chi2.ppf(0.5, nu)
+    return np.interp(f, fq, v), float(t[-1] - t[0])
+
+
+def _transfer_magnitude_squared(h, f, band, label):
+    if "frequency" not in getattr(h, "dims", ()):
+        raise FividError(f"{label}: the transfer function must be a DataArray over dim 'frequency' [Hz]")
+    hf = np.asarray(h["frequency"].values, float)
+    mag2 = np.abs(np.asarray(h.values)) ** 2
+    if hf[0] > band[0] or hf[-1] < band[1]:
+        raise FividError(
+            f"{label}: the transfer function covers {hf[0]:g}-{hf[-1]:g} Hz, not the whole band {band[0]:g}-{band[1]:g} Hz"
+        )
+    return np.interp(f, hf, mag2)

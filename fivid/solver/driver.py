@@ -1,0 +1,248 @@
+"""The explicit transient solver's driver: validate, choose the step, allocate, run the kernel, wrap the result.
+
+See DESIGN §5 for the method and :mod:`fivid.solver._kernels` for the time loop. The public entry
+point is :func:`simulate`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fivid.errors import ConfigError, FividError
+
+__all__ = ["SimulationDiverged", "RunSettings", "PreparedRun", "simulate", "prepare_run"]
+
+log = logging.getLogger("fivid")
+
+
+class SimulationDiverged(FividError):
+    """The explicit run produced NaN or a runaway energy; the message names the step, time and node."""
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """Numerical settings of a run (recorded in the output attrs)."""
+
+    time_step: float
+    critical_time_step: float
+    omega_max: float
+    steps_per_interval: int
+    oversample: int
+    n_intervals: int
+    gs_max_iterations: int
+    gs_tolerance: float
+
+
+def _positive(name, value, *, allow_zero=False):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
+        raise ConfigError(f"{name} must be a finite number {'>=' if allow_zero else '>'} 0, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class PreparedRun:
+    """A run ready for the time loop: model, stencils, kernel arrays, friction table, settings, schedule."""
+
+    model: object
+    stencils: object
+    arrays: object
+    friction: object
+    settings: RunSettings
+    schedule: object
+    preload: object
+    wrap: dict
+
+    def run(self, *, progress=None):
+        """Integrate and wrap the RunDataset (see :func:`simulate`)."""
+        from fivid.solver.integrate import integrate
+        from fivid.solver.output import run_dataset
+
+        raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
+        return run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
+
+
+def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None,
+             duration, sample_rate, seed=0, progress=None, time_step=None, safety=0.9, settle_time=1e-3,
+             preload_time=None, base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100,
+             gs_tolerance=1e-10, record_state=False):
+    """Simulate the rig: preload, settle, base-velocity ramp, steady sliding; return a RunDataset.
+
+    Parameters
+    ----------
+    model : Model or str or path-like
+        The FE model (or its config file).
+    law : friction-law object, optional
+        ``mu_k(t) = mu0 + mu_p,k(t)`` (interface of :mod:`fivid.friction`); default: Coulomb.
+    mu : float, optional
+        Constant friction coefficient [-] for every pair (default: each pair's ``mu``). Not with ``law``.
+    sliding_velocity : float, optional
+        Velocity of the "base" motion after its ramp [m s-1]; the sign of the configured amplitude gives
+        the direction. None: as configured.
+    normal_load : float, optional
+        Target normal force at the transducer [N], set by the "load" clamp's displacement (static
+        preload solve, :mod:`fivid.solver.preload`). None: the configured clamp displacement.
+    roughness_ra : float, optional
+        Ra [m], passed to the law and recorded.
+    duration : float
+        Steady-sliding time recorded after the transient [s]; the output covers transient + duration.
+    sample_rate : float
+        Output sample rate [Hz] (the rig's DAQ rate).
+    seed : int
+        Seed of the friction-law synthesis (the run is otherwise deterministic).
+    progress : bool or None
+        Progress bar; None: only when stderr is a terminal.
+    time_step : float, optional
+        Solver step [s]; refused above the critical step. Default ``safety * dt_crit``.
+    safety : float
+        Fraction of the critical step used by default (0 < safety <= 1).
+    settle_time : float
+        Time between the end of the preload ramp and the start of the base ramp [s].
+    preload_time, base_ramp_time : float, optional
+        Ramp times of the clamp and of the base velocity [s] (default: the motions' ``ramp_time``).
+    oversample : int
+        Internal recording rate = ``oversample * sample_rate``; the records are decimated with a
+        zero-phase FIR low-pass (anti-aliasing) to ``sample_rate``.
+    run_id : str, optional
+    gs_max_iterations, gs_tolerance
+        Contact Gauss-Seidel limits: sweeps, and the largest node-pair correction of the last sweep as a
+        fraction of the shortest master segment.
+    record_state : bool
+        Also return the final displacement and velocity (global dofs) in ``attrs`` -- for tests.
+
+    Returns
+    -------
+    xarray.Dataset
+        RunDataset: ``acceleration`` [m s-2] (dims time[, sensor]), ``friction_force`` [N],
+        ``normal_force`` [N], contact diagnostics and the energy balance.
+
+    Raises
+    ------
+    ConfigError
+        Bad settings or model (message names the value and what is allowed).
+    SimulationDiverged
+        NaN or runaway energy (step, time, node).
+    """
+    prepared = prepare_run(
+        model, law=law, mu=mu, sliding_velocity=sliding_velocity, normal_load=normal_load, roughness_ra=roughness_ra,
+        duration=duration, sample_rate=sample_rate, seed=seed, time_step=time_step, safety=safety,
+        settle_time=settle_time, preload_time=preload_time, base_ramp_time=base_ramp_time, oversample=oversample,
+        run_id=run_id, gs_max_iterations=gs_max_iterations, gs_tolerance=gs_tolerance, record_state=record_state)
+    return prepared.run(progress=progress)
+
+
+def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None, duration,
+                sample_rate, seed=0, time_step=None, safety=0.9, settle_time=1e-3, preload_time=None,
+                base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100, gs_tolerance=1e-10,
+                record_state=False) -> PreparedRun:
+    """Validate the settings and build everything :func:`simulate` integrates (same parameters)."""
+    from fivid.fe.model import Model, load_model
+    from fivid.solver.stencil import block_stencils
+    from fivid.solver.timestep import stable_step
+
+    if not isinstance(model, Model):
+        model = load_model(model)
+    duration = _positive("duration", duration)
+    sample_rate = _positive("sample_rate", sample_rate)
+    if sliding_velocity is not None:
+        sliding_velocity = _positive("sliding_velocity", sliding_velocity, allow_zero=True)
+    if normal_load is not None:
+        normal_load = _positive("normal_load", normal_load)
+    if roughness_ra is not None:
+        roughness_ra = _positive("roughness_ra", roughness_ra, allow_zero=True)
+    if not (0.0 < float(safety) <= 1.0):
+        raise ConfigError(f"safety must be in (0, 1], got {safety!r}")
+    oversample = int(oversample)
+    if oversample < 1:
+        raise ConfigError(f"oversample must be an integer >= 1, got {oversample!r}")
+    settle_time = _positive("settle_time", settle_time, allow_zero=True)
+
+    stab = stable_step(model)
+    dt_crit = stab.critical_time_step
+    if time_step is not None:
+        time_step = _positive("time_step", time_step)
+        if time_step > dt_crit:
+            raise ConfigError(
+                f"time step {time_step:.4g} s is above the critical step {dt_crit:.4g} s of this model "
+                f"(omega_max = {stab.omega_max:.4g} rad/s, beta-damping ratio of that mode xi = {stab.xi:.3g}: "
+                f"dt_crit = (2/omega_max)(sqrt(1+xi^2) - xi)); central differences would diverge. "
+                f"Use a step <= {dt_crit:.4g} s or leave it out ({safety:g} * dt_crit is used)")
+        dt_max = time_step
+    else:
+        dt_max = float(safety) * dt_crit
+    t_int = 1.0 / (sample_rate * oversample)
+    n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
+    dt = t_int / n_sub
+
+    if law is not None:
+        mu_pairs = [float(getattr(law, "mu0", 0.0))] * len(model.contacts)
+    else:
+        mu_pairs = [float(mu) if mu is not None else c.mu for c in model.contacts]
+    mu_slave = np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)]) \
+        if model.contacts else np.zeros(0)
+    schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
+                                         settle_time, mu_slave)
+    total = schedule.transient_end + duration
+    n_out = max(1, math.ceil(total * sample_rate - 1e-9))
+    n_int = n_out * oversample
+    st = block_stencils(model)
+    from fivid.solver.setup import kernel_arrays
+
+    ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1])
+    from fivid.solver.friction_input import friction_table
+
+    base = model.motion("base")
+    v_signed = (sliding_velocity if sliding_velocity is not None else abs(base.amplitude) if base else 0.0)
+    if base is not None and base.amplitude < 0:
+        v_signed = -v_signed
+    comp = base.component if base is not None else 0
+    slave_x = model.coords[ka.slave_global, comp] if ka.slave_global.size else np.zeros(0)
+    fric = friction_table(model, ka.slave_pair, slave_x, law=law, mu=mu, total_time=n_int * t_int, dt=dt,
+                          sample_rate=sample_rate, sliding_velocity=v_signed, roughness_ra=roughness_ra,
+                          normal_load=normal_load, seed=seed)
+    settings = RunSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int, int(gs_max_iterations),
+                           float(gs_tolerance))
+    return PreparedRun(model, st, ka, fric, settings, schedule, preload, dict(
+        law=law, mu=mu, seed=seed, sliding_velocity=abs(v_signed), normal_load=normal_load,
+        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state))
+
+
+def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):
+    """The loading sequence, the transducer signs and the preload (None without a target load)."""
+    from fivid.solver.preload import preload_displacement
+    from fivid.solver.setup import Schedule
+
+    load = model.motion("load")
+    base = model.motion("base")
+    load_ramp = float(preload_time) if preload_time is not None else (load.ramp_time if load else 0.0)
+    base_ramp = float(base_ramp_time) if base_ramp_time is not None else (base.ramp_time if base else 0.0)
+    direction = 1.0 if load is None or load.amplitude >= 0 else -1.0
+    base_dir = 1.0 if base is None or base.amplitude >= 0 else -1.0
+    signs = (-base_dir, direction)
+    preload = None
+    load_disp = None
+    if normal_load is not None:
+        if load is None:
+            raise ConfigError("normal_load was given but the model has no motion with role 'load' to set it")
+        if not model.reactions:
+            raise ConfigError("normal_load was given but the model has no reaction (force transducer) to measure it")
+        r = model.reactions[0]
+        weights = np.zeros(model.n_dofs)
+        weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
+        preload = preload_displacement(model, normal_load, normal_weights=weights, load_dofs=load.dofs,
+                                       direction=direction, mu=mu_slave)
+        load_disp = direction * preload.displacement  # preload solved for u = delta * direction on the clamp
+    base_start = (load_ramp + settle_time) if load is not None else 0.0
+    base_velocity = None
+    if sliding_velocity is not None:
+        if base is None:
+            raise ConfigError("sliding_velocity was given but the model has no motion with role 'base'")
+        base_velocity = base_dir * sliding_velocity
+    return Schedule(load_disp, load_ramp, base_start, base_velocity, base_ramp), signs, preload

@@ -1,0 +1,177 @@
+"""Kernel arrays of a model: constraints and their motions, springs, contact, sensors, transducer weights.
+
+The loading sequence (DESIGN §5) is encoded here as ramp parameters of the constrained dofs:
+the "load" motion ramps its displacement to the preload value over ``[0, t_load]``; the model then
+settles until ``t_base``; the "base" motion ramps its velocity to the sliding velocity over
+``[t_base, t_base + base ramp]`` (the end of the transient); then steady sliding. Other motions run as
+configured from t = 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fivid.errors import ConfigError
+from fivid.solver.stencil import BlockStencils
+
+__all__ = ["Schedule", "KernelArrays", "kernel_arrays", "KIND_FIXED", "KIND_DISPLACEMENT", "KIND_VELOCITY"]
+
+KIND_FIXED = 0
+KIND_DISPLACEMENT = 1
+KIND_VELOCITY = 2
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """The loading sequence [s] and amplitudes.
+
+    Attributes
+    ----------
+    load_displacement : float or None
+        Clamp displacement of the "load" motion [m] (None: as configured).
+    load_ramp : float
+        Ramp time of the clamp [s].
+    base_start : float
+        Start of the base-velocity ramp (end of settling) [s].
+    base_velocity : float or None
+        Velocity of the "base" motion [m s-1] (None: as configured).
+    base_ramp : float
+        Ramp time of the base velocity [s].
+    """
+
+    load_displacement: float | None
+    load_ramp: float
+    base_start: float
+    base_velocity: float | None
+    base_ramp: float
+
+    @property
+    def transient_end(self) -> float:
+        """End of the base ramp: steady sliding from here [s]."""
+        return self.base_start + self.base_ramp
+
+
+@dataclass
+class KernelArrays:
+    """Everything :func:`fivid.solver._kernels.run_steps` needs besides the state and outputs."""
+
+    mass: np.ndarray
+    minv: np.ndarray
+    minv_c: np.ndarray
+    X: np.ndarray
+    spr_dof: np.ndarray
+    spr_kc: np.ndarray
+    con_dof: np.ndarray
+    con_grp: np.ndarray
+    grp_par: np.ndarray
+    con_react: np.ndarray
+    con_global: np.ndarray
+    slave_node: np.ndarray
+    slave_pair: np.ndarray
+    slave_global: np.ndarray
+    master_ptr: np.ndarray
+    master_nodes: np.ndarray
+    pair_sign: np.ndarray
+    seg: np.ndarray
+    cnodes: np.ndarray
+    cnode_slot: np.ndarray
+    sens_node: np.ndarray
+    sens_dir: np.ndarray
+    extras: dict = field(default_factory=dict)
+
+
+def _idx(a, dtype=np.int64):
+    return np.ascontiguousarray(np.asarray(a, dtype=dtype))
+
+
+def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_sign: float,
+                  normal_sign: float) -> KernelArrays:
+    """Assemble the kernel arrays of ``model`` in the layout of ``st`` with the loading ``schedule``.
+
+    ``tangential_sign``/``normal_sign`` orient the transducer: ``friction_force = tangential_sign * sum R_t``,
+    ``normal_force = normal_sign * sum R_n`` over the reaction nodes of the first Reaction.
+    """
+    from fivid.fe.assembly import lumped_mass
+
+    n_dofs = model.n_dofs
+    mass_g = lumped_mass(model)
+    mass = st.to_kernel(mass_g)
+    minv = np.zeros_like(mass)
+    minv[mass > 0] = 1.0 / mass[mass > 0]
+    # ---- constrained dofs: fixed unless a motion drives them
+    kind = np.full(n_dofs, -1, dtype=np.int64)
+    par = np.zeros((n_dofs, 3))
+    kind[model.fixed_dofs] = KIND_FIXED
+    for mo in model.motions:
+        dofs = mo.dofs
+        k = KIND_DISPLACEMENT if mo.kind == "displacement" else KIND_VELOCITY
+        amp, t0, tr = float(mo.amplitude), 0.0, float(mo.ramp_time)
+        if mo.role == "load" and schedule.load_displacement is not None:
+            if k != KIND_DISPLACEMENT:
+                raise ConfigError(f"motions.{mo.name}: the 'load' motion must be of kind displacement, got {mo.kind!r}")
+            amp, tr = schedule.load_displacement, schedule.load_ramp
+        if mo.role == "base":
+            if k != KIND_VELOCITY:
+                raise ConfigError(f"motions.{mo.name}: the 'base' motion must be of kind velocity, got {mo.kind!r}")
+            if schedule.base_velocity is not None:
+                amp = schedule.base_velocity
+            t0, tr = schedule.base_start, schedule.base_ramp
+        kind[dofs] = k
+        par[dofs] = (amp, t0, tr)
+    con_global = np.flatnonzero(kind >= 0)
+    con_react = np.zeros((con_global.size, 2))
+    if model.reactions:
+        r = model.reactions[0]
+        slot = {int(d): i for i, d in enumerate(con_global)}
+        for node in np.asarray(r.nodes):
+            for col, comp, sign in ((0, r.tangential_component, tangential_sign), (1, r.normal_component, normal_sign)):
+                d = 2 * int(node) + comp
+                if d not in slot:
+                    raise ConfigError(
+                        f"reactions.{r.name}: node {int(node)} component {'xy'[comp]} is not constrained; a force "
+                        "transducer must sit on clamped or driven dofs")
+                con_react[slot[d], col] = sign
+    # motion groups: dofs sharing (kind, amplitude, start, ramp) get one velocity evaluation per step
+    rows = np.column_stack([kind[con_global], par[con_global]]).astype(float)
+    grp_par, grp = np.unique(rows, axis=0, return_inverse=True) if rows.size else (np.zeros((0, 4)), np.zeros(0))
+    grp = np.asarray(grp).ravel()
+    minv_c = minv.copy()
+    minv_c[st.dof_index(con_global)] = 0.0
+    # ---- springs
+    spr_dof = np.array([[st.dof_index(2 * s.node_a + s.component),
+                         st.dof_index(2 * s.node_b + s.component) if s.node_b >= 0 else -1] for s in model.springs],
+                       dtype=np.int64).reshape(-1, 2)
+    spr_kc = np.array([[s.stiffness, s.damping] for s in model.springs], dtype=float).reshape(-1, 2)
+    # ---- contact
+    slave_nodes, slave_pair, master, ptr = [], [], [], [0]
+    for p, pair in enumerate(model.contacts):
+        slave_nodes.extend(int(s) for s in pair.slave_nodes)
+        slave_pair.extend([p] * len(pair.slave_nodes))
+        master.extend(int(m) for m in pair.master_nodes)
+        ptr.append(len(master))
+    slave_global = _idx(slave_nodes)
+    cnodes_g = np.unique(np.concatenate([slave_global, _idx(master)])) if slave_nodes else _idx([])
+    cnode_slot = np.full(st.npd, -1, dtype=np.int64)
+    cnode_slot[st.node_index(cnodes_g)] = np.arange(cnodes_g.size)
+    # initial segment of each slave: the nearest master segment midpoint
+    seg = np.zeros(slave_global.size, dtype=np.int64)
+    for k, (s, p) in enumerate(zip(slave_global, slave_pair)):
+        m = _idx(master[ptr[p]:ptr[p + 1]])
+        mid = 0.5 * (model.coords[m[:-1]] + model.coords[m[1:]])
+        seg[k] = int(np.argmin(np.linalg.norm(mid - model.coords[s], axis=1)))
+    # ---- sensors
+    sens_node = _idx([st.node_index(s.node) for s in model.sensors])
+    sens_dir = np.array([np.asarray(s.direction, float) for s in model.sensors]).reshape(-1, 2)
+    return KernelArrays(
+        mass=mass, minv=minv, minv_c=minv_c, X=st.to_kernel(model.coords.ravel()),
+        spr_dof=_idx(spr_dof), spr_kc=np.ascontiguousarray(spr_kc),
+        con_dof=_idx(st.dof_index(con_global)), con_grp=_idx(grp), grp_par=np.ascontiguousarray(grp_par),
+        con_react=con_react, con_global=con_global,
+        slave_node=_idx(st.node_index(slave_global)), slave_pair=_idx(slave_pair), slave_global=slave_global,
+        master_ptr=_idx(ptr), master_nodes=_idx(st.node_index(_idx(master))),
+        pair_sign=np.ones(len(model.contacts)), seg=seg,
+        cnodes=_idx(st.node_index(cnodes_g)), cnode_slot=cnode_slot,
+        sens_node=sens_node, sens_dir=np.ascontiguousarray(sens_dir),
+    )
