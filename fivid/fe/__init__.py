@@ -1,4 +1,6 @@
-"""Finite-element model of a rig: config -> structured Q4 blocks, assembly, modal analysis, CEA.
+"""Finite-element models of a rig: config -> structured Q4 blocks, assembly, modal analysis, CEA.
+
+:mod:`fivid.fe.beam` (Euler-Bernoulli cantilever of the damper models) is imported from its module.
 
 Heavy dependencies (scipy.sparse, xarray) are imported inside the functions that use them.
 """
@@ -12,6 +14,9 @@ from fivid.fe.assembly import (
     rayleigh_from_damping_ratios,
     stiffness_matrix,
 )
+from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
+from fivid.fe.contact import linearise_contact
+from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
 from fivid.fe.model import (
     Block,
     ContactPair,
@@ -43,4 +48,10 @@ __all__ = [
     "consistent_mass",
     "damping_matrix",
     "rayleigh_from_damping_ratios",
+    "linearise_contact",
+    "modal_analysis",
+    "modes_to_json",
+    "write_modes",
+    "complex_eigenvalue_analysis",
+    "cea_to_json",
 ]

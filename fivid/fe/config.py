@@ -16,18 +16,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from fivid.errors import ConfigError, UnitError
-from fivid.fe.model import (
-    EDGES,
-    Block,
-    ContactPair,
-    Material,
-    Model,
-    Motion,
-    PointMass,
-    Reaction,
-    Sensor,
-    Spring,
-)
+import fivid.fe.model as fm
 from fivid.units import parse_quantity
 
 __all__ = ["build_model", "read_config"]
@@ -170,7 +159,7 @@ def _material(ctx, value, key, materials: dict) -> Material:
         raise ctx.error(f"{key}.nu", f"Poisson's ratio {nu!r} is not allowed; need -1 < nu < 0.5 "
                                      "(nu >= 0.5 is incompressible: the elasticity matrix is singular)")
     rho = _quantity(ctx, m["rho"], f"{key}.rho", "kg m-3", positive=True)
-    return Material(E, nu, rho)
+    return fm.Material(E, nu, rho)
 
 
 def _check_corners(ctx, corners: np.ndarray, key: str) -> None:
@@ -221,10 +210,10 @@ def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ..
         clamp = b.get("clamp", [])
         clamp = [clamp] if isinstance(clamp, str) else _list(ctx, clamp, f"{key}.clamp")
         for i, e in enumerate(clamp):
-            _choice(ctx, e, f"{key}.clamp[{i}]", EDGES)
+            _choice(ctx, e, f"{key}.clamp[{i}]", fm.EDGES)
         clamps[name] = tuple(clamp)
         nx, ny = div
-        blocks.append(Block(name=str(name), corners=corners, nx=nx, ny=ny, material=material, thickness=thickness,
+        blocks.append(fm.Block(name=str(name), corners=corners, nx=nx, ny=ny, material=material, thickness=thickness,
                             plane=plane, node_offset=offset, coords=_block_coords(corners, nx, ny),
                             initial_velocity=v0))
         offset += (nx + 1) * (ny + 1)
@@ -238,12 +227,12 @@ def _block_ref(ctx, blocks, value, key) -> Block:
     raise ctx.error(key, f"body {value!r} does not exist; bodies are: {', '.join(b.name for b in blocks)}")
 
 
-def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[Block, np.ndarray, dict]:
+def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[fm.Block, np.ndarray, dict]:
     """``{body, edge, x: [lo, hi] | y: [lo, hi]}`` -> (block, nodes in edge order, the other keys)."""
     allowed = {"body": "required", "edge": "required", "x": "optional", "y": "optional", **extra}
     m = _mapping(ctx, spec, key, allowed)
     block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
-    _choice(ctx, m["edge"], f"{key}.edge", EDGES)
+    _choice(ctx, m["edge"], f"{key}.edge", fm.EDGES)
     nodes = block.edge_nodes(m["edge"])
     coords = block.coords.reshape(-1, 2)[nodes - block.node_offset]
     for axis, c in (("x", 0), ("y", 1)):
@@ -313,7 +302,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
             _choice(ctx, role, f"{key}.role", ("base", "load"))
             if any(mo.role == role for mo in motions):
                 raise ctx.error(f"{key}.role", f"a second motion with role {role!r}; only one is allowed")
-        motions.append(Motion(_name(ctx, m["name"], f"{key}.name"), nodes, comp, kind, amp, ramp, role))
+        motions.append(fm.Motion(_name(ctx, m["name"], f"{key}.name"), nodes, comp, kind, amp, ramp, role))
         fixed.append(2 * nodes + comp)
     fixed_dofs = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, dtype=np.int64)
 
@@ -321,7 +310,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     for i, spec in enumerate(_items(ctx, data, "point_masses")):
         key = f"point_masses[{i}]"
         node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "mass": "required"})
-        point_masses.append(PointMass(_name(ctx, m["name"], f"{key}.name"), node,
+        point_masses.append(fm.PointMass(_name(ctx, m["name"], f"{key}.name"), node,
                                       _quantity(ctx, m["mass"], f"{key}.mass", "kg", positive=True)))
 
     springs = []
@@ -334,7 +323,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
         if a == b:
             raise ctx.error(f"{key}.b", "both ends of the spring are the same node")
         comp = _COMPONENTS[_choice(ctx, m["component"], f"{key}.component", tuple(_COMPONENTS))]
-        springs.append(Spring(_name(ctx, m["name"], f"{key}.name"), a, b, comp,
+        springs.append(fm.Spring(_name(ctx, m["name"], f"{key}.name"), a, b, comp,
                               _quantity(ctx, m["stiffness"], f"{key}.stiffness", "N m-1", nonnegative=True),
                               _quantity(ctx, m.get("damping", 0.0), f"{key}.damping", "N s m-1", nonnegative=True)))
 
@@ -352,11 +341,13 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
         mu = _quantity(ctx, m["mu"], f"{key}.mu", "dimensionless", nonnegative=True)
         if "normal_stiffness" in m:
             kn = _quantity(ctx, m["normal_stiffness"], f"{key}.normal_stiffness", "N m-3", positive=True)
-        else:  # one slave element's normal stiffness per unit area: E / (element size normal to the edge)
+        else:  # 10 x the slave body's own normal stiffness per unit area E/D (D: its depth normal to the edge):
+            # stiff against the body, and independent of the mesh (an element-size penalty is not)
             edge = m["slave"]["edge"]
-            h = sb.coords[1, 0] - sb.coords[0, 0] if edge in ("bottom", "top") else sb.coords[0, 1] - sb.coords[0, 0]
-            kn = sb.material.E / float(np.hypot(*h))
-        contacts.append(ContactPair(_name(ctx, m["name"], f"{key}.name"), sb.name, snodes, mb.name, mnodes, mu, kn))
+            c = sb.corners
+            depth = np.hypot(*(c[3] - c[0])) if edge in ("bottom", "top") else np.hypot(*(c[1] - c[0]))
+            kn = 10.0 * sb.material.E / float(depth)
+        contacts.append(fm.ContactPair(_name(ctx, m["name"], f"{key}.name"), sb.name, snodes, mb.name, mnodes, mu, kn))
 
     sensors = []
     for i, spec in enumerate(_items(ctx, data, "sensors")):
@@ -377,7 +368,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                 raise ctx.error(f"{key}.direction", "the direction is the zero vector")
             direction = direction / norm
         quantity = _choice(ctx, m.get("quantity", "acceleration"), f"{key}.quantity", ("acceleration",))
-        sensors.append(Sensor(_name(ctx, m["name"], f"{key}.name"), node, direction, quantity))
+        sensors.append(fm.Sensor(_name(ctx, m["name"], f"{key}.name"), node, direction, quantity))
 
     reactions = []
     for i, spec in enumerate(_items(ctx, data, "reactions")):
@@ -392,7 +383,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
         if free.size:
             raise ctx.error(key, f"a reaction needs constrained nodes (a clamp or a motion), but "
                                  f"{free.size} of its dofs are free; clamp edge {m['edge']!r} of {block.name!r}")
-        reactions.append(Reaction(_name(ctx, m["name"], f"{key}.name"), nodes, t, n))
+        reactions.append(fm.Reaction(_name(ctx, m["name"], f"{key}.name"), nodes, t, n))
 
     alpha, beta = _damping(ctx, data.get("damping"))
     for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),
@@ -401,7 +392,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
         dup = {n for n in names if names.count(n) > 1}
         if dup:
             raise ctx.error(section, f"duplicate name(s) {sorted(dup)}; names must be unique within '{section}'")
-    return Model(plane=plane, blocks=blocks, n_nodes=n_nodes, coords=coords, fixed_dofs=fixed_dofs,
+    return fm.Model(plane=plane, blocks=blocks, n_nodes=n_nodes, coords=coords, fixed_dofs=fixed_dofs,
                  motions=tuple(motions), point_masses=tuple(point_masses), springs=tuple(springs),
                  contacts=tuple(contacts), sensors=tuple(sensors), reactions=tuple(reactions),
                  rayleigh_alpha=alpha, rayleigh_beta=beta, source=origin, config=data)

@@ -1,0 +1,1 @@
+"""Friction laws and elements: Coulomb, perturbed Coulomb, Jenkins (Masing) and Iwan."""

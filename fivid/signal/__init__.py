@@ -1,0 +1,29 @@
+"""Spectral analysis of rig and simulation signals (layer L2).
+
+Welch PSD and cross-spectra with χ² bounds (:func:`welch_psd`, :func:`csd`), FRF estimators H1/H2 and
+coherence, band RMS, IEC 61260-1 1/3-octave levels, the vibration level Lv(dB), the steady-sliding
+window and resampling to a common rate. The pure numpy computations live in
+:mod:`fivid.signal.spectral` (and :mod:`fivid.signal.fft` for the planned FFTs); the functions here
+wrap DataArrays/Datasets and record units and settings in attrs.
+"""
+
+from fivid.signal.frf import coherence, frf
+from fivid.signal.levels import band_rms, third_octave_bands, third_octave_levels, vibration_level_db
+from fivid.signal.resample import resample_to
+from fivid.signal.steady import steady_sliding_window
+from fivid.signal.unit_strings import power_units
+from fivid.signal.welch import csd, welch_psd
+
+__all__ = [
+    "welch_psd",
+    "csd",
+    "frf",
+    "coherence",
+    "band_rms",
+    "third_octave_bands",
+    "third_octave_levels",
+    "vibration_level_db",
+    "steady_sliding_window",
+    "resample_to",
+    "power_units",
+]

@@ -1,0 +1,115 @@
+"""Steady-sliding window: the part of a run where the sliding velocity sits on its plateau.
+
+A rig run ramps the base up, slides steadily, and ramps down; the friction law and the PSD scores
+use only the steady part (DESIGN §3: "the part where the encoder velocity is within a tolerance of
+its plateau").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fivid.errors import ConfigError, DataQualityError
+from fivid.signal.sampling import check_finite, run_label, sample_rate_of
+
+__all__ = ["sliding_velocity_signal", "steady_sliding_window"]
+
+
+def sliding_velocity_signal(ds) -> tuple[np.ndarray, np.ndarray, str]:
+    """Time [s], encoder sliding velocity [m s-1] and its origin, from ``velocity`` or ``position``.
+
+    ``velocity`` is used when present; otherwise ``position`` [m] is differentiated (second-order
+    central differences, :func:`numpy.gradient`).
+    """
+    label = run_label(ds, default="dataset")
+    if "time" not in ds.coords:
+        raise DataQualityError(f"{label}: no 'time' coordinate")
+    t = np.asarray(ds["time"].values, dtype=np.float64)
+    if "velocity" in ds.variables:
+        name = "velocity"
+    elif "position" in ds.variables:
+        name = "position"
+    else:
+        raise DataQualityError(
+            f"{label}: neither 'velocity' nor 'position' is recorded, so the steady-sliding window cannot be "
+            f"found; variables present: {', '.join(sorted(map(str, ds.data_vars)))}"
+        )
+    values = np.asarray(ds[name].values, dtype=np.float64)
+    if values.ndim != 1:
+        raise DataQualityError(f"{label}: {name!r} has dims {ds[name].dims}; expected ('time',)")
+    check_finite(values, label=label, variable=name, time=t)
+    if name == "position":
+        sample_rate_of(t, label=label)
+        values = np.gradient(values, t)
+    return t, values, name
+
+
+def steady_sliding_window(ds, *, tolerance=0.05, smoothing=0.05, central_fraction=0.5, min_duration=None):
+    """The longest interval where the smoothed sliding velocity is within a tolerance of its plateau.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A RunDataset with ``velocity`` [m s-1] or ``position`` [m] on a uniform ``time`` [s].
+    tolerance : float, default 0.05
+        Allowed relative deviation from the plateau [-]: ``|v_s - v_p| <= tolerance * |v_p|``.
+    smoothing : float, default 0.05
+        Length of the centred moving average applied to the velocity [s] (encoder quantisation of a
+        differentiated position is averaged out; a ramp's crossing time moves by at most half of it).
+    central_fraction : float, default 0.5
+        The plateau ``v_p`` is the median of the smoothed velocity over this central part of the record.
+    min_duration : float, optional
+        Shortest acceptable window [s]; default 20 % of the record.
+
+    Returns
+    -------
+    (t_start, t_stop) : tuple of float [s]
+        Times of the first and last sample of the window.
+
+    Raises
+    ------
+    DataQualityError
+        No velocity/position, NaN, non-uniform time, a zero plateau (no sliding), or no interval of
+        at least ``min_duration`` within the tolerance; the message names the run and the values.
+    """
+    from scipy.ndimage import uniform_filter1d
+
+    label = run_label(ds, default="dataset")
+    if not (0 < tolerance < 1):
+        raise ConfigError(f"tolerance must be in (0, 1), got {tolerance!r}", key="tolerance")
+    if not (0 < central_fraction <= 1):
+        raise ConfigError(f"central_fraction must be in (0, 1], got {central_fraction!r}", key="central_fraction")
+    t, v, origin = sliding_velocity_signal(ds)
+    fs = sample_rate_of(t, label=label)
+    duration = t[-1] - t[0]
+    width = max(1, int(round(smoothing * fs)))
+    if width > t.size // 2:
+        raise ConfigError(f"{label}: smoothing {smoothing!r} s exceeds half the record ({duration!r} s)",
+                          key="smoothing")
+    vs = uniform_filter1d(v, size=width, mode="nearest")
+    n = t.size
+    lo = int(n * (1 - central_fraction) / 2)
+    hi = max(lo + 1, n - lo)
+    plateau = float(np.median(vs[lo:hi]))
+    if plateau == 0.0 or not np.isfinite(plateau):
+        raise DataQualityError(f"{label}: the plateau of the sliding velocity (from {origin!r}) is {plateau!r} m s-1: "
+                               "no steady sliding in this run")
+    inside = np.abs(vs - plateau) <= tolerance * abs(plateau)
+    edges = np.diff(np.concatenate(([0], inside.astype(np.int8), [0])))
+    starts = np.nonzero(edges == 1)[0]
+    stops = np.nonzero(edges == -1)[0]  # exclusive
+    min_duration = 0.2 * duration if min_duration is None else float(min_duration)
+    if starts.size:
+        j = int(np.argmax(stops - starts))
+        i0, i1 = int(starts[j]), int(stops[j]) - 1
+        if t[i1] - t[i0] >= min_duration:
+            return float(t[i0]), float(t[i1])
+        longest = t[i1] - t[i0]
+    else:
+        longest = 0.0
+    raise DataQualityError(
+        f"{label}: no steady sliding: the {smoothing:g} s-smoothed velocity (from {origin!r}) stays within "
+        f"{tolerance:.1%} of its plateau {plateau:.6g} m s-1 for at most {longest:.6g} s "
+        f"({np.mean(inside):.1%} of samples in all); at least {min_duration:.6g} s is required "
+        "(raise tolerance= or lower min_duration= if this run is usable)"
+    )

@@ -1,0 +1,200 @@
+"""Complex eigenvalue analysis: the 2-DOF mode-coupling model in closed form, contact linearisation, rig sweeps."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from fivid.errors import FividError
+from fivid.fe import load_model
+from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis, complex_eigenvalue_sweep, project_on_modes
+from fivid.fe.contact import ContactLinearisation, linearise_contact
+from fivid.fe.modal import modal_analysis
+
+ROOT = Path(__file__).resolve().parents[1]
+COARSE = ROOT / "configs" / "models" / "triboair_coarse.yaml"
+
+
+def _hoffmann(m, k1, k2, k3, c):
+    """Minimal mode-coupling model (Hoffmann, Fischer, Gaul & Hahn 2002, Tribology International 35):
+    a mass m on a belt moving in +x, held by springs k1 at +45 deg and k2 at 135 deg, pressed on the belt by the
+    contact spring k3 (normal y). Springs at angle a contribute k [[c^2, cs], [cs, s^2]], so
+
+        k11 = (k1 + k2)/2,  k12 = (k1 - k2)/2,  k22 = (k1 + k2)/2 + k3.
+
+    Friction on the mass is mu p along +x with the contact pressure p = -k3 y, which adds +mu k3 at (x, y):
+        m x'' + c x' + k11 x + (k12 + mu k3) y = 0
+        m y'' + c y' + k12 x + k22 y = 0.
+    Undamped, with s = m omega^2:  s^2 - (k11 + k22) s + k11 k22 - k12 (k12 + mu k3) = 0, whose roots turn
+    complex (flutter: one eigenvalue with Re > 0) when the discriminant
+        D = (k11 - k22)^2 + 4 k12^2 + 4 mu k3 k12
+    is negative, i.e. (k12 < 0)  mu_c = -[(k11 - k22)^2 + 4 k12^2] / (4 k3 k12).
+    With mass-proportional damping c: lambda = -gamma +- sqrt(gamma^2 - s/m), gamma = c/(2m). Writing
+    s/m = S +- i Omega (S = (k11+k22)/(2m), Omega = sqrt(-D)/(2m)), Re sqrt(gamma^2 - s/m) > gamma iff
+    Omega^2 > 4 gamma^2 S, i.e.  -D > 2 c^2 (k11 + k22)/m:
+        mu_c = -[(k11 - k22)^2 + 4 k12^2 + 2 c^2 (k11 + k22)/m] / (4 k3 k12).
+
+    Returns K_s (springs), the contact linearisation with G_n = [0, 1], G_t = [1, 0] (belt rigid), M, C and
+    the two closed-form thresholds.
+    """
+    k11, k12, k22s = (k1 + k2) / 2, (k1 - k2) / 2, (k1 + k2) / 2
+    K_s = np.array([[k11, k12], [k12, k22s]])
+    contact = ContactLinearisation(sp.csr_matrix([[0.0, 1.0]]), sp.csr_matrix([[1.0, 0.0]]),
+                                   np.array([k3]), np.array([1.0]), np.array([0]))
+    k22 = k22s + k3
+    mu_c = -((k11 - k22) ** 2 + 4 * k12**2) / (4 * k3 * k12)
+    mu_c_damped = -((k11 - k22) ** 2 + 4 * k12**2 + 2 * c**2 * (k11 + k22) / m) / (4 * k3 * k12)
+    return K_s, contact, m * np.eye(2), c * np.eye(2), mu_c, mu_c_damped
+
+
+@pytest.mark.parametrize("damped", [False, True])
+@pytest.mark.parametrize("belt", [+1, -1], ids=["belt+x", "belt-x"])
+def test_two_dof_mode_coupling_threshold_matches_closed_form(damped, belt):
+    """Belt moving in -x is the mirror image (x -> -x) of the +x case with k1 and k2 swapped: same threshold."""
+    m, k1, k2, k3, c = 1.0, 1.0e6, 1.6e6, 0.8e6, 20.0
+    K_s, contact, M, C, mu_c, mu_c_damped = _hoffmann(m, k1, k2, k3, c)
+    if belt < 0:
+        K_s, contact, *_ = _hoffmann(m, k2, k1, k3, c)
+        contact = ContactLinearisation(contact.G_n, contact.G_t, contact.stiffness, -contact.direction, contact.pair)
+    K = K_s + contact.normal_stiffness_matrix().toarray()
+    Kf = contact.friction_stiffness_matrix().toarray()
+    assert np.allclose(Kf, [[0.0, belt * k3], [0.0, 0.0]])  # normal displacement drives the tangential force only
+    proj = project_on_modes(K, M, C if damped else 0 * C, Kf)
+    mu = np.linspace(0.0, 2.0, 41)
+    res = complex_eigenvalue_sweep(proj, mu)
+    expected = mu_c_damped if damped else mu_c
+    assert 0.0 < expected < 2.0
+    crit = res["critical_mu"]
+    assert np.isfinite(crit).sum() == 1  # one of the pair destabilises, the other is stabilised
+    i = int(np.flatnonzero(np.isfinite(crit))[0])
+    # bisection runs to machine precision; what is left is the threshold tol = sqrt(eps)|lambda|max on Re:
+    # undamped Re ~ omega sqrt(mu - mu_c) -> mu error ~ eps; damped Re ~ omega (mu - mu_c) -> ~ sqrt(eps) ~ 1.5e-8
+    assert crit[i] == pytest.approx(expected, rel=1e-9 if not damped else 1e-6)
+    assert res["partner"][i] == 1 - i
+    lam = res["eigenvalues"]
+    before, after = mu < expected, mu > expected
+    if not damped:
+        # conservative below mu_c: purely imaginary pair; above: one pair lambda = +-sigma + i omega, same omega
+        assert np.abs(lam[before].real).max() < res["tolerance"]
+        np.testing.assert_allclose(lam[after, 0].imag, lam[after, 1].imag, rtol=1e-7)
+        np.testing.assert_allclose(lam[after, 0].real, -lam[after, 1].real, rtol=1e-7)
+    else:
+        assert lam[before].real.max() < 0 and lam[after, i].real.min() > 0
+
+
+def test_contact_linearisation_of_the_rig_geometry():
+    model = load_model(COARSE)
+    lin = linearise_contact(model)
+    c = model.contacts[0]
+    n = c.slave_nodes.size
+    assert lin.G_n.shape == (n, model.n_dofs)
+    # tributary areas add up to the contact length (10 mm) times the beam width (10 mm)
+    per_area = lin.stiffness / c.normal_stiffness
+    assert per_area.sum() == pytest.approx(0.01 * 0.01, rel=1e-12)
+    # the lower beam (master) slides in +x under the upper beam: friction drags the slave in +x;
+    # the master top edge runs right to left (t = -x), so d = sign(v_rel . t) = -1
+    assert np.all(lin.direction == -1)
+    # gap: rigid translations of the whole model leave it unchanged; lifting the slave by delta opens it by delta
+    for rigid in ([1.0, 0.0], [0.0, 1.0]):
+        assert np.abs(lin.G_n @ np.tile(rigid, model.n_nodes)).max() < 1e-15
+    u = np.zeros(model.n_dofs)
+    u[2 * c.slave_nodes + 1] = 1e-6
+    np.testing.assert_allclose(lin.G_n @ u, 1e-6, rtol=1e-12)
+    Kn, Kf = lin.normal_stiffness_matrix(), lin.friction_stiffness_matrix()
+    assert abs(Kn - Kn.T).max() == 0 and abs(Kf - Kf.T).max() > 0
+    # friction force on the slave for a penetration delta: + mu k delta along +x (f = -mu Kf u)
+    u[:] = 0
+    u[2 * c.slave_nodes + 1] = -1e-6
+    f = -(Kf @ u)
+    np.testing.assert_allclose(f[2 * c.slave_nodes], lin.stiffness * 1e-6, rtol=1e-12)
+
+
+def test_rig_cea_at_zero_friction_equals_the_coupled_modal_analysis():
+    model = load_model(COARSE)
+    ds = complex_eigenvalue_analysis(model, [0.0, 0.5], n_modes=10, damping=False)
+    modes = modal_analysis(model, 10, include_contact=True)
+    # the basis modes are eigenvectors of the mu = 0 system: only the dense solver's rounding separates them
+    np.testing.assert_allclose(ds["frequency"].values[0], modes["frequency"].values, rtol=1e-9)
+    damped = complex_eigenvalue_analysis(model, [0.0, 0.5], n_modes=10)
+    # C = alpha M + beta K is positive semi-definite: a passive, frictionless system decays
+    assert np.all(damped["real_part"].values[0] < 0)
+    zeta = damped["damping_ratio"].values[0]
+    f = damped["frequency"].values[0]
+    w = 2 * np.pi * f
+    rayleigh = model.rayleigh_alpha / (2 * w) + model.rayleigh_beta * w / 2
+    # the basis diagonalises K + K_n, not K alone: beta's share differs by the contact springs' share of the modal
+    # strain energy, so only the order of magnitude is checked against the uncoupled Rayleigh formula
+    assert np.all((zeta > 0.2 * rayleigh) & (zeta < 5 * rayleigh))
+
+
+def test_rig_mode_coupling_pairs_coalesce_at_their_critical_mu():
+    model = load_model(COARSE)
+    mu = np.linspace(0.0, 1.5, 31)
+    ds = complex_eigenvalue_analysis(model, mu, n_modes=20, damping=False)
+    crit = ds["critical_mu"].values
+    unstable = np.flatnonzero(np.isfinite(crit))
+    assert unstable.size >= 1  # the conservative rig flutters for some mu below 1.5 (mode coupling exists)
+    paired = [i for i in unstable if ds["partner"].values[i] > 0]  # -1: the partner is above the reported modes
+    assert paired
+    for i in paired:
+        p = int(ds["partner"].values[i]) - 1
+        after = mu > crit[i] + 0.05
+        fi, fp = ds["frequency"].values[after, i], ds["frequency"].values[after, p]
+        # past the threshold the pair shares one frequency (a complex-conjugate pair of the real system)
+        np.testing.assert_allclose(fi[:3], fp[:3], rtol=1e-6)
+    j = cea_to_json(ds)
+    assert len(j["modes"]) == 20 and j["mu"] == pytest.approx(list(mu))
+    assert [u["mode"] for u in j["unstable"]] == sorted((unstable + 1).tolist(), key=lambda k: crit[k - 1])
+    assert all(m["critical_mu"] is None for m in j["modes"] if m["mode"] - 1 not in unstable)
+
+
+def test_cea_needs_contact_and_sliding():
+    beam = {"bodies": {"b": {"corners": [[0, 0], [0.1, 0], [0.1, 0.01], [0, 0.01]], "divisions": [10, 2],
+                             "material": {"E": 210e9, "nu": 0.3, "rho": 7850}, "thickness": 0.01, "clamp": ["left"]}}}
+    with pytest.raises(FividError, match="contact"):
+        complex_eigenvalue_analysis(load_model(beam), [0.0, 1.0])
+    import yaml
+
+    cfg = yaml.safe_load(COARSE.read_text())
+    cfg["motions"] = [mo for mo in cfg["motions"] if mo["role"] != "base"]
+    with pytest.raises(FividError, match="sliding direction"):
+        complex_eigenvalue_analysis(load_model(cfg), [0.0, 1.0])
+
+
+def test_modal_basis_converges_to_the_full_order_eigenvalues_and_augmentation_helps():
+    """Reference: the full-order state-space pencil [[0, I], [-(K + mu Kf), -C]] z = lambda [[I, 0], [0, M]] z,
+    solved by ARPACK shift-invert around each reduced eigenvalue (no projection). The modal truncation error of
+    the 12 lowest oscillating modes must fall as the basis grows, and the static responses to contact-node loads
+    (modal truncation augmentation) must cut it by at least 10x at the same number of modes: friction acts by
+    point forces whose local flexibility lives in the discarded modes."""
+    import scipy.sparse.linalg as spla
+    from threadpoolctl import threadpool_limits
+
+    from fivid.fe.assembly import damping_matrix, stiffness_matrix
+    from fivid.fe.modal import constrained_matrices
+
+    model = load_model(COARSE)
+    lin = linearise_contact(model)
+    K, M, free = constrained_matrices(model, include_contact=True, contact=lin)
+    Kf = lin.friction_stiffness_matrix()[free][:, free]
+    C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))[free][:, free]
+    loads = sp.hstack([lin.G_n, lin.G_t]).T.tocsr()[free]
+    mu = 1.0
+    eye = sp.identity(K.shape[0], format="csr")
+    A = sp.bmat([[None, eye], [-(K + mu * Kf), -C]], format="csc").astype(complex)
+    B = sp.bmat([[eye, None], [None, M]], format="csc").astype(complex)
+
+    def error(n_basis, augmented):
+        proj = project_on_modes(K, M, C, Kf, n_basis, static_loads=loads if augmented else None)
+        lam, _ = proj.eigen(mu)
+        lam = lam[lam.imag > 0]
+        lam = lam[np.argsort(lam.imag)][:12]
+        ref = np.array([spla.eigs(A, k=1, M=B, sigma=x, which="LM", return_eigenvectors=False)[0] for x in lam])
+        return np.abs((lam - ref) / ref).max()
+
+    with threadpool_limits(limits=1, user_api="blas"):  # small dense and sparse solves: one thread is faster
+        plain = [error(n, False) for n in (20, 40)]
+        enriched = [error(n, True) for n in (20, 40)]
+    assert plain[1] < plain[0] and enriched[1] < enriched[0]
+    assert enriched[1] < plain[1] / 10, (plain, enriched)

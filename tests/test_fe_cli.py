@@ -1,0 +1,67 @@
+"""``fivid modes`` and ``fivid cea`` on the coarse rig config: JSON as the issue specifies, outputs, bad input -> 2."""
+
+import json
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from fivid.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+COARSE = str(ROOT / "configs" / "models" / "triboair_coarse.yaml")
+
+
+def test_modes_json_and_netcdf(tmp_path, capsys):
+    out = tmp_path / "modes.nc"
+    assert main(["modes", COARSE, "-n", "4", "--json", "-o", str(out)]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert len(j["frequencies_hz"]) == 4 and j["n_dofs"] == 984
+    assert j["frequencies_hz"] == sorted(j["frequencies_hz"]) and 700 < j["frequencies_hz"][0] < 900
+    with xr.open_dataset(out) as ds:
+        assert ds["frequency"].values.tolist() == pytest.approx(j["frequencies_hz"])
+        assert ds["mode_shape"].dims == ("mode", "node", "component")
+    # the output exists now: refused without --overwrite (exit 2, one line), accepted with it
+    assert main(["modes", COARSE, "-n", "2", "-o", str(out)]) == 2
+    assert "exists" in capsys.readouterr().err
+    assert main(["modes", COARSE, "-n", "2", "-o", str(out), "--overwrite"]) == 0
+
+
+def test_modes_table(capsys):
+    assert main(["modes", COARSE, "-n", "3"]) == 0
+    out = capsys.readouterr().out
+    assert "frequency [Hz]" in out and len(out.strip().splitlines()) == 5
+
+
+def test_cea_json_per_mode(tmp_path, capsys):
+    out = tmp_path / "cea.nc"
+    assert main(["cea", COARSE, "--mu", "0", "1.5", "16", "-n", "20", "--no-damping", "--json", "-o", str(out)]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert len(j["mu"]) == 16 and j["mu"][0] == 0 and j["mu"][-1] == 1.5
+    assert len(j["modes"]) == 20
+    for m in j["modes"]:
+        assert len(m["frequency_hz"]) == 16 and len(m["real_part"]) == 16
+        assert m["critical_mu"] is None or 0 <= m["critical_mu"] <= 1.5
+    assert any(m["critical_mu"] is not None for m in j["modes"])
+    with xr.open_dataset(out) as ds:
+        assert ds.sizes == {"mu": 16, "mode": 20}
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["cea", COARSE, "--mu", "0", "1", "x"], "START STOP STEPS"),
+    (["cea", COARSE, "--mu", "1", "0", "5"], "START < STOP"),
+    (["modes", "/nonexistent/model.yaml"], "cannot read"),
+    (["modes", COARSE, "-n", "0"], ">= 1"),
+])
+def test_bad_input_exits_2_with_one_line(argv, words, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert words in err and len(err.splitlines()) == 1
+
+
+def test_config_error_names_key(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(Path(COARSE).read_text().replace("divisions: [30, 5]", "divisions: [30, 0]"))
+    assert main(["modes", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bodies.upper.divisions[1]" in err and f"{bad}:" in err
