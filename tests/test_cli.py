@@ -21,3 +21,13 @@ def test_help_lists_commands():
 
 def test_no_command_is_bad_input():
     assert main([]) == 2
+
+
+def test_main_restores_the_fivid_logger(tmp_path):
+    import logging
+
+    log = logging.getLogger("fivid")
+    before = (list(log.handlers), log.level, log.propagate)
+    status = main(["-vv", "ingest", str(tmp_path / "missing.csv"), "-o", str(tmp_path)])
+    assert status == 2
+    assert (list(log.handlers), log.level, log.propagate) == before

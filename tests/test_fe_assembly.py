@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from fivid.fe import (
     consistent_mass,
@@ -127,6 +129,7 @@ def test_global_matrices_rigid_motions_total_mass_and_point_masses():
     ones_x = np.tile([1.0, 0.0], m.n_nodes)
     assert ml[0::2].sum() == pytest.approx(total, rel=1e-12) and ml[1::2].sum() == pytest.approx(total, rel=1e-12)
     assert ones_x @ (Mc @ ones_x) == pytest.approx(total, rel=1e-12)
+    np.testing.assert_allclose(ml, np.asarray(Mc.sum(axis=1)).ravel(), rtol=1e-12)  # global row-sum lumping
     node = m.point_masses[0].node
     assert np.allclose(m.coords[node], [0.05, 0.01])
 
@@ -153,3 +156,23 @@ def test_rayleigh_coefficients_reproduce_the_target_damping_ratios():
         assert alpha / (2 * w) + beta * w / 2 == pytest.approx(z, rel=1e-12)
     with pytest.raises(ValueError):
         rayleigh_from_damping_ratios(1e3, 0.01, 1e3, 0.02)
+
+_square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-0.2, 0.2), min_size=8, max_size=8), st.floats(0.0, 2 * np.pi), st.floats(1e-3, 10.0))
+def test_element_stiffness_is_objective_and_scale_free(offsets, angle, scale):
+    """For any convex quad (a unit square with corners moved by < 0.2, always convex): rotating the element by R
+    rotates its stiffness, K(R x) = T K(x) T^T with T = blockdiag(R, R, R, R); and in 2D the stiffness of a
+    geometrically scaled element is unchanged (K ~ t E, integrand ~ 1/L^2 times area ~ L^2)."""
+    xy = _square + np.reshape(offsets, (4, 2))
+    K = element_stiffness_q4(xy, 1.0, 0.3, 1.0, "stress")
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.array([[c, -s], [s, c]])
+    T = np.kron(np.eye(4), R)
+    Kr = element_stiffness_q4(scale * xy @ R.T, 1.0, 0.3, 1.0, "stress")
+    # entries O(1), each a sum of a few products: rounding ~ 1e2 eps covers rotation and scaling round-off
+    np.testing.assert_allclose(Kr, T @ K @ T.T, rtol=0, atol=1e-13)
+    w = np.linalg.eigvalsh(K)
+    assert np.all(np.abs(w[:3]) < 1e-13) and w[3] > 1e-3

@@ -55,6 +55,10 @@ def test_numbering_and_edges_follow_the_documented_convention():
     assert np.allclose(m.coords[11], [0.1, 0.01])
     assert list(m.fixed_dofs) == [0, 1, 8, 9, 16, 17]
     assert b.is_rectangular_grid()
+    assert np.array_equal(b.element_dofs()[..., 0::2] // 2, b.element_nodes())
+    assert np.array_equal(b.element_dofs()[..., 1::2], 2 * b.element_nodes() + 1)
+    trapezoid = load_model(_beam(corners=[[0, 0], [0.1, 0], [0.08, 0.01], [0, 0.01]])).blocks[0]
+    assert not trapezoid.is_rectangular_grid()
 
 
 def test_quantities_with_units_equal_si_numbers():

@@ -13,6 +13,7 @@ failure (traceback on stderr); 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import logging
 import pkgutil
@@ -57,14 +58,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _configure_logging(verbosity: int) -> None:
+@contextlib.contextmanager
+def _logging_to_stderr(verbosity: int):
+    """Route the ``fivid`` logger to stderr for one command; restore its previous state afterwards.
+
+    Restoring matters when ``main`` is called in-process (tests, notebooks): the logger must not keep a
+    handler on a stream that is closed later, nor stop propagating to the caller's handlers.
+    """
     level = logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("fivid: %(levelname)s: %(message)s"))
     log = logging.getLogger("fivid")
+    saved = (list(log.handlers), log.level, log.propagate)
     log.handlers[:] = [handler]
     log.setLevel(level)
     log.propagate = False
+    try:
+        yield
+    finally:
+        log.handlers[:], level0, log.propagate = saved[0], saved[1], saved[2]
+        log.setLevel(level0)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -74,9 +87,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
-    _configure_logging(args.verbose)
     try:
-        status = args.func(args)
+        with _logging_to_stderr(args.verbose):
+            status = args.func(args)
     except FividError as exc:
         print(f"fivid {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

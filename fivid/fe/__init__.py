@@ -1,4 +1,6 @@
-"""Finite-element model of a rig: config -> structured Q4 blocks, assembly, modal analysis, CEA.
+"""Finite-element models of a rig: config -> structured Q4 blocks, assembly, modal analysis, CEA.
+
+:mod:`fivid.fe.beam` (Euler-Bernoulli cantilever of the damper models) is imported from its module.
 
 Heavy dependencies (scipy.sparse, xarray) are imported inside the functions that use them.
 """

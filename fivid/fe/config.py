@@ -341,10 +341,12 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
         mu = _quantity(ctx, m["mu"], f"{key}.mu", "dimensionless", nonnegative=True)
         if "normal_stiffness" in m:
             kn = _quantity(ctx, m["normal_stiffness"], f"{key}.normal_stiffness", "N m-3", positive=True)
-        else:  # one slave element's normal stiffness per unit area: E / (element size normal to the edge)
+        else:  # 10 x the slave body's own normal stiffness per unit area E/D (D: its depth normal to the edge):
+            # stiff against the body, and independent of the mesh (an element-size penalty is not)
             edge = m["slave"]["edge"]
-            h = sb.coords[1, 0] - sb.coords[0, 0] if edge in ("bottom", "top") else sb.coords[0, 1] - sb.coords[0, 0]
-            kn = sb.material.E / float(np.hypot(*h))
+            c = sb.corners
+            depth = np.hypot(*(c[3] - c[0])) if edge in ("bottom", "top") else np.hypot(*(c[1] - c[0]))
+            kn = 10.0 * sb.material.E / float(depth)
         contacts.append(fm.ContactPair(_name(ctx, m["name"], f"{key}.name"), sb.name, snodes, mb.name, mnodes, mu, kn))
 
     sensors = []

@@ -5,8 +5,18 @@
 - :func:`load_law` / :func:`write_law` — the law file written by ``fivid identify``.
 - :func:`synthesise_perturbation` — random-phase / Gaussian spectral synthesis (pyfftw, seeded).
 - :class:`AmplitudeModel` — the amplitude forms A(V, Ra, Fn).
+- :mod:`fivid.friction.jenkins` — Jenkins (Masing) and Iwan elements for friction dampers (seed 004).
 """
 
+from fivid.friction.jenkins import (
+    iwan_energy_per_cycle,
+    iwan_force,
+    iwan_uniform_elements,
+    jenkins_energy_per_cycle,
+    jenkins_force,
+    jenkins_periodic_force,
+    loop_energy,
+)
 from fivid.friction.amplitude import AMPLITUDE_FORMS, AmplitudeModel, amplitude_design_matrix
 from fivid.friction.lawfile import law_dataset, law_from_dataset, load_law, write_law
 from fivid.friction.laws import INJECTION_MODES, CoulombLaw, PerturbedCoulombLaw
@@ -24,4 +34,11 @@ __all__ = [
     "law_dataset",
     "law_from_dataset",
     "synthesise_perturbation",
+    "jenkins_force",
+    "jenkins_periodic_force",
+    "jenkins_energy_per_cycle",
+    "loop_energy",
+    "iwan_force",
+    "iwan_uniform_elements",
+    "iwan_energy_per_cycle",
 ]

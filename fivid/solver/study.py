@@ -14,7 +14,8 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     ----------
     model : Model or path
     time_step : float, optional
-        The coarser step [s] (default: the solver's default step).
+        The coarser step [s] (default: the solver's default step), rounded down to fit a whole number of
+        steps in a recording interval; the finer run uses exactly half of it.
     variable : str
         Variable whose PSD is compared (first sensor if it has a sensor dim).
     band : (float, float), optional
@@ -41,9 +42,15 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
 
     if not isinstance(model, Model):
         model = load_model(model)
+    import math
+
     if time_step is None:
         time_step = float(simulate_kwargs.pop("safety", 0.9)) * stable_step(model).critical_time_step
-    runs = [simulate(model, time_step=dt, **simulate_kwargs) for dt in (time_step, 0.5 * time_step)]
+    # the solver fits a whole number of steps in each recording interval: take that step and exactly half of it
+    t_int = 1.0 / (float(simulate_kwargs["sample_rate"]) * int(simulate_kwargs.get("oversample", 4)))
+    n_sub = max(1, math.ceil(t_int / time_step * (1.0 - 1e-12)))
+    coarse = t_int / n_sub
+    runs = [simulate(model, time_step=dt, **simulate_kwargs) for dt in (coarse, t_int / (2 * n_sub))]
     psds = []
     for ds in runs:
         da = ds[variable]

@@ -6,17 +6,18 @@ import sys
 
 __all__ = ["register"]
 
+_DESCRIPTION = (
+    "Complex eigenvalue analysis of a model config with frictional contact: linearise about steady sliding "
+    "(penalty contact springs, friction coupling -> non-symmetric stiffness), project on a modal basis and sweep "
+    "the friction coefficient. Per mode: frequency and real part of the eigenvalue against mu, and the critical mu "
+    "at which the real part crosses zero (null if stable over the range)."
+)
+
 
 def register(subparsers) -> None:
     """Add the ``cea`` sub-command."""
-    p = subparsers.add_parser(
-        "cea",
-        help="complex eigenvalue analysis: mode-coupling instability against the friction coefficient",
-        description="Complex eigenvalue analysis of a model config with frictional contact: linearise about "
-        "steady sliding (penalty contact springs, friction coupling -> non-symmetric stiffness), project on a "
-        "modal basis and sweep the friction coefficient. Per mode: frequency and real part of the eigenvalue "
-        "against mu, and the critical mu at which the real part crosses zero (null if stable over the range).",
-    )
+    help_ = "complex eigenvalue analysis: mode-coupling instability against the friction coefficient"
+    p = subparsers.add_parser("cea", help=help_, description=_DESCRIPTION)
     p.add_argument("model", metavar="MODEL.yaml", help="model config with a contact pair and a base motion")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")
@@ -60,8 +61,12 @@ def run(args) -> int:
     if args.output:
         check_writable(args.output, overwrite=args.overwrite)
     model = load_model(args.model)
-    ds = complex_eigenvalue_analysis(model, mu, n_modes=args.n_modes, n_basis=args.basis,
-                                     damping=not args.no_damping)
+    from tqdm import tqdm
+
+    # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
+    with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
+        ds = complex_eigenvalue_analysis(model, mu, n_modes=args.n_modes, n_basis=args.basis,
+                                         damping=not args.no_damping, progress=bar.update)
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
     result = cea_to_json(ds)
