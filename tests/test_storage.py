@@ -1,0 +1,34 @@
+import os
+import stat
+
+import pytest
+
+from fivid.errors import OutputExistsError
+from fivid.storage import atomic_path, write_text
+
+
+def test_atomic_write_has_the_mode_open_would_give(tmp_path):
+    mask = os.umask(0o022)
+    try:
+        path = write_text(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(mask)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644
+
+
+def test_failed_write_leaves_nothing(tmp_path):
+    with pytest.raises(RuntimeError):
+        with atomic_path(tmp_path / "b.nc") as tmp:
+            tmp.write_text("partial")
+            raise RuntimeError("killed")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_no_overwrite_refuses_a_file_that_appeared(tmp_path):
+    target = tmp_path / "c.txt"
+    with pytest.raises(OutputExistsError):
+        with atomic_path(target, overwrite=False) as tmp:
+            tmp.write_text("new")
+            target.write_text("someone else's")
+    assert target.read_text() == "someone else's"
+    assert [p.name for p in tmp_path.iterdir()] == ["c.txt"]
