@@ -59,8 +59,11 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
     old = {k: os.environ.get(k) for k in env}
     os.environ.update(env)
     try:
+        # silence_logs=CRITICAL: a worker's heartbeat racing the scheduler's shutdown logs a
+        # CommClosedError traceback at ERROR level that means nothing to the user; task failures still
+        # reach the client as exceptions, with their own traceback.
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
     finally:
         for k, v in old.items():
             if v is None:
