@@ -38,6 +38,8 @@ def figure_data_uri(fig, *, fmt: str = "png", dpi: int = 110) -> str:
 
 def _cell(value) -> str:
     if isinstance(value, float):
+        if value != value:  # NaN: not computed (e.g. an amplitude form that was not fitted)
+            return "<td>—</td>"
         return f'<td class="num">{value:.4g}</td>'
     if isinstance(value, bool):
         cls = "pass" if value else "fail"
