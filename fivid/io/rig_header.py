@@ -281,7 +281,9 @@ def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
             att = registry().attributes[attr]
             value = f"<value> {att.units}" if att.units else "<value>"
             if profile.format == "fivid-rig-csv":
-                how = f"add a line '# {attr}: {value}' before the header (any unit of that dimension)"
+                how = f"add a line '# {attr}: {value}' before the header"
+                if att.units:
+                    how += " (any unit of that dimension)"
             else:
                 how = (f"give it in the file's preamble, the file name (metadata.file_name.pattern) or "
                        f"metadata.values of {profile.describe()}")
