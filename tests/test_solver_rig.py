@@ -22,7 +22,7 @@ def test_coulomb_rig_psd_peaks_at_coupled_modes(root):
     from scipy.signal import find_peaks, welch
 
     from fivid.fe.modal import lowest_modes
-    from fivid.solver.preload import contact_geometry
+    from fivid.fe.static import contact_geometry
 
     model = load_model(root / "configs/models/triboair_coarse.yaml")
     ds = simulate(model, mu=0.3, sliding_velocity=0.01, normal_load=5.0, duration=0.1, sample_rate=51200.0,
