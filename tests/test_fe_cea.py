@@ -14,6 +14,7 @@ from fivid.fe.modal import modal_analysis
 
 ROOT = Path(__file__).resolve().parents[1]
 COARSE = ROOT / "configs" / "models" / "triboair_coarse.yaml"
+LOAD = 5.0  # [N] normal load of the rig's preload (the sample runs' 5 N)
 
 
 def _hoffmann(m, k1, k2, k3, c):
@@ -112,11 +113,11 @@ def test_contact_linearisation_of_the_rig_geometry():
 
 def test_rig_cea_at_zero_friction_equals_the_coupled_modal_analysis():
     model = load_model(COARSE)
-    ds = complex_eigenvalue_analysis(model, [0.0, 0.5], n_modes=10, damping=False)
-    modes = modal_analysis(model, 10, include_contact=True)
+    ds = complex_eigenvalue_analysis(model, [0.0, 0.5], normal_load=LOAD, n_modes=10, damping=False)
+    modes = modal_analysis(model, 10, include_contact=True, normal_load=LOAD)
     # the basis modes are eigenvectors of the mu = 0 system: only the dense solver's rounding separates them
     np.testing.assert_allclose(ds["frequency"].values[0], modes["frequency"].values, rtol=1e-9)
-    damped = complex_eigenvalue_analysis(model, [0.0, 0.5], n_modes=10)
+    damped = complex_eigenvalue_analysis(model, [0.0, 0.5], normal_load=LOAD, n_modes=10)
     # C = alpha M + beta K is positive semi-definite: a passive, frictionless system decays
     assert np.all(damped["real_part"].values[0] < 0)
     zeta = damped["damping_ratio"].values[0]
@@ -131,7 +132,7 @@ def test_rig_cea_at_zero_friction_equals_the_coupled_modal_analysis():
 def test_rig_mode_coupling_pairs_coalesce_at_their_critical_mu():
     model = load_model(COARSE)
     mu = np.linspace(0.0, 1.5, 31)
-    ds = complex_eigenvalue_analysis(model, mu, n_modes=20, damping=False)
+    ds = complex_eigenvalue_analysis(model, mu, normal_load=LOAD, n_modes=20, damping=False)
     crit = ds["critical_mu"].values
     unstable = np.flatnonzero(np.isfinite(crit))
     assert unstable.size >= 1  # the conservative rig flutters for some mu below 1.5 (mode coupling exists)
@@ -153,13 +154,13 @@ def test_cea_needs_contact_and_sliding():
     beam = {"bodies": {"b": {"corners": [[0, 0], [0.1, 0], [0.1, 0.01], [0, 0.01]], "divisions": [10, 2],
                              "material": {"E": 210e9, "nu": 0.3, "rho": 7850}, "thickness": 0.01, "clamp": ["left"]}}}
     with pytest.raises(FividError, match="contact"):
-        complex_eigenvalue_analysis(load_model(beam), [0.0, 1.0])
+        complex_eigenvalue_analysis(load_model(beam), [0.0, 1.0], normal_load=LOAD)
     import yaml
 
     cfg = yaml.safe_load(COARSE.read_text())
     cfg["motions"] = [mo for mo in cfg["motions"] if mo["role"] != "base"]
     with pytest.raises(FividError, match="sliding direction"):
-        complex_eigenvalue_analysis(load_model(cfg), [0.0, 1.0])
+        complex_eigenvalue_analysis(load_model(cfg), [0.0, 1.0], normal_load=LOAD)
 
 
 def test_modal_basis_converges_to_the_full_order_eigenvalues_and_augmentation_helps():
@@ -174,8 +175,10 @@ def test_modal_basis_converges_to_the_full_order_eigenvalues_and_augmentation_he
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
     from fivid.fe.modal import constrained_matrices
 
+    from fivid.fe.contact import linearise_preloaded_contact
+
     model = load_model(COARSE)
-    lin = linearise_contact(model)
+    lin = linearise_preloaded_contact(model, LOAD)[0]
     K, M, free = constrained_matrices(model, include_contact=True, contact=lin)
     Kf = lin.friction_stiffness_matrix()[free][:, free]
     C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))[free][:, free]
@@ -198,3 +201,26 @@ def test_modal_basis_converges_to_the_full_order_eigenvalues_and_augmentation_he
         enriched = [error(n, True) for n in (20, 40)]
     assert plain[1] < plain[0] and enriched[1] < enriched[0]
     assert enriched[1] < plain[1] / 10, (plain, enriched)
+
+
+def test_preloaded_contact_closes_the_tip_only_and_carries_the_load():
+    """Static contact solve on the coarse rig: the clamp bends the upper beam, whose free-end corner (the slave
+    node of smallest x) alone touches; equilibrium: its normal force is the transducer's 5 N (the load path runs
+    through the contact only), to the direct solver's rounding (~1e-12 relative). The linearisation keeps exactly
+    the rows of the closed nodes of the all-nodes operators."""
+    from fivid.fe.contact import linearise_preloaded_contact
+    from fivid.fe.static import contact_geometry
+
+    model = load_model(COARSE)
+    lin, state = linearise_preloaded_contact(model, LOAD)
+    geo = contact_geometry(model)
+    tip = int(np.argmin(model.coords[geo.slave_node, 0]))
+    assert np.flatnonzero(state.active).tolist() == [tip]
+    assert state.normal_force.sum() == pytest.approx(LOAD, rel=1e-9)
+    assert np.all(state.normal_force[~state.active] == 0)
+    full = linearise_contact(model)
+    assert lin.slave.tolist() == [tip]
+    assert abs(lin.G_n - full.G_n[[tip]]).max() == 0 and abs(lin.G_t - full.G_t[[tip]]).max() == 0
+    assert lin.stiffness.tolist() == [full.stiffness[tip]] and lin.direction.tolist() == [full.direction[tip]]
+    with pytest.raises(FividError, match="normal load"):
+        modal_analysis(model, 4, include_contact=True)

@@ -27,6 +27,15 @@ def test_modes_json_and_netcdf(tmp_path, capsys):
     assert main(["modes", COARSE, "-n", "2", "-o", str(out), "--overwrite"]) == 0
 
 
+def test_modes_with_load_couple_the_bodies_at_the_closed_tip(capsys):
+    """Under 5 N the bent upper beam touches with its tip corner only (static preload solve): one closed node
+    carrying the whole load; the coupled first mode is well below the all-slave-nodes-bonded one (~2135 Hz)."""
+    assert main(["modes", COARSE, "-n", "3", "--load", "5 N", "--json"]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["include_contact"] and j["normal_load_n"] == 5.0 and len(j["closed_slave_nodes"]) == 1
+    assert 1300 < j["frequencies_hz"][0] < 1600
+
+
 def test_modes_table(capsys):
     assert main(["modes", COARSE, "-n", "3"]) == 0
     out = capsys.readouterr().out
@@ -35,7 +44,7 @@ def test_modes_table(capsys):
 
 def test_cea_json_per_mode(tmp_path, capsys):
     out = tmp_path / "cea.nc"
-    assert main(["cea", COARSE, "--mu", "0", "1.5", "16", "-n", "20", "--no-damping", "--json", "-o", str(out)]) == 0
+    assert main(["cea", COARSE, "--load", "5 N", "--mu", "0", "1.5", "16", "-n", "20", "--no-damping", "--json", "-o", str(out)]) == 0
     j = json.loads(capsys.readouterr().out)
     assert len(j["mu"]) == 16 and j["mu"][0] == 0 and j["mu"][-1] == 1.5
     assert len(j["modes"]) == 20
@@ -48,10 +57,13 @@ def test_cea_json_per_mode(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("argv, words", [
-    (["cea", COARSE, "--mu", "0", "1", "x"], "START STOP STEPS"),
-    (["cea", COARSE, "--mu", "1", "0", "5"], "START < STOP"),
+    (["cea", COARSE, "--load", "5 N", "--mu", "0", "1", "x"], "START STOP STEPS"),
+    (["cea", COARSE, "--load", "5 N", "--mu", "1", "0", "5"], "START < STOP"),
     (["modes", "/nonexistent/model.yaml"], "cannot read"),
     (["modes", COARSE, "-n", "0"], ">= 1"),
+    (["modes", COARSE, "--contact"], "--load"),
+    (["modes", COARSE, "--load", "-5 N"], "positive"),
+    (["cea", COARSE, "--load", "0 N", "--mu", "0", "1", "5"], "positive"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, words, capsys):
     assert main(argv) == 2

@@ -106,7 +106,7 @@ def test_dry_run_prints_the_plan_and_writes_nothing(setup, capsys):
     assert _run(setup, "--dry-run") == 0
     out = capsys.readouterr().out
     assert "ingest    2 task(s): 0 cached, 2 to run" in out and "would run A" in out
-    assert "modal     1 task(s): 0 cached, 1 to run" in out  # needs no CSV: planned while ingest has work
+    assert "modal     runs after ingest" in out  # linearised about the conditions' normal load: needs the CSVs
     assert not setup["out"].exists()
     assert _run(setup) == 0
     capsys.readouterr()

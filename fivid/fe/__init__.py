@@ -15,7 +15,7 @@ from fivid.fe.assembly import (
     stiffness_matrix,
 )
 from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
-from fivid.fe.contact import linearise_contact
+from fivid.fe.contact import linearise_contact, linearise_preloaded_contact
 from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
 from fivid.fe.model import (
     Block,
@@ -29,6 +29,7 @@ from fivid.fe.model import (
     Spring,
     load_model,
 )
+from fivid.fe.static import preload_state
 
 __all__ = [
     "Block",
@@ -49,6 +50,8 @@ __all__ = [
     "damping_matrix",
     "rayleigh_from_damping_ratios",
     "linearise_contact",
+    "linearise_preloaded_contact",
+    "preload_state",
     "modal_analysis",
     "modes_to_json",
     "write_modes",

@@ -1,7 +1,8 @@
 """Complex eigenvalue analysis (CEA) of frictional contact: eigenvalues against the friction coefficient.
 
-The model is linearised about steady sliding (seed 002, Massi et al.; DESIGN §4): contact pairs
-become penalty normal springs ``K_n`` and the friction force ``mu p`` adds the non-symmetric
+The model is linearised about steady sliding under the preload (seed 002, Massi et al.; DESIGN §4): the
+static contact solve (:mod:`fivid.fe.static`) gives the slave nodes closed under the normal load, and only
+these become penalty normal springs ``K_n``; the friction force ``mu p`` at them adds the non-symmetric
 ``mu K_f`` (:mod:`fivid.fe.contact`), so
 
     M u'' + C u' + (K + K_n + mu K_f) u = 0.
@@ -233,9 +234,9 @@ def _refine_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -
     return float(brentq(excess, a, b, xtol=rtol * max(abs(b), 1.0), rtol=4 * np.finfo(float).eps))
 
 
-def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | None = None,
-                                damping: bool = True, augment: bool = True, velocities: dict | None = None,
-                                refine: bool = True, progress=None):
+def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, n_modes: int = 20,
+                                n_basis: int | None = None, damping: bool = True, augment: bool = True,
+                                velocities: dict | None = None, refine: bool = True, progress=None):
     """CEA of ``model`` over the friction coefficients ``mu``.
 
     Parameters
@@ -244,6 +245,10 @@ def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | 
         Needs at least one contact pair and a sliding direction (a base motion, or ``velocities``).
     mu : array_like
         Increasing friction coefficients [-].
+    normal_load : float
+        Transducer normal force [N] (required): the static preload solve under it gives the closed slave nodes,
+        the only ones with contact springs and friction coupling
+        (:func:`fivid.fe.contact.linearise_preloaded_contact`; friction during the preload: the pairs' ``mu``).
     n_modes : int
         Number of lowest modes reported.
     n_basis : int, optional
@@ -272,13 +277,13 @@ def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | 
 
     from fivid.errors import FividError
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
-    from fivid.fe.contact import linearise_contact
-    from fivid.fe.modal import constrained_matrices
+    from fivid.fe.contact import linearise_preloaded_contact
+    from fivid.fe.modal import _contact_state_attrs, constrained_matrices
     from fivid.schema import apply_cf_attrs, new_history
 
     if not model.contacts:
         raise FividError("CEA needs a contact pair: the model config has no 'contacts'")
-    contact = linearise_contact(model, velocities=velocities)
+    contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)
     if not np.any(contact.direction):
         raise FividError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
                          "motion with role 'base' to the config)")
@@ -326,8 +331,10 @@ def complex_eigenvalue_analysis(model, mu, *, n_modes: int = 20, n_basis: int | 
             "rayleigh_beta": model.rayleigh_beta,
             "instability_tolerance": res["tolerance"],
             "contact_nodes": int(contact.stiffness.size),
-            "history": new_history(f"complex_eigenvalue_analysis(n_modes={n_modes}, n_basis={proj.n}, "
-                                   f"damping={bool(damping)}, augment={bool(augment)}, refine={bool(refine)})"),
+            "history": new_history(f"complex_eigenvalue_analysis(normal_load={normal_load!r}, n_modes={n_modes}, "
+                                   f"n_basis={proj.n}, damping={bool(damping)}, augment={bool(augment)}, "
+                                   f"refine={bool(refine)})"),
+            **_contact_state_attrs(model, state),
         },
     )
     log.info("CEA: %s, basis %d, %d of %d modes unstable in [%g, %g]", model.describe(), proj.n,
@@ -361,6 +368,8 @@ def cea_to_json(ds) -> dict:
         "n_dofs": int(ds.attrs["n_dofs"]),
         "n_basis": int(ds.attrs["n_basis"]),
         "damping": bool(ds.attrs["damping"]),
+        "normal_load_n": float(ds.attrs["normal_load"]),
+        "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist(),
         "model": ds.attrs["model"],
         "model_source": ds.attrs["model_source"],
     }

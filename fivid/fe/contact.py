@@ -1,6 +1,6 @@
 """Linearised frictional contact about the sliding state: penalty normal springs and friction coupling.
 
-For every slave node ``s`` of a contact pair, projected on its master segment ``(m1, m2)`` at the
+For every closed slave node (the closed set comes from the static preload solve, :mod:`fivid.fe.static`) ``s`` of a contact pair, projected on its master segment ``(m1, m2)`` at the
 parameter ``xi`` (shape values ``N1 = 1 - xi``, ``N2 = xi``), the gap increment and the tangential
 relative displacement are
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from fivid.errors import FividError
 
-__all__ = ["ContactLinearisation", "linearise_contact", "sliding_directions"]
+__all__ = ["ContactLinearisation", "linearise_contact", "linearise_preloaded_contact", "sliding_directions"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +44,8 @@ class ContactLinearisation:
         Sliding direction ``d`` in {-1, 0, +1} of each node along the master tangent.
     pair : ndarray of int, shape (n_contact,)
         Index of the contact pair of each row.
+    slave : ndarray of int, shape (n_contact,), optional
+        Index of each row's node among all slave nodes (all pairs, in order).
     """
 
     G_n: object
@@ -51,6 +53,7 @@ class ContactLinearisation:
     stiffness: np.ndarray
     direction: np.ndarray
     pair: np.ndarray
+    slave: np.ndarray | None = None
 
     def normal_stiffness_matrix(self):
         """``K_n = G_n^T diag(k) G_n`` [N m-1] (sparse, symmetric)."""
@@ -100,14 +103,22 @@ def sliding_directions(model, velocities: dict[str, np.ndarray] | None = None) -
     return v
 
 
-def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None) -> ContactLinearisation:
-    """Linearise every contact pair of ``model`` about the closed, sliding reference configuration.
+def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
+                      closed: np.ndarray | None = None) -> ContactLinearisation:
+    """Linearise the contact pairs of ``model`` about a sliding state, one row per closed slave node.
+
+    The geometry (projection, normals) is that of the reference configuration, like the static contact solve
+    of :mod:`fivid.fe.static` whose closed set it takes (the preload displacements are microns).
 
     Parameters
     ----------
     model : Model
     velocities : dict, optional
         Body name -> rigid velocity [m s-1] setting the sliding direction; default from the base motion.
+    closed : ndarray of bool, shape (n_slave,), optional
+        Which slave nodes (all pairs, in order) are in contact, e.g. ``preload_state(model, load).active``
+        (:func:`fivid.fe.static.preload_state`); open nodes get no row. Default: every slave node (a bonded
+        interface: the operators of the whole slave range, not a physical state of a preloaded rig).
 
     Raises
     ------
@@ -118,8 +129,13 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None)
 
     vel = sliding_directions(model, velocities)
     rows, cols, vals_n, vals_t = [], [], [], []
-    stiffness, direction, pair = [], [], []
+    stiffness, direction, pair, slave = [], [], [], []
+    n_slave = sum(len(c.slave_nodes) for c in model.contacts)
+    closed = np.ones(n_slave, dtype=bool) if closed is None else np.asarray(closed, dtype=bool)
+    if closed.shape != (n_slave,):
+        raise ValueError(f"closed must have one flag per slave node ({n_slave}), got shape {closed.shape}")
     r = 0
+    i_slave = -1
     for ip, c in enumerate(model.contacts):
         xs_all = model.coords[c.slave_nodes]
         xm = model.coords[c.master_nodes]
@@ -127,6 +143,9 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None)
         area = _tributary_lengths(xs_all) * model.block(c.slave_block).thickness
         v_rel = vel[c.master_block] - vel[c.slave_block]
         for s, xs, A in zip(c.slave_nodes, xs_all, area):
+            i_slave += 1
+            if not closed[i_slave]:
+                continue
             xi, gap, t, n = _project(xs[None, :], a, b)
             tol = 1e-9
             on = (xi >= -tol) & (xi <= 1 + tol)
@@ -147,8 +166,50 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None)
             stiffness.append(c.normal_stiffness * A)
             direction.append(d)
             pair.append(ip)
+            slave.append(i_slave)
             r += 1
     shape = (r, model.n_dofs)
     G_n = sp.csr_matrix((vals_n, (rows, cols)), shape=shape)
     G_t = sp.csr_matrix((vals_t, (rows, cols)), shape=shape)
-    return ContactLinearisation(G_n, G_t, np.asarray(stiffness), np.asarray(direction), np.asarray(pair, dtype=int))
+    return ContactLinearisation(G_n, G_t, np.asarray(stiffness), np.asarray(direction), np.asarray(pair, dtype=int),
+                                np.asarray(slave, dtype=int))
+
+
+def linearise_preloaded_contact(model, normal_load: float | None, *, velocities: dict[str, np.ndarray] | None = None,
+                                mu=None):
+    """Linearise the contact about the preloaded sliding equilibrium: springs only at the closed slave nodes.
+
+    The closed set comes from the static contact solve under the transducer normal force ``normal_load``
+    (:func:`fivid.fe.static.preload_state`, clamp lowered monotonically with friction ``mu``, default each pair's).
+    On the default rig the bent upper beam touches with its tip corner only, not along its whole slave range.
+
+    Parameters
+    ----------
+    model : Model
+    normal_load : float
+        Normal force [N] read by the transducer (the model's first reaction).
+    velocities : dict, optional
+        Body name -> rigid velocity [m s-1] setting the sliding direction (default from the base motion).
+    mu : float, optional
+        Friction coefficient during the preload.
+
+    Returns
+    -------
+    ContactLinearisation
+        Rows of the closed nodes only.
+    Preload
+        The static state (closed set, normal forces [N], clamp displacement [m]).
+
+    Raises
+    ------
+    ConfigError
+        ``normal_load`` is None, or the model cannot be preloaded (no load motion or reaction).
+    """
+    from fivid.errors import ConfigError
+    from fivid.fe.static import preload_state
+
+    if normal_load is None:
+        raise ConfigError("linearising the contact needs the normal load: only the slave nodes closed under it "
+                          "carry contact springs (give normal_load [N], e.g. --load '5 N')", key="normal_load")
+    state = preload_state(model, normal_load, mu=mu)
+    return linearise_contact(model, velocities=velocities, closed=state.active), state

@@ -23,7 +23,7 @@ DENSE_LIMIT = 600
 
 
 def constrained_matrices(model, *, mass: str = "consistent", include_contact: bool = False,
-                         contact=None):
+                         contact=None, normal_load: float | None = None):
     """Stiffness and mass restricted to the free dofs.
 
     Parameters
@@ -31,9 +31,13 @@ def constrained_matrices(model, *, mass: str = "consistent", include_contact: bo
     model : Model
     mass : {"consistent", "lumped"}
     include_contact : bool
-        Add the linearised normal contact springs ``K_n`` (bonded in the normal direction, frictionless).
+        Add the linearised normal contact springs ``K_n`` at the slave nodes closed under ``normal_load``
+        (frictionless: tangentially free, as a sliding contact whose Coulomb force is a constant follower force).
     contact : ContactLinearisation, optional
-        Reuse an existing linearisation.
+        Reuse an existing linearisation (then ``normal_load`` is not used).
+    normal_load : float, optional
+        Transducer normal force [N] of the static preload solve (:func:`fivid.fe.contact.linearise_preloaded_contact`);
+        needed with ``include_contact`` unless ``contact`` is given.
 
     Returns
     -------
@@ -49,9 +53,9 @@ def constrained_matrices(model, *, mass: str = "consistent", include_contact: bo
     K = stiffness_matrix(model)
     if include_contact and model.contacts:
         if contact is None:
-            from fivid.fe.contact import linearise_contact
+            from fivid.fe.contact import linearise_preloaded_contact
 
-            contact = linearise_contact(model)
+            contact = linearise_preloaded_contact(model, normal_load)[0]
         K = K + contact.normal_stiffness_matrix()
     if mass == "consistent":
         M = consistent_mass(model)
@@ -127,7 +131,7 @@ def _eigen_pairs(K, M, k, sigma):
 
 
 def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", include_contact: bool = False,
-                   sigma: float | None = None):
+                   normal_load: float | None = None, sigma: float | None = None):
     """Natural frequencies and mass-normalised mode shapes of ``model`` with its constraints.
 
     Parameters
@@ -138,7 +142,11 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
     mass : {"consistent", "lumped"}
         Mass matrix (consistent is the more accurate for frequencies; lumped is what the explicit solver uses).
     include_contact : bool
-        Couple the bodies by the normal penalty springs of the contact pairs (no friction).
+        Couple the bodies by normal penalty springs at the slave nodes closed under ``normal_load`` (static
+        preload solve, :mod:`fivid.fe.static`; tangentially free: the sliding contact's Coulomb force is a
+        constant follower force, no stiffness). DESIGN §4: linearise about the sliding equilibrium.
+    normal_load : float, optional
+        Transducer normal force [N] of the preload; required with ``include_contact`` on a model with contacts.
     sigma : float, optional
         Shift [s-2] of the shift-invert solver (default: small negative).
 
@@ -153,7 +161,12 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
 
     from fivid.schema import apply_cf_attrs, new_history
 
-    K, M, free = constrained_matrices(model, mass=mass, include_contact=include_contact)
+    contact = state = None
+    if include_contact and model.contacts:
+        from fivid.fe.contact import linearise_preloaded_contact
+
+        contact, state = linearise_preloaded_contact(model, normal_load)
+    K, M, free = constrained_matrices(model, mass=mass, include_contact=include_contact, contact=contact)
     lam, vec = lowest_modes(K, M, n_modes, sigma=sigma)
     shapes = np.zeros((len(lam), model.n_dofs))
     shapes[:, free] = vec.T
@@ -184,11 +197,26 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
             "mass_matrix": mass,
             "include_contact": int(bool(include_contact)),
             "history": new_history(f"modal_analysis(n_modes={n_modes}, mass={mass!r}, "
-                                   f"include_contact={bool(include_contact)})"),
+                                   f"include_contact={bool(include_contact)}, normal_load={normal_load!r})"),
         },
     )
+    if state is not None:
+        ds.attrs.update(_contact_state_attrs(model, state))
     log.info("modal analysis: %s, %d modes, f1 = %.6g Hz", model.describe(), len(lam), freq[0])
     return apply_cf_attrs(ds)
+
+
+def _contact_state_attrs(model, state) -> dict:
+    """Attributes recording the preloaded contact state a linearisation is about."""
+    from fivid.fe.static import contact_geometry
+
+    nodes = contact_geometry(model).slave_node[state.active]
+    return {
+        "normal_load": float(state.normal_load),
+        "preload_displacement": float(state.displacement),
+        "closed_slave_nodes": np.asarray(nodes, dtype=np.int64),
+        "closed_normal_force": np.asarray(state.normal_force[state.active], dtype=float),
+    }
 
 
 def write_modes(ds, path: str | PathLike, *, overwrite: bool = False):
@@ -208,6 +236,9 @@ def modes_to_json(ds) -> dict:
         "n_free_dofs": int(ds.attrs["n_free_dofs"]),
         "mass_matrix": ds.attrs["mass_matrix"],
         "include_contact": bool(ds.attrs["include_contact"]),
+        **({"normal_load_n": float(ds.attrs["normal_load"]),
+            "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist()}
+           if "normal_load" in ds.attrs else {}),
         "model": ds.attrs["model"],
         "model_source": ds.attrs["model_source"],
     }

@@ -43,7 +43,7 @@ __all__ = [
 STAGE_REQUIRES: dict[str, tuple[str, ...]] = {
     "ingest": (),
     "identify": ("ingest",),
-    "modal": (),
+    "modal": ("ingest",),  # linearised about the preload: needs the test conditions' normal loads
     "simulate": ("ingest", "identify"),
     "score": ("ingest", "simulate"),
     "report": ("ingest", "identify", "simulate", "score"),

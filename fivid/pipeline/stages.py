@@ -9,7 +9,7 @@ stage      one task per                             inputs hashed into its key
 =========  ======================================  ==========================================
 ingest     input CSV                                CSV sha256, rig profile
 identify   pipeline run                             every ingested run, identify options
-modal      pipeline run                             model file, n_modes
+modal      distinct normal load of the conditions   model file, n_modes, normal load
 simulate   test condition × Monte-Carlo seed        model file, law file, condition, seed, settings
 score      test condition                           its measured runs and simulations, band
 report     pipeline run                             everything above, thresholds
@@ -157,26 +157,38 @@ class Identify:
 
 
 class Modal:
-    """Modal analysis of the model (frequencies [Hz] to compare with measured peaks); writes ``modal.nc``."""
+    """Modal analysis of the model linearised about its preloaded contact state, one per distinct normal load of
+    the test conditions (frequencies [Hz] to compare with measured peaks); writes ``modal.nc`` (one load) or
+    ``modal-fn<load>N.nc`` (several)."""
 
     name = "modal"
 
     def plan(self, ctx) -> list[Task]:
         cfg = ctx.config
-        return [Task("modal", "modes", {"n_modes": cfg.n_modes}, {"model": file_sha256(cfg.model)},
-                     {"modes": str(ctx.out / "modal.nc")})]
+        loads = sorted({float(c["normal_load"]) for c in ctx.data["conditions"].values()})
+        model_sha = file_sha256(cfg.model)
+        tasks = []
+        for load in loads:
+            name = "modal" if len(loads) == 1 else f"modal-fn{load:.4g}N"
+            tasks.append(Task("modal", name, {"n_modes": cfg.n_modes, "normal_load": load}, {"model": model_sha},
+                              {"modes": str(ctx.out / f"{name}.nc")}))
+        return tasks
 
     def execute(self, ctx, tasks) -> None:
         from fivid.fe import load_model
         from fivid.fe.modal import modal_analysis
         from fivid.storage import write_netcdf
 
-        task = tasks[0]
-        _timed(ctx, task, lambda: write_netcdf(
-            modal_analysis(load_model(ctx.config.model), n_modes=ctx.config.n_modes, include_contact=True), task.outputs["modes"]))
+        model = load_model(ctx.config.model)
+        for task in tasks:
+            _timed(ctx, task, lambda t=task: write_netcdf(
+                modal_analysis(model, n_modes=ctx.config.n_modes, include_contact=True,
+                               normal_load=t.params["normal_load"]), t.outputs["modes"]))
 
     def collect(self, ctx, tasks) -> None:
-        ctx.data["modal_path"] = tasks[0].outputs["modes"]
+        # the report shows one modal analysis: that of the lowest load (all of them when the loads agree)
+        ctx.data["modal_path"] = tasks[0].outputs["modes"] if tasks else None
+        ctx.data["modal_paths"] = {t.params["normal_load"]: t.outputs["modes"] for t in tasks}
 
 
 class Simulate:

@@ -88,7 +88,7 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         the direction. None: as configured.
     normal_load : float, optional
         Target normal force at the transducer [N], set by the "load" clamp's displacement (static
-        preload solve, :mod:`fivid.solver.preload`). None: the configured clamp displacement.
+        preload solve, :mod:`fivid.fe.static`). None: the configured clamp displacement.
     roughness_ra : float, optional
         Ra [m], passed to the law and recorded.
     duration : float
@@ -181,12 +181,9 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
     dt = t_int / n_sub
 
-    if law is not None:
-        mu_pairs = [float(getattr(law, "mu0", 0.0))] * len(model.contacts)
-    else:
-        mu_pairs = [float(mu) if mu is not None else c.mu for c in model.contacts]
-    mu_slave = np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)]) \
-        if model.contacts else np.zeros(0)
+    from fivid.fe.static import slave_friction
+
+    mu_slave = slave_friction(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
     schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
                                          settle_time, mu_slave)
     total = schedule.transient_end + duration
@@ -216,7 +213,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
 
 def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):
     """The loading sequence, the transducer signs and the preload (None without a target load)."""
-    from fivid.solver.preload import preload_displacement
+    from fivid.fe.static import preload_state
     from fivid.solver.setup import Schedule
 
     load = model.motion("load")
@@ -229,15 +226,7 @@ def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time
     preload = None
     load_disp = None
     if normal_load is not None:
-        if load is None:
-            raise ConfigError("normal_load was given but the model has no motion with role 'load' to set it")
-        if not model.reactions:
-            raise ConfigError("normal_load was given but the model has no reaction (force transducer) to measure it")
-        r = model.reactions[0]
-        weights = np.zeros(model.n_dofs)
-        weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
-        preload = preload_displacement(model, normal_load, normal_weights=weights, load_dofs=load.dofs,
-                                       direction=direction, mu=mu_slave)
+        preload = preload_state(model, normal_load, mu=mu_slave)
         load_disp = direction * preload.displacement  # preload solved for u = delta * direction on the clamp
     base_start = (load_ramp + settle_time) if load is not None else 0.0
     base_velocity = None

@@ -1,4 +1,4 @@
-"""``fivid cea MODEL.yaml --mu START STOP STEPS [--json]``: complex eigenvalue analysis against friction."""
+"""``fivid cea MODEL.yaml --load Q --mu START STOP STEPS [--json]``: complex eigenvalue analysis against friction."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ __all__ = ["register"]
 
 _DESCRIPTION = (
     "Complex eigenvalue analysis of a model config with frictional contact: linearise about steady sliding "
-    "(penalty contact springs, friction coupling -> non-symmetric stiffness), project on a modal basis and sweep "
+    "under the normal load --load (penalty contact springs and friction coupling at the slave nodes closed under "
+    "it by a static preload solve -> non-symmetric stiffness), project on a modal basis and sweep "
     "the friction coefficient. Per mode: frequency and real part of the eigenvalue against mu, and the critical mu "
     "at which the real part crosses zero (null if stable over the range)."
 )
@@ -19,6 +20,8 @@ def register(subparsers) -> None:
     help_ = "complex eigenvalue analysis: mode-coupling instability against the friction coefficient"
     p = subparsers.add_parser("cea", help=help_, description=_DESCRIPTION)
     p.add_argument("model", metavar="MODEL.yaml", help="model config with a contact pair and a base motion")
+    p.add_argument("--load", required=True, metavar="Q",
+                   help="normal load with unit, e.g. '5 N' (the preload the contact is linearised about)")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")
     p.add_argument("-n", "--n-modes", type=int, default=20, metavar="N", help="modes reported (default 20)")
@@ -60,12 +63,16 @@ def run(args) -> int:
         raise ConfigError(f"--basis ({args.basis}) must be >= -n ({args.n_modes})")
     if args.output:
         check_writable(args.output, overwrite=args.overwrite)
+    from fivid.cli.commands.modes import _positive_load
+    from fivid.units import parse_quantity
+
+    load = _positive_load(args.load, parse_quantity)
     model = load_model(args.model)
     from tqdm import tqdm
 
     # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
     with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
-        ds = complex_eigenvalue_analysis(model, mu, n_modes=args.n_modes, n_basis=args.basis,
+        ds = complex_eigenvalue_analysis(model, mu, normal_load=load, n_modes=args.n_modes, n_basis=args.basis,
                                          damping=not args.no_damping, progress=bar.update)
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
@@ -73,7 +80,8 @@ def run(args) -> int:
     if args.json:
         print(dumps_json(result))
         return 0
-    print(f"{model.describe()}; modal basis {result['n_basis']}; mu {mu[0]:g}..{mu[-1]:g} ({mu.size} steps)")
+    print(f"{model.describe()}; modal basis {result['n_basis']}; mu {mu[0]:g}..{mu[-1]:g} ({mu.size} steps); "
+          f"contact closed under {load:g} N at slave node(s) {result['closed_slave_nodes']}")
     print(" mode  f(mu0) [Hz]  f(mu1) [Hz]  max Re [s-1]  critical mu  partner")
     for m in result["modes"]:
         crit = "-" if m["critical_mu"] is None else f"{m['critical_mu']:.4f}"

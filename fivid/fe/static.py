@@ -1,4 +1,4 @@
-"""The preload: the loading-clamp displacement that gives the target normal load.
+"""Static contact solve: the loading-clamp displacement that gives a target normal load, and the contact state.
 
 Chosen method (DESIGN §5 "preload by the loading clamp"): a linear static solve of the model with
 unilateral contact, tied tangentially where Coulomb's cone allows it (the contact sticks while the clamp
@@ -11,9 +11,11 @@ every other constrained dof at rest, the solution for a fixed active set is affi
 tension; a tied node whose tangential multiplier leaves the cone ``|lam_t| <= mu lam_n`` slips on it,
 ``lam_t = sign * mu lam_n``) until it repeats. Friction is path dependent, so this is the state of a clamp
 lowered monotonically from a stress-free contact, which is what the ramp does.
-The explicit run then ramps the clamp to ``delta`` smoothly and lets it settle;
+The explicit run (:mod:`fivid.solver`) then ramps the clamp to ``delta`` smoothly and lets it settle;
 friction (stick during the preload) changes the normal load slightly, and the simulated
-``normal_force`` records what the transducer actually sees.
+``normal_force`` records what the transducer actually sees. Modal analysis and CEA
+(:mod:`fivid.fe.modal`, :mod:`fivid.fe.cea`) linearise about this state: contact springs only at the
+closed slave nodes (DESIGN §4, "linearise about the sliding equilibrium").
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ import numpy as np
 
 from fivid.errors import ConfigError
 
-__all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement"]
+__all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement", "preload_state",
+           "slave_friction"]
 
 
 @dataclass(frozen=True)
@@ -100,6 +103,10 @@ class Preload:
         Static displacement [m], global dofs.
     iterations : int
         Active-set iterations.
+    normal_force : ndarray, shape (n_slave,)
+        Normal contact force of each slave node (Lagrange multiplier, >= 0; 0 at open nodes) [N].
+    tangential_force : ndarray, shape (n_slave,)
+        Tangential contact force along ``t = (-n_y, n_x)`` of each slave node [N].
     """
 
     displacement: float
@@ -107,6 +114,8 @@ class Preload:
     active: np.ndarray
     u: np.ndarray
     iterations: int
+    normal_force: np.ndarray | None = None
+    tangential_force: np.ndarray | None = None
 
 
 def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarray, load_dofs: np.ndarray,
@@ -209,8 +218,52 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
         new_slip = np.where(outside, np.sign(lam_t), slip) * new
         new_tied = (tied & new & ~outside) | (new & ~active & (mu > 0))
         if np.array_equal(new, active) and np.array_equal(new_tied, tied) and np.array_equal(new_slip, slip):
-            return Preload(displacement=float(delta), normal_load=float(normal_load), active=active, u=u, iterations=it)
+            return Preload(displacement=float(delta), normal_load=float(normal_load), active=active, u=u,
+                           iterations=it, normal_force=lam_n, tangential_force=lam_t)
         active, tied, slip = new, new_tied, new_slip
         if not active.any():
             raise ConfigError("the preload active set emptied: the clamp pulls the bodies apart")
     raise ConfigError(f"the preload contact solve did not settle in {max_iterations} active-set iterations")
+
+
+def slave_friction(model, mu=None) -> np.ndarray:
+    """Friction coefficient of every slave node (all pairs, in order) [-]: ``mu`` if given, else each pair's own."""
+    if not model.contacts:
+        return np.zeros(0)
+    mu_pairs = [float(mu) if mu is not None else c.mu for c in model.contacts]
+    return np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)])
+
+
+def preload_state(model, normal_load: float, *, mu=None) -> Preload:
+    """The static contact state under the transducer normal force ``normal_load`` [N], clamp lowered monotonically.
+
+    The model's motion with role "load" is the clamp (its amplitude's sign gives the pressing direction), its
+    first reaction the transducer (the normal component's reaction, signed like the clamp, is the normal force).
+
+    Parameters
+    ----------
+    model : Model
+    normal_load : float
+        Target normal force [N], > 0.
+    mu : float or ndarray (n_slave,), optional
+        Friction coefficient during the preload (scalar: every pair; default: each pair's ``mu``).
+
+    Raises
+    ------
+    ConfigError
+        No load motion or no reaction, a non-positive load, or a contact that the clamp does not press.
+    """
+    if not (np.isfinite(normal_load) and normal_load > 0):
+        raise ConfigError(f"normal_load must be a positive force [N], got {normal_load!r}")
+    load = model.motion("load")
+    if load is None:
+        raise ConfigError("normal_load was given but the model has no motion with role 'load' to set it")
+    if not model.reactions:
+        raise ConfigError("normal_load was given but the model has no reaction (force transducer) to measure it")
+    direction = 1.0 if load.amplitude >= 0 else -1.0
+    r = model.reactions[0]
+    weights = np.zeros(model.n_dofs)
+    weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
+    mu_slave = mu if (mu is not None and np.ndim(mu) == 1) else slave_friction(model, mu)
+    return preload_displacement(model, float(normal_load), normal_weights=weights, load_dofs=load.dofs,
+                                direction=direction, mu=mu_slave)
