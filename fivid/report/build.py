@@ -225,7 +225,8 @@ def _modal_section(page: Page, inputs: dict, frequency, psds, units: str) -> Non
         else:
             rows.append([i + 1, float(fm), None, None])
     page.raw(table(["mode", "model frequency [Hz]", "nearest measured peak [Hz]", "difference [%]"], rows))
-    page.paragraph(f"Modes computed: {modal_f.size} (with the contact pairs as normal penalty springs, no "
+    page.paragraph(f"Modes computed: {modal_f.size} (linearised about the preloaded contact state: normal "
+                   f"penalty springs at the slave nodes closed under the normal load, tangentially free, no "
                    f"friction); listed: those between half the band's lower edge and 1.5 times its upper edge.")
 
 
