@@ -22,7 +22,8 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError
 from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
 from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
-from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, RunAnalysis, RunSettings, analyse_run
+from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis, RunSettings,
+                                  analyse_run)
 from fivid.identify.shape import SpectralShape, identify_shape
 
 __all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
@@ -154,6 +155,11 @@ class FrictionIdentification:
         for name, (values, units) in table.items():
             ds[name] = ("run", np.asarray(values, float), {"units": units})
         ds["run_used"] = ("run", np.array([r.used for r in self.runs], dtype=np.int8))
+        ds["run_nperseg"] = ("run", np.array([r.psd_attrs.get("nperseg", 0) for r in self.runs], dtype=np.int32),
+                             {"units": "1", "long_name": "Welch segment length [samples] (0: run not analysed)"})
+        ds["run_mains_bins_removed"] = ("run", np.array([r.mains_bins_removed for r in self.runs], dtype=np.int32),
+                                        {"units": "1"})
+        ds["run_mains_removal"] = ("run", np.array([r.mains_removal for r in self.runs], dtype=object))
         ds["run_reason"] = ("run", np.array([r.reason for r in self.runs], dtype=object))
         ds = ds.assign_coords(run=("run", run))
         forms = np.array([f.form for f in self.form_fits], dtype=object)
@@ -252,7 +258,10 @@ def identify_friction_law(
         Valid band [Hz]; default 20 Hz to min(2 kHz, 0.4 fs) — set it to where the force chain
         is dynamic-free (or give ``transfer_function``).
     nperseg : int, optional
-        Welch segment length [samples]; default :func:`fivid.identify.runs.default_nperseg`.
+        Welch segment length [samples]; default per run :func:`fivid.identify.runs.default_nperseg`:
+        bins of at most mains/4 (12.5 Hz at 50 Hz) so that mains-line removal takes only the lines,
+        within ≥ 7 segments, else the coarser rule of ≥ 31 segments (lines then left in, with a
+        message). The segment length of every run is in the law file (``run_nperseg``).
     tolerance : float, default 0.05
         Relative velocity tolerance of the steady-sliding window [-].
     min_normal_force : float, default 0.1
@@ -313,6 +322,8 @@ def identify_friction_law(
         reasons = "; ".join(f"{r.run_id}: {r.reason}" for r in analyses)
         raise DataQualityError(f"no usable run among {len(analyses)}: {reasons}")
     messages = [f"run {r.run_id} excluded: {r.reason}" for r in analyses if not r.used]
+    messages += [f"run {r.run_id}: mains-line removal {r.mains_removal}" for r in used
+                 if r.mains_removal.startswith("not done")]
     mu0, mu0_ci = _mu0_interval(used, confidence)
     v_ref = float(np.exp(np.mean(np.log([r.sliding_velocity for r in used])))) if injection == "convected" else None
     shape = identify_shape(used, band, smoothing_octaves=smoothing_octaves, injection=injection,
@@ -351,6 +362,7 @@ def identify_friction_law(
         "transfer_function": "none" if transfer_function is None else "given",
         "shape_method": shape_method, "smoothing_octaves": smoothing_octaves, "forms": ",".join(forms),
         "weighting": weighting, "injection": injection, "confidence": confidence,
+        "nperseg_rule": "given" if nperseg else NPERSEG_RULE,
         "welch": dict(used[0].psd_attrs),
     }
     return FrictionIdentification(

@@ -29,7 +29,8 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError, SchemaError
 
 __all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
-           "default_nperseg", "mains_lines_resolved"]
+           "default_nperseg", "mains_lines_resolved",
+           "NPERSEG_RULE"]
 
 _log = logging.getLogger("fivid")
 
@@ -82,6 +83,8 @@ class RunSettings:
         }
 
 
+NPERSEG_RULE = ("largest power of two <= n/16 with fs/nperseg >= 2 Hz (>= 256); raised to fs/nperseg <= mains/4 "
+                "while nperseg <= n/4 (n: steady-window samples)")
 DEFAULT_BAND_LOW = 20.0  # [Hz] above drift and the loading device's rigid-body modes
 DEFAULT_BAND_HIGH = 2000.0  # [Hz] placeholder for where a TRIBOAIR-like force chain is dynamic-free
 
@@ -198,13 +201,16 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
 
     A Hann-windowed line at frequency ``f_k = k f_m`` puts its power into the bins within two bins
     of ``f_k`` (the main lobe; 2.5 bins away the leakage is below −31 dB). For each harmonic in the
-    band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the median of the
-    bins 5 to 15 bins away on either side. A line is declared when the largest of them exceeds the
+    band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the higher of the
+    medians of the bins 5 to 15 bins away on each side (the edge of a steep broadband feature, low on
+    one side and high on the other, is then not a line). A line is declared when the largest of them exceeds the
     floor by more than a broadband bin would with probability ``p_false`` over the whole band
     (near 0 Hz the floor window is clipped to the bins above 0 Hz):
     the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
-    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``). A line is narrow: the peak must also exceed,
+    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``, n = 11 per side). Lines are resolved only
+    when ``Δf <= f_m / 4`` (:func:`mains_lines_resolved`); :func:`analyse_run` does not call this
+    with coarser bins. A line is narrow: the peak must also exceed,
     by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
     broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
 
@@ -237,8 +243,10 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
     n_tested = int(in_lobe.sum())
     chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
-    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
-    floor = np.median(p[around], axis=1)
+    half = around.shape[1] // 2  # the floor on each side; a line stands above the higher one, so that the
+    # edge of a steep broadband feature (one side low, one side high) is not taken for a line
+    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(half))
+    floor = np.maximum(np.median(p[around[:, :half]], axis=1), np.median(p[around[:, half:]], axis=1))
     shoulder = np.median(p[np.clip(centre[:, None] + np.array([-5, -4, 4, 5])[None, :], 1, f.size - 1)], axis=1)
     peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
     line = (floor > 0) & (peak > threshold * floor) & (peak > threshold * shoulder)
