@@ -269,7 +269,8 @@ def identify_friction_law(
     tare : (float, float), optional
         Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
     mains_frequency : float or None, default 50.0
-        Mains harmonics standing out of the PSD are interpolated over [Hz]; None disables.
+        Mains harmonics standing out of the PSD are interpolated over [Hz], in runs whose Welch bins
+        are <= mains/4 (else left in, with a message); None disables.
     noise_correction : bool, default True
         With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
     transfer_function : xarray.DataArray, optional
