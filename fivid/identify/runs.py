@@ -210,7 +210,7 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
     has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``, n = 11 per side). Lines are resolved only
     when ``Δf <= f_m / 4`` (:func:`mains_lines_resolved`); :func:`analyse_run` does not call this
-    with coarser bins. A line is narrow: the peak must also exceed,
+    with coarser bins on the PSD of μp (it does on the smooth sensor-noise PSD of the tare interval). A line is narrow: the peak must also exceed,
     by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
     broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
 
@@ -262,6 +262,8 @@ def _replace_lines(frequency, psd, mask):
     out = psd.copy()
     keep = ~mask
     keep[0] = False
+    if not keep.any():  # nothing to interpolate from
+        return psd
     out[mask] = np.interp(frequency[mask], frequency[keep], psd[keep])
     return out
 
@@ -454,7 +456,7 @@ def _tare_noise_psd(t, ft, fn, mu_mean, fn_mean, f, nperseg, fs, band, settings)
 
     With no load the sensors read only their noise e_t, e_n; during sliding these enter μ = Ft/Fn as
     ``(e_t − μ e_n) / Fn`` to first order. Its Welch PSD on the tare interval (segments of up to
-    ``nperseg`` samples, at least 4 of them), with mains lines removed when its bins resolve them, is smoothed by a 1/3-octave
+    ``nperseg`` samples, at least 4 of them), with mains lines removed, is smoothed by a 1/3-octave
     running median (the noise floor is broadband; the median ignores lines that were not removed)
     divided by the median of χ²_ν/ν, ``chi2.ppf(0.5, ν)/ν``, which makes it unbiased for a smooth
     floor; it is interpolated onto ``f``. Returns (psd, tare duration [s]).
@@ -477,8 +479,10 @@ def _tare_noise_psd(t, ft, fn, mu_mean, fn_mean, f, nperseg, fs, band, settings)
     fq = np.asarray(p["frequency"].values, float)
     v = np.asarray(p.values, float)
     nu = float(p.attrs["equivalent_degrees_of_freedom"])
-    if mains_lines_resolved(fq[1] - fq[0], settings.mains_frequency):  # else the running median ignores them
-        v = _replace_lines(fq, v, mains_line_bins(fq, v, nu, settings.mains_frequency, (fq[1], fq[-1])))
+    # at any resolution: interpolating over a sensor-noise floor, smooth by nature and median-smoothed
+    # below, takes no broadband structure away (unlike on the PSD of μp, see default_nperseg)
+    mask = mains_line_bins(fq, v, nu, settings.mains_frequency, (fq[1], fq[-1]))
+    v = _replace_lines(fq, v, mask)
     v[1:] = octave_median(fq[1:], v[1:], 1.0 / 3.0) * nu / stats.chi2.ppf(0.5, nu)
     return np.interp(f, fq, v), float(t[-1] - t[0])
 
