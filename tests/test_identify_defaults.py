@@ -102,3 +102,8 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root):
         ratios.append(a / a_true)
         assert lo <= a_true <= hi, (run["run_id"], a_true, a, lo, hi)
     print("twin at defaults, A / A_true:", np.round(ratios, 4), "form", res.law.amplitude_model.form)
+    # without a tare mu0 carries the sensor offsets (0.012 N, -0.02 N at 5 N: +0.0036); the result says so
+    # and suggests a tare inside the 20 ms unloaded pre-trigger
+    hint = [m for m in res.messages if m.startswith("no tare given")]
+    assert len(hint) == 1 and "tare=(0, 0.0151) s" in hint[0] and "up to 0.0036" in hint[0], res.messages
+    assert not any(m.startswith("no tare") for m in identify_friction_law(runs, tare=(0.0, 0.015)).messages)

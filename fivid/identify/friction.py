@@ -220,6 +220,38 @@ def _check_band(band, datasets):
     return lo, hi
 
 
+def _unloaded_start(ds, fraction: float = 0.05):
+    """Length [s] of the record's unloaded start (|Fn| < ``fraction`` of the nominal load) and the mean
+    friction force (sign as in μ > 0) and normal force [N] there (the sensor offsets), or None when the
+    record starts loaded."""
+    fn = np.asarray(ds["normal_force"].values, float)
+    load = float(ds.attrs.get("normal_load", np.nan))
+    if not load > 0 or fn.size < 2:
+        return None
+    above = np.abs(fn) >= fraction * load
+    k = int(np.argmax(above))
+    if k < 10 or not above.any():
+        return None
+    t = np.asarray(ds["time"].values, float)
+    ft = np.asarray(ds["friction_force"].values, float)
+    sign = 1.0 if np.mean(ft) >= 0 else -1.0  # the sign convention analyse_run makes positive
+    return float(t[k] - t[0]), sign * float(np.mean(ft[:k])), float(np.mean(fn[:k]))
+
+
+def _tare_hint(datasets, analyses):
+    """A message when no tare was given but every used run starts unloaded: the offsets there bias μ0."""
+    pairs = [(ds, r) for ds, r in zip(datasets, analyses) if r.used]
+    starts = [_unloaded_start(ds) for ds, _ in pairs]
+    if not pairs or any(s is None for s in starts):
+        return None
+    bias = [(ft0 - r.mu_mean * fn0) / r.normal_load for (_, r), (_, ft0, fn0) in zip(pairs, starts)]
+    span = min(s[0] for s in starts)
+    return (f"no tare given, but every run starts unloaded for >= {span * 1e3:.3g} ms (|Fn| < 5 % of the nominal "
+            f"load), where the force sensors read offsets that bias mu by (offset_t - mu offset_n)/Fn, up to "
+            f"{max(np.abs(bias)):.2g} here; pass tare=(0, {0.75 * span:.3g}) s "
+            f"(--tare 0 {0.75 * span:.3g}) to remove them")
+
+
 def _mu0_interval(used, confidence):
     from scipy import stats
 
@@ -326,6 +358,10 @@ def identify_friction_law(
     messages += [f"run {r.run_id}: mains-line removal {r.mains_removal}" for r in used
                  if r.mains_removal.startswith("not done")]
     mu0, mu0_ci = _mu0_interval(used, confidence)
+    hint = _tare_hint(datasets, analyses) if tare is None else None
+    if hint:
+        messages.append(hint)
+        _log.info(hint)
     v_ref = float(np.exp(np.mean(np.log([r.sliding_velocity for r in used])))) if injection == "convected" else None
     shape = identify_shape(used, band, smoothing_octaves=smoothing_octaves, injection=injection,
                            reference_velocity=v_ref)
