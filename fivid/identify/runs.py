@@ -203,16 +203,17 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     of ``f_k`` (the main lobe; 2.5 bins away the leakage is below −31 dB). For each harmonic in the
     band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the higher of the
     medians of the bins 5 to 15 bins away on each side (the edge of a steep broadband feature, low on
-    one side and high on the other, is then not a line). A line is declared when the largest of them exceeds the
-    floor by more than a broadband bin would with probability ``p_false`` over the whole band
-    (near 0 Hz the floor window is clipped to the bins above 0 Hz):
+    one side and high on the other, is then not a line). A line is declared when the largest of them
+    exceeds the floor by more than a broadband bin would with probability ``p_false`` over the whole
+    band (near 0 Hz the floor window is clipped to the bins above 0 Hz):
     the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
     has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``, n = 11 per side). Lines are resolved only
     when ``Δf <= f_m / 4`` (:func:`mains_lines_resolved`); :func:`analyse_run` does not call this
-    with coarser bins on the PSD of μp (it does on the smooth sensor-noise PSD of the tare interval). A line is narrow: the peak must also exceed,
-    by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
-    broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
+    with coarser bins on the PSD of μp (it does on the smooth sensor-noise PSD of the tare interval).
+    A line is narrow: the peak must also exceed, by the same factor, the median of its shoulders 4 and
+    5 bins away (outside the main lobe), so a broad resonance near a mains harmonic is not taken for
+    hum (seen on real friction-damper data).
 
     Returns
     -------
