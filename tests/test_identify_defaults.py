@@ -76,7 +76,7 @@ def _twin_truth(root):
     return generate.load_truth(root / "sample_data" / "ground_truth.yaml"), generate
 
 
-def test_twin_data_at_defaults_inside_the_pipeline_intervals(root):
+def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
     """``fivid identify`` with defaults on the ingested twin: the truth inside the law's 95 % intervals.
 
     The same comparison as the pipeline's slow test (tests/test_pipeline_sample.py), at the defaults
@@ -107,3 +107,18 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root):
     hint = [m for m in res.messages if m.startswith("no tare given")]
     assert len(hint) == 1 and "tare=(0, 0.0151) s" in hint[0] and "up to 0.0036" in hint[0], res.messages
     assert not any(m.startswith("no tare") for m in identify_friction_law(runs, tare=(0.0, 0.015)).messages)
+
+    # the engineer's command, `fivid identify *.nc -o law.nc`, gives the same law and records its settings
+    import xarray as xr
+
+    from fivid.cli import main
+    from fivid.io import write_run
+
+    paths = [str(write_run(ds, tmp_path / f"{ds.attrs['run_id']}.nc")) for ds in runs]
+    assert main(["identify", *paths, "-o", str(tmp_path / "law.nc")]) == 0
+    with xr.open_dataset(tmp_path / "law.nc") as law:
+        np.testing.assert_array_equal(law["run_mu_rms"].values, [r.mu_rms for r in res.runs])
+        assert list(law["run_nperseg"].values) == [4096] * len(runs)
+        assert list(law["run_mains_removal"].values) == ["on"] * len(runs)
+        assert law.attrs["setting_welch_frequency_resolution"] == 12.5 and law.attrs["setting_nperseg"] == "auto"
+        assert law.attrs["setting_nperseg_rule"].startswith("largest power of two")
