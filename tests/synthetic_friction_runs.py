@@ -19,7 +19,7 @@ import xarray as xr
 from fivid.friction import AmplitudeModel, PerturbedCoulombLaw, synthesise_perturbation
 from fivid.schema import apply_cf_attrs, new_history, validate_run
 
-__all__ = ["true_law", "synthetic_run", "run_grid", "band_fraction", "band_amplitude", "FS", "ANALYSIS_BAND", "MU0"]
+__all__ = ["true_law", "edge_law", "synthetic_run", "run_grid", "band_fraction", "band_amplitude", "FS", "ANALYSIS_BAND", "MU0"]
 
 FS = 25600.0  # [Hz]
 ANALYSIS_BAND = (100.0, 5000.0)  # [Hz], multiples of the Welch resolution 12.5 Hz (nperseg 2048)
@@ -71,7 +71,8 @@ def _smoothstep(x):
 
 
 def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", duration=3.2, fs=FS,
-                  noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02, acceleration_psd=None):
+                  noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02, acceleration_psd=None,
+                  unloaded=0.6):
     """A SYNTHETIC RunDataset from ``law`` (see the module docstring).
 
     Parameters
@@ -86,14 +87,16 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
         Offsets of the friction and normal force sensors [N].
     hum : sequence of float
         Amplitudes [N] of the mains hum at the 1st, 3rd, 5th... harmonics of ``mains`` [Hz].
+    unloaded : float
+        Duration [s] of the unloaded start (the load ramps up over the next 0.1 s, the base over the 0.1 s after).
     acceleration_psd : callable, optional
         One-sided PSD [m2 s-4 Hz-1] of the acceleration (default: white, 0.5 m s-2 RMS).
     """
     rng = np.random.default_rng(seed + 1_000_003)
     n = int(round(duration * fs))
     t = np.arange(n) / fs
-    load = _smoothstep((t - 0.6) / 0.1)
-    slide = _smoothstep((t - 0.7) / 0.1) * _smoothstep((duration - 0.05 - t) / 0.1)
+    load = _smoothstep((t - unloaded) / 0.1)
+    slide = _smoothstep((t - unloaded - 0.1) / 0.1) * _smoothstep((duration - 0.05 - t) / 0.1)
     v = velocity * slide
     fn = normal_load * load * (1 + 0.01 * np.sin(2 * np.pi * 3.1 * t + rng.uniform(0, 6.28)))
     # the synthesis is periodic over its record with an exactly zero mean; drawn over 8 record lengths
@@ -139,3 +142,14 @@ def run_grid(law, seed, *, velocities=(0.005, 0.01, 0.02), roughnesses=(0.4e-6, 
                 runs.append(synthetic_run(law, velocity=v, roughness=ra, normal_load=fn, seed=seed * 1000 + i,
                                           run_id=f"S{i:02d}", **kw))
     return runs
+
+
+def edge_law() -> PerturbedCoulombLaw:
+    """A known law like the twin's (sample_data/ground_truth.yaml): s ∝ 1/(1 + (f/1 kHz)²) on 100 Hz–10 kHz,
+    zero below 100 Hz (a steep spectral edge next to the mains harmonics), μ0 = 0.3, and the linear
+    amplitude law of :func:`true_law`.
+    """
+    f = np.r_[0.0, 99.0, np.linspace(100.0, 10000.0, 3961), 10001.0, 12000.0]
+    s = np.where((f >= 100.0) & (f <= 10000.0), 1.0 / (1.0 + (f / 1000.0) ** 2), 0.0)
+    base = true_law("linear_velocity")
+    return PerturbedCoulombLaw(MU0, f, s, base.amplitude_model, (f[0], f[-1]))

@@ -22,7 +22,8 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError
 from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
 from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
-from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, RunAnalysis, RunSettings, analyse_run
+from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis, RunSettings,
+                                  analyse_run)
 from fivid.identify.shape import SpectralShape, identify_shape
 
 __all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
@@ -154,6 +155,11 @@ class FrictionIdentification:
         for name, (values, units) in table.items():
             ds[name] = ("run", np.asarray(values, float), {"units": units})
         ds["run_used"] = ("run", np.array([r.used for r in self.runs], dtype=np.int8))
+        ds["run_nperseg"] = ("run", np.array([r.psd_attrs.get("nperseg", 0) for r in self.runs], dtype=np.int32),
+                             {"units": "1", "long_name": "Welch segment length [samples] (0: run not analysed)"})
+        ds["run_mains_bins_removed"] = ("run", np.array([r.mains_bins_removed for r in self.runs], dtype=np.int32),
+                                        {"units": "1"})
+        ds["run_mains_removal"] = ("run", np.array([r.mains_removal for r in self.runs], dtype=object))
         ds["run_reason"] = ("run", np.array([r.reason for r in self.runs], dtype=object))
         ds = ds.assign_coords(run=("run", run))
         forms = np.array([f.form for f in self.form_fits], dtype=object)
@@ -214,6 +220,38 @@ def _check_band(band, datasets):
     return lo, hi
 
 
+def _unloaded_start(ds, fraction: float = 0.05):
+    """Length [s] of the record's unloaded start (|Fn| < ``fraction`` of the nominal load) and the mean
+    friction force (sign as in μ > 0) and normal force [N] there (the sensor offsets), or None when the
+    record starts loaded."""
+    fn = np.asarray(ds["normal_force"].values, float)
+    load = float(ds.attrs.get("normal_load", np.nan))
+    if not load > 0 or fn.size < 2:
+        return None
+    above = np.abs(fn) >= fraction * load
+    k = int(np.argmax(above))
+    if k < 10 or not above.any():
+        return None
+    t = np.asarray(ds["time"].values, float)
+    ft = np.asarray(ds["friction_force"].values, float)
+    sign = 1.0 if np.mean(ft) >= 0 else -1.0  # the sign convention analyse_run makes positive
+    return float(t[k] - t[0]), sign * float(np.mean(ft[:k])), float(np.mean(fn[:k]))
+
+
+def _tare_hint(datasets, analyses):
+    """A message when no tare was given but every used run starts unloaded: the offsets there bias μ0."""
+    pairs = [(ds, r) for ds, r in zip(datasets, analyses) if r.used]
+    starts = [_unloaded_start(ds) for ds, _ in pairs]
+    if not pairs or any(s is None for s in starts):
+        return None
+    bias = [(ft0 - r.mu_mean * fn0) / r.normal_load for (_, r), (_, ft0, fn0) in zip(pairs, starts)]
+    span = min(s[0] for s in starts)
+    return (f"no tare given, but every run starts unloaded for >= {span * 1e3:.3g} ms (|Fn| < 5 % of the nominal "
+            f"load), where the force sensors read offsets that bias mu by (offset_t - mu offset_n)/Fn, up to "
+            f"{max(np.abs(bias)):.2g} here; pass tare=(0, {0.75 * span:.3g}) s "
+            f"(--tare 0 {0.75 * span:.3g}) to remove them")
+
+
 def _mu0_interval(used, confidence):
     from scipy import stats
 
@@ -252,7 +290,10 @@ def identify_friction_law(
         Valid band [Hz]; default 20 Hz to min(2 kHz, 0.4 fs) — set it to where the force chain
         is dynamic-free (or give ``transfer_function``).
     nperseg : int, optional
-        Welch segment length [samples]; default :func:`fivid.identify.runs.default_nperseg`.
+        Welch segment length [samples]; default per run :func:`fivid.identify.runs.default_nperseg`:
+        bins of at most mains/4 (12.5 Hz at 50 Hz) so that mains-line removal takes only the lines,
+        within ≥ 7 segments, else the coarser rule of ≥ 31 segments (lines then left in, with a
+        message). The segment length of every run is in the law file (``run_nperseg``).
     tolerance : float, default 0.05
         Relative velocity tolerance of the steady-sliding window [-].
     min_normal_force : float, default 0.1
@@ -260,7 +301,8 @@ def identify_friction_law(
     tare : (float, float), optional
         Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
     mains_frequency : float or None, default 50.0
-        Mains harmonics standing out of the PSD are interpolated over [Hz]; None disables.
+        Mains harmonics standing out of the PSD are interpolated over [Hz], in runs whose Welch bins
+        are <= mains/4 (else left in, with a message); None disables.
     noise_correction : bool, default True
         With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
     transfer_function : xarray.DataArray, optional
@@ -313,7 +355,13 @@ def identify_friction_law(
         reasons = "; ".join(f"{r.run_id}: {r.reason}" for r in analyses)
         raise DataQualityError(f"no usable run among {len(analyses)}: {reasons}")
     messages = [f"run {r.run_id} excluded: {r.reason}" for r in analyses if not r.used]
+    messages += [f"run {r.run_id}: mains-line removal {r.mains_removal}" for r in used
+                 if r.mains_removal.startswith("not done")]
     mu0, mu0_ci = _mu0_interval(used, confidence)
+    hint = _tare_hint(datasets, analyses) if tare is None else None
+    if hint:
+        messages.append(hint)
+        _log.info(hint)
     v_ref = float(np.exp(np.mean(np.log([r.sliding_velocity for r in used])))) if injection == "convected" else None
     shape = identify_shape(used, band, smoothing_octaves=smoothing_octaves, injection=injection,
                            reference_velocity=v_ref)
@@ -351,6 +399,7 @@ def identify_friction_law(
         "transfer_function": "none" if transfer_function is None else "given",
         "shape_method": shape_method, "smoothing_octaves": smoothing_octaves, "forms": ",".join(forms),
         "weighting": weighting, "injection": injection, "confidence": confidence,
+        "nperseg_rule": "given" if nperseg else NPERSEG_RULE,
         "welch": dict(used[0].psd_attrs),
     }
     return FrictionIdentification(

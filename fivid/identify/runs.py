@@ -29,7 +29,8 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError, SchemaError
 
 __all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
-           "default_nperseg"]
+           "default_nperseg", "mains_lines_resolved",
+           "NPERSEG_RULE"]
 
 _log = logging.getLogger("fivid")
 
@@ -82,6 +83,8 @@ class RunSettings:
         }
 
 
+NPERSEG_RULE = ("largest power of two <= n/16 with fs/nperseg >= 2 Hz (>= 256); raised to fs/nperseg <= mains/4 "
+                "while nperseg <= n/4 (n: steady-window samples)")
 DEFAULT_BAND_LOW = 20.0  # [Hz] above drift and the loading device's rigid-body modes
 DEFAULT_BAND_HIGH = 2000.0  # [Hz] placeholder for where a TRIBOAIR-like force chain is dynamic-free
 
@@ -109,6 +112,7 @@ class RunAnalysis:
     psd: np.ndarray = field(default_factory=lambda: np.zeros(0))
     weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mains_bins_removed: int = 0
+    mains_removal: str = ""
     noise_fraction: float = np.nan
     psd_attrs: dict = field(default_factory=dict)
 
@@ -130,21 +134,50 @@ class RunAnalysis:
             "mu_rms_stderr": self.mu_rms_stderr,
             "mu_rms_total": self.mu_rms_total,
             "mains_bins_removed": self.mains_bins_removed,
+            "mains_removal": self.mains_removal,
             "noise_fraction": self.noise_fraction,
         }
 
 
-def default_nperseg(sample_rate: float, n_samples: int) -> int:
+def default_nperseg(sample_rate: float, n_samples: int, mains_frequency: float | None = None) -> int:
     """Default Welch segment length [samples] for a window of ``n_samples`` at ``sample_rate`` [Hz].
 
-    Returns the largest power of two ``m`` with ``fs / m >= 2 Hz`` (resolves mains harmonics
-    apart from the broadband floor) and ``m <= n / 16`` (at least ~31 half-overlapped segments),
-    and at least 256.
+    Two needs set it:
+
+    - **averages**: the largest power of two ``m`` with ``m <= n / 16`` (at least ~31
+      half-overlapped segments) and ``fs / m >= 2 Hz``, and at least 256;
+    - **mains lines** (``mains_frequency`` given): the line test of :func:`mains_line_bins` and the
+      interpolation over a line's ±2-bin main lobe touch only the line when the bins are narrow
+      compared with the line spacing. With ``Δf <= f_m / 4`` a harmonic's lobe spans ±f_m/2 and
+      its floor (5–15 bins away) lies 1.25–3.75 f_m away, so a line removes 5 bins of width f_m/4
+      (1.25 f_m of spectrum per harmonic, replaced by interpolation, not zeroed). At ``Δf = f_m``
+      (e.g. 1024 samples at 51.2 kHz and 50 Hz mains) the lobe is as wide as the line spacing: every
+      bin is "near a harmonic", broadband structure is taken for lines and interpolated away — on the
+      synthetic twin data this underestimated A by 10–17 %. So ``m`` is raised to the smallest power
+      of two with ``fs / m <= f_m / 4``, but not beyond ``n / 4`` (≥ 7 half-overlapped segments,
+      ν ≈ 13 χ² degrees of freedom per bin, which the line test's quantile accounts for). A window
+      too short for that resolution keeps the averages rule; :func:`analyse_run` then does not remove
+      lines (see :func:`mains_lines_resolved`).
+
+    The band power A² and its variance do not depend on ``m`` (a sum over the band of a Welch PSD
+    estimates ``(1/T) ∫ S² df`` for any resolution), so the finer segments cost no precision of A.
     """
     m = 256
     while 2 * m <= n_samples / 16 and sample_rate / (2 * m) >= 2.0:
         m *= 2
+    if mains_frequency:
+        while sample_rate / m > mains_frequency / 4 and 2 * m <= n_samples / 4:
+            m *= 2
     return m
+
+
+def mains_lines_resolved(resolution: float, mains_frequency: float | None) -> bool:
+    """True when Welch bins of width ``resolution`` [Hz] resolve mains lines: ``Δf <= f_m / 4``.
+
+    See :func:`default_nperseg`; coarser bins make :func:`mains_line_bins` take broadband power
+    for lines.
+    """
+    return bool(mains_frequency) and resolution <= mains_frequency / 4 * (1 + 1e-9)
 
 
 def band_weights(frequency: np.ndarray, band: tuple) -> np.ndarray:
@@ -168,15 +201,19 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
 
     A Hann-windowed line at frequency ``f_k = k f_m`` puts its power into the bins within two bins
     of ``f_k`` (the main lobe; 2.5 bins away the leakage is below −31 dB). For each harmonic in the
-    band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the median of the
-    bins 5 to 15 bins away on either side. A line is declared when the largest of them exceeds the
-    floor by more than a broadband bin would with probability ``p_false`` over the whole band
-    (near 0 Hz the floor window is clipped to the bins above 0 Hz):
+    band, the bins with ``|f − f_k| <= 2 Δf`` are compared with the local floor, the higher of the
+    medians of the bins 5 to 15 bins away on each side (the edge of a steep broadband feature, low on
+    one side and high on the other, is then not a line). A line is declared when the largest of them
+    exceeds the floor by more than a broadband bin would with probability ``p_false`` over the whole
+    band (near 0 Hz the floor window is clipped to the bins above 0 Hz):
     the χ² quantile ``chi2.ppf(1 − p_false/M, dof)/dof`` (Bonferroni over the M bins tested), times
     ``1 + 3 sd`` of the floor's own estimate (the median of n bins of relative sd ``sqrt(2/dof)``
-    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``). A line is narrow: the peak must also exceed,
-    by the same factor, the median of its shoulders 4 and 5 bins away (outside the main lobe), so a
-    broad resonance near a mains harmonic is not taken for hum (seen on real friction-damper data).
+    has relative sd ``1.253 sqrt(2/dof) / sqrt(n)``, n = 11 per side). Lines are resolved only
+    when ``Δf <= f_m / 4`` (:func:`mains_lines_resolved`); :func:`analyse_run` does not call this
+    with coarser bins on the PSD of μp (it does on the smooth sensor-noise PSD of the tare interval).
+    A line is narrow: the peak must also exceed, by the same factor, the median of its shoulders 4 and
+    5 bins away (outside the main lobe), so a broad resonance near a mains harmonic is not taken for
+    hum (seen on real friction-damper data).
 
     Returns
     -------
@@ -207,8 +244,10 @@ def mains_line_bins(frequency, psd, dof, mains_frequency, band, *, p_false=1e-2)
     in_lobe = np.abs(f[near] - fk[:, None]) <= 2 * df
     n_tested = int(in_lobe.sum())
     chi = stats.chi2.ppf(1.0 - p_false / n_tested, dof) / dof
-    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(around.shape[1]))
-    floor = np.median(p[around], axis=1)
+    half = around.shape[1] // 2  # the floor on each side; a line stands above the higher one, so that the
+    # edge of a steep broadband feature (one side low, one side high) is not taken for a line
+    threshold = chi * (1.0 + 3.0 * 1.253 * np.sqrt(2.0 / dof) / np.sqrt(half))
+    floor = np.maximum(np.median(p[around[:, :half]], axis=1), np.median(p[around[:, half:]], axis=1))
     shoulder = np.median(p[np.clip(centre[:, None] + np.array([-5, -4, 4, 5])[None, :], 1, f.size - 1)], axis=1)
     peak = np.where(in_lobe, p[near], -np.inf).max(axis=1)
     line = (floor > 0) & (peak > threshold * floor) & (peak > threshold * shoulder)
@@ -224,6 +263,8 @@ def _replace_lines(frequency, psd, mask):
     out = psd.copy()
     keep = ~mask
     keep[0] = False
+    if not keep.any():  # nothing to interpolate from
+        return psd
     out[mask] = np.interp(frequency[mask], frequency[keep], psd[keep])
     return out
 
@@ -335,7 +376,7 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
     res.mu_mean, res.mu_mean_ci = batch_means_interval(mu, settings.n_batches, settings.confidence)
     mup = mu - res.mu_mean
     res.mu_rms_total = float(np.sqrt(np.mean(mup**2)))
-    nperseg = settings.nperseg or default_nperseg(fs, mup.size)
+    nperseg = settings.nperseg or default_nperseg(fs, mup.size, settings.mains_frequency)
     da = xr.DataArray(mup, dims="time", coords={"time": t[win]}, name="friction_perturbation",
                       attrs={"units": "1", "run_id": run_id})
     if mup.size < 2 * nperseg:
@@ -346,7 +387,9 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
     f = np.asarray(p["frequency"].values, float)
     dof = float(p.attrs["equivalent_degrees_of_freedom"])
     values = np.asarray(p.values, float)
-    mask = mains_line_bins(f, values, dof, settings.mains_frequency, band)
+    res.mains_removal = _mains_removal_state(f[1] - f[0], settings.mains_frequency, mup.size, fs)
+    mains = settings.mains_frequency if res.mains_removal == "on" else None
+    mask = mains_line_bins(f, values, dof, mains, band)
     values = _replace_lines(f, values, mask)
     res.mains_bins_removed = int(np.count_nonzero(mask & (f >= band[0]) & (f <= band[1])))
     noise = None
@@ -379,6 +422,17 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
                                                "frequency_resolution") if k in p.attrs}
     res.used = True
     return res
+
+
+def _mains_removal_state(resolution, mains_frequency, n_samples, fs):
+    """``"on"``, ``"off"`` (no mains frequency) or why lines are left in (bins too coarse)."""
+    if not mains_frequency:
+        return "off"
+    if mains_lines_resolved(resolution, mains_frequency):
+        return "on"
+    return (f"not done: Welch resolution {resolution:.4g} Hz > mains/4 = {mains_frequency / 4:.4g} Hz would take "
+            f"broadband power for lines (needs segments of >= {int(np.ceil(4 * fs / mains_frequency))} samples; "
+            f"the window has {n_samples}); the hum power stays in A")
 
 
 def _tare(t, ft, fn, settings, label):
@@ -426,6 +480,8 @@ def _tare_noise_psd(t, ft, fn, mu_mean, fn_mean, f, nperseg, fs, band, settings)
     fq = np.asarray(p["frequency"].values, float)
     v = np.asarray(p.values, float)
     nu = float(p.attrs["equivalent_degrees_of_freedom"])
+    # at any resolution: interpolating over a sensor-noise floor, smooth by nature and median-smoothed
+    # below, takes no broadband structure away (unlike on the PSD of μp, see default_nperseg)
     mask = mains_line_bins(fq, v, nu, settings.mains_frequency, (fq[1], fq[-1]))
     v = _replace_lines(fq, v, mask)
     v[1:] = octave_median(fq[1:], v[1:], 1.0 / 3.0) * nu / stats.chi2.ppf(0.5, nu)

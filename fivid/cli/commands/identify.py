@@ -26,7 +26,8 @@ def register(subparsers) -> None:
                    help="valid band [Hz] (default 20 Hz to min(2 kHz, 0.4 fs): where the force chain is trustworthy)")
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
     p.add_argument("--report", metavar="REPORT.json", help="also write the JSON report to this file")
-    p.add_argument("--nperseg", type=int, help="Welch segment length [samples] (default: automatic)")
+    p.add_argument("--nperseg", type=int, help="Welch segment length [samples] (default per run: bins <= mains/4, e.g. 12.5 Hz at 50 Hz, so that "
+                   "mains-line removal takes only the lines, with >= 7 segments; see docs/identification.md)")
     p.add_argument("--tolerance", type=float, default=0.05,
                    help="relative velocity tolerance of the steady-sliding window (default 0.05)")
     p.add_argument("--min-normal-force", type=float, default=0.1,
