@@ -31,3 +31,20 @@ def test_main_restores_the_fivid_logger(tmp_path):
     status = main(["-vv", "ingest", str(tmp_path / "missing.csv"), "-o", str(tmp_path)])
     assert status == 2
     assert (list(log.handlers), log.level, log.propagate) == before
+
+
+def test_a_missing_optional_package_gets_an_install_hint(monkeypatch, capsys):
+    import argparse
+
+    import fivid.cli as cli
+
+    def needs_dask(args):
+        raise ModuleNotFoundError("No module named 'distributed'", name="distributed")
+
+    parser = argparse.ArgumentParser()
+    parser.add_argument("-v", "--verbose", action="count", default=0)
+    parser.set_defaults(command="run", func=needs_dask)
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    assert cli.main([]) == 1
+    err = capsys.readouterr().err
+    assert "'distributed'" in err and "fivid[sweep]" in err and "Traceback" not in err

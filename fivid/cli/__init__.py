@@ -29,6 +29,9 @@ EXIT_FAILURE = 1
 EXIT_BAD_INPUT = 2
 EXIT_BELOW_THRESHOLD = 3
 
+# optional dependencies (pyproject extras) -> the extra that installs them
+_OPTIONAL = {"dask": "sweep", "distributed": "sweep", "matplotlib": "report"}
+
 _EPILOG = """\
 exit status: 0 ok, 2 bad input or configuration, 3 scores below thresholds (fivid run),
 1 unexpected failure, 130 interrupted.
@@ -80,6 +83,15 @@ def _logging_to_stderr(verbosity: int):
         log.setLevel(level0)
 
 
+def _missing_optional(exc: BaseException) -> str | None:
+    """The optional package whose absence raised ``exc``, or None."""
+    if isinstance(exc, ModuleNotFoundError):
+        root = (exc.name or "").split(".")[0]
+        if root in _OPTIONAL:
+            return root
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``fivid`` command; returns the exit status."""
     parser = build_parser()
@@ -96,7 +108,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"fivid {args.command}: interrupted", file=sys.stderr)
         return 130
-    except Exception:
+    except Exception as exc:
+        missing = _missing_optional(exc)
+        if missing is not None:
+            print(f"fivid {args.command}: error: this command needs the optional package {missing!r}, which is not "
+                  f"installed; install it with: python -m pip install 'fivid[{_OPTIONAL[missing]}]'", file=sys.stderr)
+            return EXIT_FAILURE
         import traceback
 
         traceback.print_exc()
