@@ -89,6 +89,20 @@ def test_config_errors_name_the_key(path, value, match):
     assert ".".join(path) in str(err.value)
 
 
+@pytest.mark.parametrize("path", [("beam", "tip_mas"), ("contact", "stifness"), ("harmonic_balance", "harmonic"),
+                                  ("frequency_rang",)])
+def test_config_unknown_keys_are_errors(path):
+    # a misspelt optional key (beam.tip_mas) would otherwise silently fall back to its default
+    cfg = _cfg()
+    node = cfg
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = "1 kg"
+    with pytest.raises(ConfigError, match="unknown key; allowed") as err:
+        damper_model_from_dict(cfg)
+    assert ".".join(path) in str(err.value)
+
+
 def test_config_file_errors(tmp_path):
     p = tmp_path / "m.yaml"
     p.write_text("beam: [1, 2\n")
