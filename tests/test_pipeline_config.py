@@ -103,3 +103,5 @@ def test_invalid_yaml_names_line(tmp_path):
     with pytest.raises(ConfigError) as err:
         load_recipe(path)
     assert err.value.line is not None
+    # the CLI prints an error in one line: the parser's problem, not its multi-line excerpt of the file
+    assert "\n" not in str(err.value) and "column" in str(err.value)
