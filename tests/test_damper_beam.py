@@ -109,3 +109,6 @@ def test_config_file_errors(tmp_path):
     with pytest.raises(ConfigError, match="not valid YAML") as err:
         load_damper_model(p)
     assert str(p) in str(err.value)
+    p.write_bytes(b"name: \xff\n")
+    with pytest.raises(ConfigError, match="not UTF-8 text"):
+        load_damper_model(p)

@@ -195,6 +195,9 @@ def load_damper_model(path) -> DamperModel:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ConfigError(f"cannot read the model file: {exc.strerror}", file=path) from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})",
+                          file=path) from None
     try:
         cfg = yaml.safe_load(text)
     except yaml.YAMLError as exc:
