@@ -144,8 +144,9 @@ def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
         youngs_modulus=_q(beam, "beam", "youngs_modulus", "Pa"),
         density=_q(beam, "beam", "density", "kg m-3"),
     )
-    fe = cantilever_beam(**props, n_elements=n_el, points=(xc, xe, xm),
-                         tip_mass=_q(beam, "beam", "tip_mass", "kg", default=0.0), clamp_rotational_stiffness=k_rot)
+    tip_mass = _q(beam, "beam", "tip_mass", "kg", default=0.0)
+    fe = cantilever_beam(**props, n_elements=n_el, points=(xc, xe, xm), tip_mass=tip_mass,
+                         clamp_rotational_stiffness=k_rot)
     zeta = _q(beam, "beam", "modal_damping_ratio", "1", default=0.005)
     modal = modal_model_from_matrices(fe.mass, fe.stiffness, fe.transverse_dof(xc), fe.transverse_dof(xe),
                                       fe.transverse_dof(xm), zeta)
@@ -182,7 +183,7 @@ def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
         harmonics=harmonics,
         samples_per_period=nt,
         source=source,
-        beam=dict(props, tip_mass=_q(beam, "beam", "tip_mass", "kg", default=0.0), n_elements=n_el),
+        beam=dict(props, tip_mass=tip_mass, n_elements=n_el),
     )
 
 
