@@ -324,6 +324,8 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
         chk.add("model", f"model file {str(model)!r} does not exist")
 
     out = Path(output) if output is not None else _resolve(base, raw.get("output", "out"))
+    if out.exists() and not out.is_dir():
+        chk.add("output", f"output {str(out)!r} exists and is not a folder; name a folder (it is created if missing)")
 
     analysis = chk.section(raw, "analysis", {"band", "nperseg", "settle"})
     band_raw = analysis.get("band", ["100 Hz", "20 kHz"])
