@@ -53,6 +53,30 @@ def test_tip_mass_and_compliant_clamp():
     assert _fe(20, clamp_rotational_stiffness=1e3)[0] < _fe(20)[0]
 
 
+def test_tip_mass_against_the_exact_frequency_equation():
+    """First frequency of a cantilever with a tip point mass: the exact Euler-Bernoulli root.
+
+    With ``r = m_t / m_beam`` the frequency equation is
+    ``1 + cos(bL) cosh(bL) + r bL (cos(bL) sinh(bL) - sin(bL) cosh(bL)) = 0`` (e.g. Blevins, Formulas for
+    natural frequency and mode shape, table 8-8); its first root lies below the bare beam's 1.8751.
+    """
+    from scipy.optimize import brentq
+
+    ei = 210e9 * 0.04 * 0.008**3 / 12
+    m_beam = 7850 * 0.04 * 0.008 * 0.5
+    for m_t in (0.0725, 1.0):  # 0.0725 kg: the seed 004 configs (their free beam at 24.09 Hz)
+        r = m_t / m_beam
+
+        def g(b, r=r):
+            return 1 + np.cos(b) * np.cosh(b) + r * b * (np.cos(b) * np.sinh(b) - np.sin(b) * np.cosh(b))
+
+        bl = brentq(g, 0.5, BETA_L[0], xtol=1e-14)
+        exact = bl**2 / (2 * np.pi) * np.sqrt(ei / (m_beam / 0.5 * 0.5**4))
+        # 20 Hermite elements: the bare beam's error is < 1e-6 at 16 (previous test) and falls as h^4;
+        # the point mass adds no discretisation error (it sits on a node)
+        assert _fe(20, tip_mass=m_t)[0] == pytest.approx(exact, rel=1e-6)
+
+
 def test_points_become_nodes():
     b = cantilever_beam(0.5, 0.04, 0.008, 210e9, 7850, n_elements=20, points=(0.35, 0.3333))
     assert 0.3333 in b.node_x and 0.35 in b.node_x
@@ -89,9 +113,26 @@ def test_config_errors_name_the_key(path, value, match):
     assert ".".join(path) in str(err.value)
 
 
+@pytest.mark.parametrize("path", [("beam", "tip_mas"), ("contact", "stifness"), ("harmonic_balance", "harmonic"),
+                                  ("frequency_rang",)])
+def test_config_unknown_keys_are_errors(path):
+    # a misspelt optional key (beam.tip_mas) would otherwise silently fall back to its default
+    cfg = _cfg()
+    node = cfg
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = "1 kg"
+    with pytest.raises(ConfigError, match="unknown key; allowed") as err:
+        damper_model_from_dict(cfg)
+    assert ".".join(path) in str(err.value)
+
+
 def test_config_file_errors(tmp_path):
     p = tmp_path / "m.yaml"
     p.write_text("beam: [1, 2\n")
     with pytest.raises(ConfigError, match="not valid YAML") as err:
         load_damper_model(p)
     assert str(p) in str(err.value)
+    p.write_bytes(b"name: \xff\n")
+    with pytest.raises(ConfigError, match="not UTF-8 text"):
+        load_damper_model(p)

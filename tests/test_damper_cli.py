@@ -72,3 +72,12 @@ def test_frf_arclength_json(capsys):
 def test_damper_without_action_shows_help(capsys):
     assert main(["damper"]) == 2
     assert "fit" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, key", [(["--normal-load", "5", "-5"], "--normal-load"),
+                                       (["--normal-load", "nan"], "--normal-load"),
+                                       (["--normal-load", "5", "--points", "1"], "--points")])
+def test_frf_bad_arguments_name_the_option(args, key, capsys):
+    assert main(["damper", "frf", str(CONFIGS / "seed004_model1.yaml"), *args]) == 2
+    err = capsys.readouterr().err
+    assert f"key '{key}'" in err and "Traceback" not in err

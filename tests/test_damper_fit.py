@@ -117,6 +117,9 @@ def test_unknown_units(tmp_path):
     ("time,displacement [m],force [N]\n0,0,0\n", UnitError, "has no unit", 1),
     ("time [s],force [N]\n0,0\n", SchemaError, "missing columns", 1),
     ("time [s],displacement [m],force [N]\n0,0,0\n1,x,0\n", SchemaError, "not numeric", 3),
+    # a repeated column would silently replace the first one
+    ("time [s],displacement [m],force [N],force [kN]\n0,0,0,0\n", SchemaError, "appears twice", 1),
+    ("time [s],displacement [m],force [N],friction_force [N]\n0,0,0,0\n", SchemaError, "keep one", 1),
 ])
 def test_csv_without_units_or_columns(tmp_path, text, error, match, line):
     p = tmp_path / "a.csv"
@@ -124,3 +127,12 @@ def test_csv_without_units_or_columns(tmp_path, text, error, match, line):
     with pytest.raises(error, match=match) as err:
         read_hysteresis(p)
     assert err.value.line == line
+
+
+@pytest.mark.parametrize("name", ["a.csv", "a.json"])
+def test_non_utf8_file_is_a_schema_error(tmp_path, name):
+    p = tmp_path / name
+    p.write_bytes(b"time [s],displacement [m],force [N]\n0,0,\xff\n")
+    with pytest.raises(SchemaError, match="not UTF-8 text .byte 0xff at offset 40") as err:
+        read_hysteresis(p)
+    assert name in str(err.value)

@@ -104,6 +104,15 @@ def test_iwan_energy_is_sum_of_elements():
     assert abs(w - iwan_energy_per_cycle(a, ks, fss)) <= 2 * fs * 2 * np.pi * a / 20000
 
 
+def test_iwan_energy_accepts_an_amplitude_array_like_jenkins():
+    # an array of amplitudes gives the array of scalar results (jenkins_energy_per_cycle does the same)
+    ks, fss = iwan_uniform_elements(1e3, 1.0, 10)
+    a = np.array([0.5e-3, 1e-3, 3e-3])
+    w = iwan_energy_per_cycle(a, ks, fss)
+    assert w.shape == a.shape
+    assert np.array_equal(w, [iwan_energy_per_cycle(ai, ks, fss) for ai in a])
+
+
 @pytest.mark.parametrize("k, fs", [(0.0, 1.0), (1.0, -1.0), (np.nan, 1.0), (1.0, np.inf)])
 def test_bad_parameters(k, fs):
     with pytest.raises(FividError, match="must be finite and > 0"):

@@ -103,3 +103,13 @@ def test_invalid_yaml_names_line(tmp_path):
     with pytest.raises(ConfigError) as err:
         load_recipe(path)
     assert err.value.line is not None
+    # the CLI prints an error in one line: the parser's problem, not its multi-line excerpt of the file
+    assert "\n" not in str(err.value) and "column" in str(err.value)
+
+
+def test_output_that_is_a_file_is_a_config_error(folder, tmp_path):
+    # the output must be a folder: a file there made the run fail in mkdir with a traceback
+    (tmp_path / "taken").write_text("")
+    with pytest.raises(ConfigError, match="is not a folder") as err:
+        load_run_config(_config(folder), output=tmp_path / "taken")
+    assert err.value.key == "output"

@@ -77,10 +77,31 @@ class DamperModel:
         return replace(self, **kw)
 
 
+# Keys a damper model config may have (a typo of an optional key would otherwise fall back to its default).
+_ALLOWED_KEYS = {
+    "": {"name", "description", "beam", "contact", "excitation", "measurement", "frequency_range",
+         "harmonic_balance"},
+    "beam": {"length", "width", "thickness", "youngs_modulus", "density", "tip_mass", "n_elements",
+             "modal_damping_ratio", "clamp_rotational_stiffness"},
+    "contact": {"position", "friction_coefficient", "stiffness"},
+    "excitation": {"position", "amplitude"},
+    "measurement": {"position"},
+    "harmonic_balance": {"harmonics", "samples_per_period"},
+}
+
+
+def _check_keys(node: dict, name: str) -> None:
+    unknown = sorted(str(k) for k in node if k not in _ALLOWED_KEYS[name])
+    if unknown:
+        key = f"{name}.{unknown[0]}" if name else unknown[0]
+        raise ConfigError(f"unknown key; allowed: {', '.join(sorted(_ALLOWED_KEYS[name]))}", key=key)
+
+
 def _section(cfg: dict, name: str) -> dict:
     sec = cfg.get(name)
     if not isinstance(sec, dict):
         raise ConfigError(f"missing or invalid section {name!r} (a mapping of quantities with units)", key=name)
+    _check_keys(sec, name)
     return sec
 
 
@@ -99,6 +120,7 @@ def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
     """Build a :class:`DamperModel` from a parsed config (see the module docstring for the layout)."""
     if not isinstance(cfg, dict):
         raise ConfigError("a damper model config must be a mapping", file=source if source != "dict" else None)
+    _check_keys(cfg, "")
     beam = _section(cfg, "beam")
     contact = _section(cfg, "contact")
     excitation = _section(cfg, "excitation")
@@ -122,8 +144,9 @@ def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
         youngs_modulus=_q(beam, "beam", "youngs_modulus", "Pa"),
         density=_q(beam, "beam", "density", "kg m-3"),
     )
-    fe = cantilever_beam(**props, n_elements=n_el, points=(xc, xe, xm),
-                         tip_mass=_q(beam, "beam", "tip_mass", "kg", default=0.0), clamp_rotational_stiffness=k_rot)
+    tip_mass = _q(beam, "beam", "tip_mass", "kg", default=0.0)
+    fe = cantilever_beam(**props, n_elements=n_el, points=(xc, xe, xm), tip_mass=tip_mass,
+                         clamp_rotational_stiffness=k_rot)
     zeta = _q(beam, "beam", "modal_damping_ratio", "1", default=0.005)
     modal = modal_model_from_matrices(fe.mass, fe.stiffness, fe.transverse_dof(xc), fe.transverse_dof(xe),
                                       fe.transverse_dof(xm), zeta)
@@ -140,6 +163,9 @@ def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
     if not 0 < f_lo < f_hi:
         raise ConfigError(f"frequency_range must have 0 < low < high, got {fr!r}", key="frequency_range")
     hb = cfg.get("harmonic_balance", {}) or {}
+    if not isinstance(hb, dict):
+        raise ConfigError(f"harmonic_balance must be a mapping, got {hb!r}", key="harmonic_balance")
+    _check_keys(hb, "harmonic_balance")
     harmonics = tuple(hb.get("harmonics", (1, 3, 5, 7)))
     if not harmonics or any((not isinstance(h, int)) or h < 1 or h % 2 == 0 for h in harmonics):
         raise ConfigError(f"harmonics must be odd integers >= 1, got {list(harmonics)!r}", key="harmonic_balance.harmonics")
@@ -157,7 +183,7 @@ def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
         harmonics=harmonics,
         samples_per_period=nt,
         source=source,
-        beam=dict(props, tip_mass=_q(beam, "beam", "tip_mass", "kg", default=0.0), n_elements=n_el),
+        beam=dict(props, tip_mass=tip_mass, n_elements=n_el),
     )
 
 
@@ -170,6 +196,9 @@ def load_damper_model(path) -> DamperModel:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise ConfigError(f"cannot read the model file: {exc.strerror}", file=path) from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})",
+                          file=path) from None
     try:
         cfg = yaml.safe_load(text)
     except yaml.YAMLError as exc:

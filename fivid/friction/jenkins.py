@@ -148,9 +148,7 @@ def loop_energy(displacement, force) -> float:
     Positive for a dissipative (clockwise in the x-F plane) loop. The path should start and end
     at the same displacement (one cycle).
     """
-    x = np.asarray(displacement, dtype=float)
-    f = np.asarray(force, dtype=float)
-    return float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(x)))
+    return float(np.trapezoid(np.asarray(force, dtype=float), np.asarray(displacement, dtype=float)))
 
 
 def iwan_force(displacement, stiffnesses, slip_forces) -> np.ndarray:
@@ -201,7 +199,21 @@ def iwan_uniform_elements(stiffness: float, slip_force: float, n_elements: int):
 
 
 def iwan_energy_per_cycle(amplitude, stiffnesses, slip_forces):
-    """Energy per cycle of an Iwan model [J]: the sum of its elements' ``4 F_s,i (a - F_s,i / k_i)``."""
+    """Energy per cycle of an Iwan model [J]: the sum of its elements' ``4 F_s,i (a - F_s,i / k_i)``.
+
+    Parameters
+    ----------
+    amplitude : float or array_like
+        Displacement amplitude ``a`` [m].
+    stiffnesses, slip_forces : array_like, shape (m,)
+        Stiffness [N/m] and slip force [N] of each element.
+
+    Returns
+    -------
+    float or ndarray
+        [J], a float for a scalar amplitude, else an array of the amplitude's shape.
+    """
     ks = np.atleast_1d(np.asarray(stiffnesses, dtype=float))
     fss = np.atleast_1d(np.asarray(slip_forces, dtype=float))
-    return float(sum(jenkins_energy_per_cycle(amplitude, k, fs) for k, fs in zip(ks, fss)))
+    w = sum(jenkins_energy_per_cycle(amplitude, k, fs) for k, fs in zip(ks, fss))
+    return float(w) if np.ndim(w) == 0 else w

@@ -59,6 +59,15 @@ class HysteresisRecord:
     metadata: dict = field(default_factory=dict)
 
 
+def _read_text(path: Path) -> str:
+    """The file as UTF-8 text, or a SchemaError saying where the first non-UTF-8 byte is."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise SchemaError(f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start}); "
+                          "export the recording as UTF-8 CSV or JSON", file=path) from None
+
+
 def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
@@ -93,7 +102,7 @@ def read_hysteresis_json(path) -> HysteresisRecord:
     """Read the ARTS-Lab friction-damper JSON layout (see the module docstring)."""
     path = Path(path)
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(_read_text(path))
     except json.JSONDecodeError as exc:
         raise SchemaError(f"not valid JSON: {exc.msg}", file=path, line=exc.lineno) from None
     if not isinstance(doc, dict) or "data" not in doc:
@@ -133,7 +142,7 @@ def read_units_csv(path, example_header: str):
         ``(line number, text)`` of the data lines.
     """
     path = Path(path)
-    lines = path.read_text(encoding="utf-8").splitlines()
+    lines = _read_text(path).splitlines()
     meta = {}
     i = 0
     while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
@@ -149,7 +158,11 @@ def read_units_csv(path, example_header: str):
         if m is None:
             raise UnitError(f"header cell {cell.strip()!r} has no unit; write it as 'name [unit]'",
                             file=path, line=i + 1, column=cell.strip())
-        header[m.group(1).strip()] = (j, m.group(2).strip())
+        name = m.group(1).strip()
+        if name in header:
+            raise SchemaError(f"column {name!r} appears twice in the header (cells {header[name][0] + 1} and {j + 1})",
+                              file=path, line=i + 1, column=name)
+        header[name] = (j, m.group(2).strip())
     body = [(k, line) for k, line in enumerate(lines[i + 1:], start=i + 2) if line.strip()]
     return meta, i + 1, header, body
 
@@ -171,6 +184,9 @@ def read_hysteresis_csv(path) -> HysteresisRecord:
     path = Path(path)
     meta, header_line, header, body = read_units_csv(path, "time [s],displacement [m],force [N]")
     cols, scales = {}, {}
+    if "force" in header and "friction_force" in header:
+        raise SchemaError("both 'force' and 'friction_force' columns: keep one (they name the same quantity)",
+                          file=path, line=header_line, column="friction_force")
     for name, (j, unit) in header.items():
         if name in _CANONICAL:
             canon, to = _CANONICAL[name]

@@ -128,8 +128,12 @@ def read_yaml(path: str | os.PathLike, what: str) -> tuple[dict, str]:
     try:
         obj = yaml.safe_load(data.decode("utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        line = getattr(getattr(exc, "problem_mark", None), "line", None)
-        raise ConfigError(f"not valid YAML ({exc})", file=path, line=None if line is None else line + 1) from None
+        mark = getattr(exc, "problem_mark", None)
+        # one line: the parser's problem and its line/column, not its multi-line excerpt of the file
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        where = "" if mark is None else f" at column {mark.column + 1}"
+        raise ConfigError(f"not valid YAML: {problem}{where}", file=path,
+                          line=None if mark is None else mark.line + 1) from None
     if not isinstance(obj, dict):
         raise ConfigError(f"{what} must be a YAML mapping, got {type(obj).__name__}", file=path)
     return obj, hashlib.sha256(data).hexdigest()
@@ -320,6 +324,8 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
         chk.add("model", f"model file {str(model)!r} does not exist")
 
     out = Path(output) if output is not None else _resolve(base, raw.get("output", "out"))
+    if out.exists() and not out.is_dir():
+        chk.add("output", f"output {str(out)!r} exists and is not a folder; name a folder (it is created if missing)")
 
     analysis = chk.section(raw, "analysis", {"band", "nperseg", "settle"})
     band_raw = analysis.get("band", ["100 Hz", "20 kHz"])

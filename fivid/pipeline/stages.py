@@ -32,8 +32,6 @@ __all__ = ["STAGES", "condition_name", "evaluate_thresholds"]
 
 log = logging.getLogger("fivid")
 
-HEADLINE_SCORES = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
-
 
 def condition_name(velocity: float, load: float, roughness: float) -> str:
     """File-safe name of a test condition, e.g. ``v10mm_s-fn5N-ra0.8um`` (SI inputs)."""

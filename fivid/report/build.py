@@ -70,8 +70,8 @@ def measured_peaks(frequency, psd, band, *, prominence_db: float = 6.0, max_peak
     level = 10 * np.log10(np.maximum(np.asarray(psd, float), np.finfo(float).tiny))
     inside = (f >= band[0]) & (f <= band[1])
     idx, props = find_peaks(np.where(inside, level, -np.inf), prominence=prominence_db)
-    idx = idx[inside[idx]]
-    prom = props["prominences"][: idx.size] if idx.size else np.array([])
+    keep = inside[idx]  # the same mask on the peaks and on their prominences (they are aligned)
+    idx, prom = idx[keep], props["prominences"][keep]
     order = np.argsort(prom)[::-1][:max_peaks]
     return np.sort(f[idx[order]])
 

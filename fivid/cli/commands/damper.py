@@ -73,9 +73,12 @@ def _frf(args: argparse.Namespace) -> int:
     from fivid.errors import FividError
     from fivid.storage import dumps_json
 
-    model = load_damper_model(args.model)
     if args.points < 2:
-        raise FividError(f"--points must be >= 2, got {args.points}")
+        raise FividError(f"--points must be >= 2, got {args.points}", key="--points")
+    bad = [fn for fn in args.normal_load if not (np.isfinite(fn) and fn > 0)]
+    if bad:
+        raise FividError(f"normal force must be finite and > 0 N, got {bad[0]!r}", key="--normal-load")
+    model = load_damper_model(args.model)
     freqs = np.linspace(*model.frequency_range, args.points)
     curves = []
     for fn in args.normal_load:
