@@ -99,6 +99,12 @@ def expand_inputs(paths) -> list[Path]:
     return out
 
 
+def _folders_without_csv(paths) -> list[Path]:
+    """The folders among ``paths`` that hold no ``*.csv`` file (they would silently convert nothing)."""
+    return [p for p in map(Path, paths)
+            if p.is_dir() and not any(q.suffix.lower() == ".csv" and q.is_file() for q in p.iterdir())]
+
+
 def _convert(path: Path, head, target: Path, profile, overwrite: bool):
     """Read one file and write its RunDataset to ``target``; raises FividError."""
     if target.exists() and not overwrite:
@@ -140,7 +146,8 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
         Written paths and rejections. A file is rejected for any bad input (see
         :func:`~fivid.io.read_rig_csv`), for an output that exists (unless ``overwrite``), and when
         its ``run_id`` is also the ``run_id`` of another file of the call (all of them are rejected:
-        which one is right is for a person to decide).
+        which one is right is for a person to decide). A folder holding no ``*.csv`` file is
+        rejected too, so that a wrong folder does not pass as a successful ingest of nothing.
 
     Raises
     ------
@@ -151,8 +158,12 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
     profile = as_rig_profile(profile)
     outdir = prepare_output_folder(outdir)
     result = IngestResult()
+    inputs = expand_inputs(paths)
+    for folder in _folders_without_csv(paths):
+        result.rejected.append(Rejection(folder, FividError(
+            "the folder holds no *.csv file; give rig CSV files or a folder of them", file=folder)))
     heads = {}
-    for path in expand_inputs(paths):
+    for path in inputs:
         try:
             heads[path] = read_rig_head(path, profile)
         except FividError as exc:
@@ -181,6 +192,6 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
                 on_written(path, target, ds)
         if on_file_done is not None:
             on_file_done(path)
-    order = {p: i for i, p in enumerate(expand_inputs(paths))}
+    order = {p: i for i, p in enumerate(inputs)}
     result.rejected.sort(key=lambda r: order.get(r.path, len(order)))
     return result
