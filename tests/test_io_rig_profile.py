@@ -147,6 +147,8 @@ def test_profile_not_found_lists_known(tmp_path):
     assert "labdaq" in info.value.message and "triboair" in info.value.message
     with pytest.raises(ConfigError, match="does not exist"):
         load_rig_profile(tmp_path / "missing.yaml")
+    with pytest.raises(ConfigError, match="is a folder"):  # e.g. --rig configs/rigs
+        load_rig_profile(tmp_path)
 
 
 def test_invalid_yaml_names_the_line(tmp_path):

@@ -158,6 +158,8 @@ def load_rig_profile(name_or_path) -> RigProfile:
     )
     if looks_like_path:
         path = Path(name_or_path)
+        if path.is_dir():
+            raise ConfigError(f"rig profile {text!r} is a folder; give a YAML file in it or a profile name")
         if not path.is_file():
             raise ConfigError(f"rig profile file {text!r} does not exist")
     else:
