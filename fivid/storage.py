@@ -12,7 +12,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from fivid.errors import OutputExistsError
+from fivid.errors import FividError, OutputExistsError
 
 __all__ = ["atomic_path", "write_netcdf", "write_text", "write_json", "dumps_json", "check_writable"]
 
@@ -20,17 +20,17 @@ __all__ = ["atomic_path", "write_netcdf", "write_text", "write_json", "dumps_jso
 def check_writable(path: str | os.PathLike, *, overwrite: bool = False) -> Path:
     """Check that ``path`` may be written: its folder exists and is writable; it exists only if ``overwrite``.
 
-    Raises :class:`~fivid.errors.OutputExistsError` or :class:`PermissionError`-derived
-    :class:`~fivid.errors.FividError` with a message naming the path.
+    Raises :class:`~fivid.errors.OutputExistsError` or :class:`~fivid.errors.FividError` with a
+    message naming the path (missing or unwritable folder; ``path`` is itself a folder).
     """
-    from fivid.errors import FividError
-
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise FividError(f"output folder {str(folder)!r} does not exist")
     if not os.access(folder, os.W_OK | os.X_OK):
         raise FividError(f"output folder {str(folder)!r} is not writable")
+    if path.is_dir():  # checked before "exists": --overwrite cannot replace a folder by a file
+        raise FividError(f"output {str(path)!r} is a folder; give the name of a file to write")
     if path.exists() and not overwrite:
         raise OutputExistsError(f"output {str(path)!r} exists; pass --overwrite to replace it")
     return path
