@@ -243,3 +243,14 @@ def test_text_between_metadata_and_header(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(FividError, match="no such file"):
         read_rig_csv(tmp_path / "nope.csv")
+
+
+def test_misspelt_optional_column_is_not_dropped_silently(tmp_path, caplog):
+    """'positon' is no variable: the run is read without it, but a warning names the likely one."""
+    header = HEADER.replace("position [mm]", "positon [mm]")
+    path = write_rig(tmp_path / "typo.csv", header=header)
+    with caplog.at_level("WARNING", logger="fivid"):
+        ds = read_rig_csv(path)
+    assert "position" not in ds
+    warned = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert any(f"{path}:{HEADER_LINE}: column 'positon'" in m and "did you mean 'position'?" in m for m in warned)
