@@ -245,6 +245,15 @@ def test_missing_file(tmp_path):
         read_rig_csv(tmp_path / "nope.csv")
 
 
+def test_read_run_of_a_folder_says_folder(tmp_path):
+    from fivid.io import read_run
+
+    with pytest.raises(FividError, match="is a folder"):
+        read_run(tmp_path)
+    with pytest.raises(FividError, match="no such file"):
+        read_run(tmp_path / "nope.nc")
+
+
 def test_misspelt_optional_column_is_not_dropped_silently(tmp_path, caplog):
     """'positon' is no variable: the run is read without it, but a warning names the likely one."""
     header = HEADER.replace("position [mm]", "positon [mm]")
