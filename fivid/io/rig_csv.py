@@ -256,7 +256,7 @@ def _warn_misspelt_columns(head: RigHead) -> None:
     """
     if head.profile.format != "fivid-rig-csv":
         return
-    variables = list(registry().variables)
+    variables = [n for n, v in registry().variables.items() if not v.coordinate or n == "time"]  # mappable
     for label in head.ignored_columns:
         close = difflib.get_close_matches(label.partition(":")[0].strip(), variables, n=1)
         if close:
