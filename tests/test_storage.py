@@ -41,3 +41,10 @@ def test_check_writable_refuses_a_folder_even_with_overwrite(tmp_path):
         with pytest.raises(FividError, match="is a folder"):
             check_writable(tmp_path / "out", overwrite=overwrite)
     assert check_writable(tmp_path / "new.nc") == tmp_path / "new.nc"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+def test_check_writable_writes_instead_of_trusting_os_access():
+    """/proc refuses new files to everyone, root included, although os.access says yes to root."""
+    with pytest.raises(FividError, match="'/proc' is not writable"):
+        check_writable("/proc/x.nc")

@@ -12,8 +12,6 @@ existing output, is found before any data are converted.
 from __future__ import annotations
 
 import logging
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,6 +19,7 @@ from fivid.errors import FividError, OutputExistsError, SchemaError
 from fivid.io.netcdf import write_run
 from fivid.io.rig_csv import as_rig_profile, read_rig_csv
 from fivid.io.rig_header import read_rig_head
+from fivid.storage import check_folder_writable
 
 __all__ = ["ingest_files", "IngestResult", "Rejection", "prepare_output_folder", "expand_inputs"]
 
@@ -76,12 +75,7 @@ def prepare_output_folder(outdir) -> Path:
         raise FividError(f"cannot create the output folder {str(outdir)!r}: {exc.strerror or exc}") from None
     if not outdir.is_dir():
         raise FividError(f"the output {str(outdir)!r} is not a folder")
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".fivid-write-test.", dir=outdir)
-    except OSError as exc:
-        raise FividError(f"the output folder {str(outdir)!r} is not writable: {exc.strerror or exc}") from None
-    os.close(fd)
-    os.unlink(probe)
+    check_folder_writable(outdir)
     return outdir
 
 
