@@ -12,25 +12,40 @@ import os
 import tempfile
 from pathlib import Path
 
-from fivid.errors import OutputExistsError
+from fivid.errors import FividError, OutputExistsError
 
-__all__ = ["atomic_path", "write_netcdf", "write_text", "write_json", "dumps_json", "check_writable"]
+__all__ = [
+    "atomic_path", "write_netcdf", "write_text", "write_json", "dumps_json", "check_writable", "check_folder_writable",
+]
+
+
+def check_folder_writable(folder: str | os.PathLike) -> None:
+    """Prove ``folder`` writable by creating (and removing) a file in it.
+
+    A real write is the only reliable test: ``os.access`` says yes to root on a read-only mount
+    or on ``/proc``. Raises :class:`~fivid.errors.FividError` naming the folder and the reason.
+    """
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".fivid-write-test.", dir=folder)
+    except OSError as exc:
+        raise FividError(f"output folder {str(folder)!r} is not writable: {exc.strerror or exc}") from None
+    os.close(fd)
+    os.unlink(probe)
 
 
 def check_writable(path: str | os.PathLike, *, overwrite: bool = False) -> Path:
     """Check that ``path`` may be written: its folder exists and is writable; it exists only if ``overwrite``.
 
-    Raises :class:`~fivid.errors.OutputExistsError` or :class:`PermissionError`-derived
-    :class:`~fivid.errors.FividError` with a message naming the path.
+    Raises :class:`~fivid.errors.OutputExistsError` or :class:`~fivid.errors.FividError` with a
+    message naming the path (missing or unwritable folder; ``path`` is itself a folder).
     """
-    from fivid.errors import FividError
-
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise FividError(f"output folder {str(folder)!r} does not exist")
-    if not os.access(folder, os.W_OK | os.X_OK):
-        raise FividError(f"output folder {str(folder)!r} is not writable")
+    check_folder_writable(folder)
+    if path.is_dir():  # checked before "exists": --overwrite cannot replace a folder by a file
+        raise FividError(f"output {str(path)!r} is a folder; give the name of a file to write")
     if path.exists() and not overwrite:
         raise OutputExistsError(f"output {str(path)!r} exists; pass --overwrite to replace it")
     return path

@@ -116,10 +116,13 @@ def _check_compatible(q, text: str, expected: str):
     return target
 
 
+@functools.lru_cache(maxsize=256)
 def conversion(from_units: str, to_units: str) -> tuple[float, float]:
     """Scale and offset turning values in ``from_units`` into ``to_units``: ``y = scale * x + offset``.
 
-    Raises :class:`~fivid.errors.UnitError` when the units are unknown or incompatible.
+    Cached (pint parsing costs ~0.5 ms and a batch of rig files repeats the same few units);
+    errors are not cached. Raises :class:`~fivid.errors.UnitError` when the units are unknown or
+    incompatible.
 
     Examples
     --------
@@ -148,9 +151,7 @@ def convert(values, from_units: str, to_units: str):
     The result is a new array (or float); the input is not modified.
     """
     scale, offset = conversion(from_units, to_units)
-    if offset == 0.0:
-        return values * scale if scale != 1.0 else values * 1.0
-    return values * scale + offset
+    return values * scale + offset if offset else values * scale
 
 
 def parse_quantity(text, to_units: str, *, default_units: str | None = None) -> float:

@@ -1,22 +1,28 @@
+import pkgutil
 import subprocess
 import sys
 
+import pytest
+
 from fivid import __version__
-from fivid.cli import main
+from fivid.cli import commands, main
 
 
 def test_version(capsys):
-    try:
+    with pytest.raises(SystemExit) as info:  # argparse's version action exits
         main(["--version"])
-    except SystemExit as e:
-        assert e.code == 0
-    assert __version__ in capsys.readouterr().out
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"fivid {__version__}"
 
 
 def test_help_lists_commands():
     out = subprocess.run([sys.executable, "-m", "fivid", "--help"], capture_output=True, text=True)
     assert out.returncode == 0
     assert "exit status" in out.stdout
+    names = [m.name for m in pkgutil.iter_modules(commands.__path__) if not m.name.startswith("_")]
+    assert "ingest" in names
+    listed = {line.split()[0] for line in out.stdout.splitlines() if line.startswith("    ") and line.split()}
+    assert set(names) <= listed, f"commands missing from --help: {set(names) - listed}"
 
 
 def test_no_command_is_bad_input():

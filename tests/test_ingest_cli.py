@@ -136,6 +136,20 @@ def test_folder_input_and_rig_option(tmp_path, capsys):
     assert "no rig profile named 'nope'" in capsys.readouterr().err
 
 
+def test_folder_without_csv_is_rejected_not_a_silent_success(tmp_path, capsys):
+    empty = tmp_path / "exports"
+    empty.mkdir()
+    (empty / "notes.txt").write_text("not data")
+    a = _good(tmp_path, "A1")
+    result = ingest_files([empty, a], tmp_path / "out")
+    assert [p.name for p in result.written] == ["A1.nc"]
+    assert [r.path for r in result.rejected] == [empty]
+    assert main(["ingest", str(empty), "-o", str(tmp_path / "o2")]) == 2
+    err = capsys.readouterr().err
+    assert f"{empty}: the folder holds no *.csv file" in err
+    assert "0 file(s) written, 1 rejected" in err
+
+
 def test_readme_main_command_gives_si_values(tmp_path):
     """What a new user runs (README): the sample file in g, mm/s, µm becomes SI in OUTDIR/R001.nc."""
     out = tmp_path / "out"

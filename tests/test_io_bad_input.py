@@ -243,3 +243,23 @@ def test_text_between_metadata_and_header(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(FividError, match="no such file"):
         read_rig_csv(tmp_path / "nope.csv")
+
+
+def test_read_run_of_a_folder_says_folder(tmp_path):
+    from fivid.io import read_run
+
+    with pytest.raises(FividError, match="is a folder"):
+        read_run(tmp_path)
+    with pytest.raises(FividError, match="no such file"):
+        read_run(tmp_path / "nope.nc")
+
+
+def test_misspelt_optional_column_is_not_dropped_silently(tmp_path, caplog):
+    """'positon' is no variable: the run is read without it, but a warning names the likely one."""
+    header = HEADER.replace("position [mm]", "positon [mm]")
+    path = write_rig(tmp_path / "typo.csv", header=header)
+    with caplog.at_level("WARNING", logger="fivid"):
+        ds = read_rig_csv(path)
+    assert "position" not in ds
+    warned = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert any(f"{path}:{HEADER_LINE}: column 'positon'" in m and "did you mean 'position'?" in m for m in warned)

@@ -90,7 +90,7 @@ _DELETE = object()
 
 
 @pytest.mark.parametrize("changes, key, what", [
-    ({"colums": {}}, "colums", "unknown key"),
+    ({"colums": {}}, "colums", "unknown key; did you mean 'columns'?"),
     ({"fivid-rig-profile": 2}, "fivid-rig-profile", "must be 1"),
     ({"format": "excel"}, "format", "must be one of"),
     ({"csv__delimiter": ","}, "csv.decimal", "cannot also be the delimiter"),
@@ -106,7 +106,7 @@ _DELETE = object()
     ({"columns__normal_force__name": None}, "columns.normal_force.name", "missing"),
     ({"columns__normal_force": _DELETE}, "columns.normal_force", "not mapped"),
     ({"columns__strain": {"name": "e", "units": "1"}}, "columns.strain", "not a canonical variable"),
-    ({"columns__friction_force__unit": "N"}, "columns.friction_force.unit", "unknown key"),
+    ({"columns__friction_force__unit": "N"}, "columns.friction_force.unit", "did you mean 'units'?"),
     ({"metadata__values__sliding_velocity": "5 N"}, "metadata.values.sliding_velocity", "not compatible"),
     ({"metadata__values__history": "x"}, "metadata.values.history", "written by fivid"),
     ({"metadata__file_name": {"pattern": "(?P<run_id>R\\d+"}}, "metadata.file_name.pattern", "not a valid regular"),
@@ -147,6 +147,8 @@ def test_profile_not_found_lists_known(tmp_path):
     assert "labdaq" in info.value.message and "triboair" in info.value.message
     with pytest.raises(ConfigError, match="does not exist"):
         load_rig_profile(tmp_path / "missing.yaml")
+    with pytest.raises(ConfigError, match="is a folder"):  # e.g. --rig configs/rigs
+        load_rig_profile(tmp_path)
 
 
 def test_invalid_yaml_names_the_line(tmp_path):

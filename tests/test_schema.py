@@ -68,3 +68,10 @@ def test_history_appends():
 def test_unknown_variable_lists_known():
     with pytest.raises(SchemaError, match="acceleration"):
         schema.variable("acceleraton")
+
+
+def test_schema_version_constant_matches_the_registry():
+    """SCHEMA_VERSION is what apply_cf_attrs writes (from the YAML): the two must not drift apart."""
+    from fivid.schema import SCHEMA_VERSION, registry
+
+    assert SCHEMA_VERSION == registry().schema_version

@@ -3,8 +3,8 @@ import stat
 
 import pytest
 
-from fivid.errors import OutputExistsError
-from fivid.storage import atomic_path, write_text
+from fivid.errors import FividError, OutputExistsError
+from fivid.storage import atomic_path, check_writable, write_text
 
 
 def test_atomic_write_has_the_mode_open_would_give(tmp_path):
@@ -32,3 +32,19 @@ def test_no_overwrite_refuses_a_file_that_appeared(tmp_path):
             target.write_text("someone else's")
     assert target.read_text() == "someone else's"
     assert [p.name for p in tmp_path.iterdir()] == ["c.txt"]
+
+
+def test_check_writable_refuses_a_folder_even_with_overwrite(tmp_path):
+    """`-o somedir --overwrite` must be a bad-input error, not an IsADirectoryError at the rename."""
+    (tmp_path / "out").mkdir()
+    for overwrite in (False, True):
+        with pytest.raises(FividError, match="is a folder"):
+            check_writable(tmp_path / "out", overwrite=overwrite)
+    assert check_writable(tmp_path / "new.nc") == tmp_path / "new.nc"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux /proc")
+def test_check_writable_writes_instead_of_trusting_os_access():
+    """/proc refuses new files to everyone, root included, although os.access says yes to root."""
+    with pytest.raises(FividError, match="'/proc' is not writable"):
+        check_writable("/proc/x.nc")

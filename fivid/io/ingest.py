@@ -12,8 +12,6 @@ existing output, is found before any data are converted.
 from __future__ import annotations
 
 import logging
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,6 +19,7 @@ from fivid.errors import FividError, OutputExistsError, SchemaError
 from fivid.io.netcdf import write_run
 from fivid.io.rig_csv import as_rig_profile, read_rig_csv
 from fivid.io.rig_header import read_rig_head
+from fivid.storage import check_folder_writable
 
 __all__ = ["ingest_files", "IngestResult", "Rejection", "prepare_output_folder", "expand_inputs"]
 
@@ -76,12 +75,7 @@ def prepare_output_folder(outdir) -> Path:
         raise FividError(f"cannot create the output folder {str(outdir)!r}: {exc.strerror or exc}") from None
     if not outdir.is_dir():
         raise FividError(f"the output {str(outdir)!r} is not a folder")
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".fivid-write-test.", dir=outdir)
-    except OSError as exc:
-        raise FividError(f"the output folder {str(outdir)!r} is not writable: {exc.strerror or exc}") from None
-    os.close(fd)
-    os.unlink(probe)
+    check_folder_writable(outdir)
     return outdir
 
 
@@ -97,6 +91,12 @@ def expand_inputs(paths) -> list[Path]:
                 seen.add(key)
                 out.append(q)
     return out
+
+
+def _folders_without_csv(paths) -> list[Path]:
+    """The folders among ``paths`` that hold no ``*.csv`` file (they would silently convert nothing)."""
+    return [p for p in map(Path, paths)
+            if p.is_dir() and not any(q.suffix.lower() == ".csv" and q.is_file() for q in p.iterdir())]
 
 
 def _convert(path: Path, head, target: Path, profile, overwrite: bool):
@@ -140,7 +140,8 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
         Written paths and rejections. A file is rejected for any bad input (see
         :func:`~fivid.io.read_rig_csv`), for an output that exists (unless ``overwrite``), and when
         its ``run_id`` is also the ``run_id`` of another file of the call (all of them are rejected:
-        which one is right is for a person to decide).
+        which one is right is for a person to decide). A folder holding no ``*.csv`` file is
+        rejected too, so that a wrong folder does not pass as a successful ingest of nothing.
 
     Raises
     ------
@@ -151,8 +152,12 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
     profile = as_rig_profile(profile)
     outdir = prepare_output_folder(outdir)
     result = IngestResult()
+    inputs = expand_inputs(paths)
+    for folder in _folders_without_csv(paths):
+        result.rejected.append(Rejection(folder, FividError(
+            "the folder holds no *.csv file; give rig CSV files or a folder of them", file=folder)))
     heads = {}
-    for path in expand_inputs(paths):
+    for path in inputs:
         try:
             heads[path] = read_rig_head(path, profile)
         except FividError as exc:
@@ -181,6 +186,6 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
                 on_written(path, target, ds)
         if on_file_done is not None:
             on_file_done(path)
-    order = {p: i for i, p in enumerate(expand_inputs(paths))}
+    order = {p: i for i, p in enumerate(inputs)}
     result.rejected.sort(key=lambda r: order.get(r.path, len(order)))
     return result

@@ -32,6 +32,8 @@ def read_run(path: str | os.PathLike, *, validate: bool = True):
     import xarray as xr
 
     path = Path(path)
+    if path.is_dir():
+        raise FividError(f"{str(path)!r} is a folder; give a RunDataset netCDF file (e.g. written by fivid ingest)")
     if not path.is_file():
         raise FividError(f"no such file: {str(path)!r}")
     try:

@@ -9,7 +9,9 @@ file is re-scanned (only then) to map data rows to lines, blank lines included.
 
 from __future__ import annotations
 
+import difflib
 import hashlib
+import logging
 import os
 import re
 import threading
@@ -23,6 +25,8 @@ from fivid.io.rig_profile import RigProfile, load_rig_profile
 from fivid.schema import apply_cf_attrs, new_history, registry, validate_run
 
 __all__ = ["read_rig_csv", "as_rig_profile"]
+
+log = logging.getLogger("fivid")
 
 _ROW = re.compile(r"Row #(\d+)")
 _FIELDS = re.compile(r"Expected (\d+) columns, got (\d+): ?(.*)", re.S)
@@ -244,6 +248,22 @@ def _history(head: RigHead, digest: str) -> str:
     )
 
 
+def _warn_misspelt_columns(head: RigHead) -> None:
+    """Warn about fivid-rig-csv header names that are no variable but close to one ('positon').
+
+    Such a column is ignored (it may be an extra channel), so a typo would drop data without a word.
+    Done here, not in :func:`read_rig_head`, which an ingest calls twice per file.
+    """
+    if head.profile.format != "fivid-rig-csv":
+        return
+    variables = [n for n, v in registry().variables.items() if not v.coordinate or n == "time"]  # mappable
+    for label in head.ignored_columns:
+        close = difflib.get_close_matches(label.partition(":")[0].strip(), variables, n=1)
+        if close:
+            log.warning("%s:%d: column %r is not a variable and is ignored; did you mean %r?",
+                        head.path, head.header_line, label, close[0])
+
+
 def read_rig_csv(path, profile=None):
     """Read a rig CSV file into a RunDataset in SI units.
 
@@ -294,6 +314,7 @@ def read_rig_csv(path, profile=None):
 
     profile = as_rig_profile(profile)
     head = read_rig_head(path, profile)
+    _warn_misspelt_columns(head)
     try:
         mapped = pa.memory_map(os.fspath(head.path), "r")
     except OSError as exc:

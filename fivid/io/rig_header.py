@@ -8,7 +8,6 @@ every file's ``run_id`` cheaply before converting anything. Line numbers are the
 from __future__ import annotations
 
 import csv
-import functools
 import logging
 import math
 import re
@@ -111,12 +110,6 @@ def _split(text: str, delimiter: str) -> list[str]:
     return [f.strip().strip("\ufeff").strip() for f in row]
 
 
-@functools.lru_cache(maxsize=256)
-def _conversion(units: str, target: str) -> tuple[float, float]:
-    """:func:`fivid.units.conversion`, cached: a batch of files repeats the same few header units."""
-    return conversion(units, target)
-
-
 def _variables() -> dict:
     return {n: v for n, v in registry().variables.items() if not v.coordinate or n == "time"}
 
@@ -148,7 +141,7 @@ def _rig_csv_columns(path: Path, fields: list[str], line: int):
             raise UnitError(f"column {label!r} has an empty unit; write e.g. '{label} [{variables[name].units}]'",
                             file=path, line=line, column=label)
         try:
-            factor, offset = _conversion(units, variables[name].units)
+            factor, offset = conversion(units, variables[name].units)
         except UnitError as exc:
             raise exc.located(file=path, line=line, column=label) from None
         columns.append((index, ColumnSpec(name, label, units, None, 1.0, factor, offset, sensor or None)))

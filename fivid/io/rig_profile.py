@@ -22,6 +22,7 @@ with its key path (``columns.acceleration.sensitivity``).
 from __future__ import annotations
 
 import codecs
+import difflib
 import math
 import os
 import re
@@ -158,6 +159,8 @@ def load_rig_profile(name_or_path) -> RigProfile:
     )
     if looks_like_path:
         path = Path(name_or_path)
+        if path.is_dir():
+            raise ConfigError(f"rig profile {text!r} is a folder; give a YAML file in it or a profile name")
         if not path.is_file():
             raise ConfigError(f"rig profile file {text!r} does not exist")
     else:
@@ -209,7 +212,9 @@ def _mapping(raw, key: str, problems: _Problems, allowed: tuple[str, ...] | None
     if allowed is not None:
         for k in raw:
             if k not in allowed:
-                problems.add(f"{key}.{k}" if key else str(k), f"unknown key; allowed: {', '.join(allowed)}")
+                close = difflib.get_close_matches(str(k), allowed, n=1)
+                hint = f"did you mean {close[0]!r}? " if close else ""
+                problems.add(f"{key}.{k}" if key else str(k), f"unknown key; {hint}allowed: {', '.join(allowed)}")
     return raw
 
 
