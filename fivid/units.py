@@ -23,7 +23,6 @@ from fivid.errors import UnitError
 
 __all__ = [
     "unit_registry",
-    "parse_units",
     "parse_quantity",
     "conversion",
     "convert",
@@ -86,23 +85,6 @@ def _parse(text: str, expected: str | None):
     if not isinstance(q, ureg.Quantity):  # a bare number
         q = ureg.Quantity(float(q), "dimensionless")
     return q
-
-
-def parse_units(text: str, expected: str | None = None):
-    """Parse a unit string (``"mm/s"``, ``"m s-2"``, ``"µm"``, ``"g"``) into a pint Unit.
-
-    Parameters
-    ----------
-    text : str
-        The unit as written.
-    expected : str, optional
-        The canonical unit of the quantity it is for; used to read ``g`` as standard gravity for
-        accelerations, and to check compatibility.
-    """
-    q = _parse(text, expected)
-    if expected is not None:
-        _check_compatible(q, text, expected)
-    return q.units if q.magnitude == 1 else q
 
 
 def _check_compatible(q, text: str, expected: str):
