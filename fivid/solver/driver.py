@@ -163,6 +163,9 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     if oversample < 1:
         raise ConfigError(f"oversample must be an integer >= 1, got {oversample!r}")
     settle_time = _positive("settle_time", settle_time, allow_zero=True)
+    # numpy.random.default_rng refuses a negative or fractional seed with a bare ValueError deep in the law
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
 
     stab = stable_step(model)
     dt_crit = stab.critical_time_step
