@@ -77,7 +77,8 @@ def test_divergence_is_diagnosed():
 
 
 @pytest.mark.parametrize("bad", [dict(duration=-1.0), dict(sample_rate=0.0), dict(mu=-0.1), dict(safety=1.5),
-                                 dict(mu=0.3, law=StandInLaw()), dict(seed=-1), dict(seed=1.5)])
+                                 dict(mu=0.3, law=StandInLaw()), dict(seed=-1), dict(seed=1.5),
+                                 dict(sample_rate=1e4)])  # 1e-4 s x 1e4 Hz: one sample
 def test_bad_settings_are_refused(bad):
     kw = dict(duration=1e-4, sample_rate=1e5)
     kw.update(bad)
