@@ -1,10 +1,12 @@
 """The solver's driver and CLI: time-step checks, friction injection, loading sequence, outputs, guards."""
 
+import shlex
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from fivid.errors import ConfigError
 from fivid.fe import load_model
@@ -75,7 +77,8 @@ def test_divergence_is_diagnosed():
 
 
 @pytest.mark.parametrize("bad", [dict(duration=-1.0), dict(sample_rate=0.0), dict(mu=-0.1), dict(safety=1.5),
-                                 dict(mu=0.3, law=StandInLaw())])
+                                 dict(mu=0.3, law=StandInLaw()), dict(seed=-1), dict(seed=1.5),
+                                 dict(sample_rate=1e4)])  # 1e-4 s x 1e4 Hz: one sample
 def test_bad_settings_are_refused(bad):
     kw = dict(duration=1e-4, sample_rate=1e5)
     kw.update(bad)
@@ -156,6 +159,14 @@ def test_cli_simulate_writes_a_run(tmp_path, root, capsys):
                          text=True, cwd=root, timeout=600)
     assert res.returncode == 0, res.stderr
     assert '"mean_normal_force_n"' in res.stdout and out.is_file()
+    # in-process (argv is not sys.argv): the history records this command, quoted so that it runs again
+    assert main(args + ["-o", str(tmp_path / "in.nc")]) == 0
+    capsys.readouterr()
+    with xr.open_dataset(tmp_path / "in.nc") as ds:
+        last = ds.attrs["history"].splitlines()[-1]
+    assert last.endswith(shlex.join(["fivid", "simulate", args[1], "--mu", "0.3", "--velocity", "10 mm/s",
+                                     "--load", "5 N", "--duration", "1 ms", "--sample-rate", "51.2 kHz",
+                                     "--seed", "0", "-o", str(tmp_path / "in.nc")])), last
     assert main(args + ["--time-step", "1 s", "-o", str(tmp_path / "x.nc")]) == 2
     assert "above the critical step" in capsys.readouterr().err and not (tmp_path / "x.nc").exists()
     assert main(args + ["--velocity", "10 N", "-o", str(tmp_path / "y.nc")]) == 2

@@ -151,6 +151,9 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
         model = load_model(model)
     duration = _positive("duration", duration)
     sample_rate = _positive("sample_rate", sample_rate)
+    if duration * sample_rate < 2.0:  # e.g. '51.2 Hz' typed for kHz: a one-sample run is no record
+        raise ConfigError(f"duration x sample_rate = {duration:g} s x {sample_rate:g} Hz = {duration * sample_rate:.3g} "
+                          "samples: the steady-sliding record needs at least 2; raise the sample rate or the duration")
     if sliding_velocity is not None:
         sliding_velocity = _positive("sliding_velocity", sliding_velocity, allow_zero=True)
     if normal_load is not None:
@@ -163,6 +166,9 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     if oversample < 1:
         raise ConfigError(f"oversample must be an integer >= 1, got {oversample!r}")
     settle_time = _positive("settle_time", settle_time, allow_zero=True)
+    # numpy.random.default_rng refuses a negative or fractional seed with a bare ValueError deep in the law
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
 
     stab = stable_step(model)
     dt_crit = stab.critical_time_step

@@ -71,9 +71,12 @@ def run(args) -> int:
 
 def _positive_load(text, parse_quantity) -> float:
     """``--load`` in newtons, > 0 (ConfigError naming the option otherwise)."""
-    from fivid.errors import ConfigError
+    from fivid.errors import ConfigError, FividError
 
-    load = parse_quantity(text, "N")
+    try:
+        load = parse_quantity(text, "N")
+    except FividError as exc:  # name the option: the bare message does not say which argument it was
+        raise type(exc)(f"--load: {exc.message}") from None
     if not load > 0:
         raise ConfigError(f"--load must be a positive force, got {text!r}")
     return float(load)

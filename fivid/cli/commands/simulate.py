@@ -82,7 +82,7 @@ def run(args) -> int:
     )
     from fivid.schema import append_history
 
-    append_history(ds, "fivid simulate " + " ".join(sys.argv[2:]) if len(sys.argv) > 2 else "fivid simulate")
+    append_history(ds, _command_line(args))
     write_run(ds, args.output, overwrite=args.overwrite)
     steady = ds.time >= ds.attrs["transient_end"]
     summary = {
@@ -104,3 +104,24 @@ def run(args) -> int:
               f"{summary['mean_normal_force_n']:.4g} N, friction force {summary['mean_friction_force_n']:.4g} N")
         print(f"written {args.output} ({summary['samples']} samples)", file=sys.stderr)
     return 0
+
+
+# option -> attribute of the parsed arguments, in the order of the help (for the history line)
+_OPTIONS = (("--law", "law"), ("--mu", "mu"), ("--velocity", "velocity"), ("--load", "load"),
+            ("--roughness", "roughness"), ("--duration", "duration"), ("--sample-rate", "sample_rate"),
+            ("--seed", "seed"), ("--time-step", "time_step"), ("--run-id", "run_id"), ("-o", "output"))
+
+
+def _command_line(args) -> str:
+    """The command as parsed, defaults included, shell-quoted so that it can be run again.
+
+    Built from ``args``, not ``sys.argv``: :func:`fivid.cli.main` may be called in-process with its own argv.
+    """
+    import shlex
+
+    words = ["fivid", "simulate", str(args.model)]
+    for option, dest in _OPTIONS:
+        value = getattr(args, dest)
+        if value is not None:
+            words += [option, str(value)]
+    return shlex.join(words + (["--overwrite"] if args.overwrite else []))
