@@ -100,3 +100,4 @@ def test_psd_command_steady_window_and_missing_variable(tmp_path, capsys):
     assert main(["psd", str(tmp_path / "V.nc"), "--variable", "position", "-o", str(tmp_path / "q.nc")]) == 2
     err = capsys.readouterr().err
     assert "run 'V'" in err and "V.nc" in err and "no variable 'position'" in err
+    assert err.count("V.nc") == 1  # the file is named once, not as a prefix and again in the run label
