@@ -163,8 +163,10 @@ def _next_scale(history) -> float:
 
 def _peak_summary(scores) -> dict:
     if "peak" not in scores.dims or scores.sizes["peak"] == 0:
-        return {"n_matched": 0}
-    out = {"n_matched": int(scores.sizes["peak"])}
+        return {"n_measured": 0, "n_matched": 0}
+    # a measured peak with no simulated one within the tolerance has peak_frequency_simulated NaN
+    out = {"n_measured": int(scores.sizes["peak"]),
+           "n_matched": int(np.isfinite(scores["peak_frequency_simulated"].values).sum())}
     for name in ("peak_frequency_measured", "peak_frequency_simulated", "peak_level_diff_db"):
         if name in scores:
             out[name] = [float(x) for x in np.asarray(scores[name].values).ravel()]
