@@ -118,3 +118,13 @@ def test_peak_summary_counts_only_matched_peaks():
                          "peak_level_diff_db": ("peak", [0.5, np.nan, -1.0])})
     out = _peak_summary(scores)
     assert out["n_measured"] == 3 and out["n_matched"] == 2
+
+
+@pytest.mark.parametrize("kw, match", [({"max_iterations": 0}, "inverse-iterations"),
+                                       ({"duration": 0.0}, "inverse-duration")])
+def test_bad_iteration_settings_are_named(kw, match):
+    from fivid.errors import ConfigError
+
+    # max_iterations 0 used to return scale 1 'not converged in 0 iterations' without simulating
+    with pytest.raises(ConfigError, match=match):
+        inverse_amplitude_scale(true_law(), xr.Dataset(), band=(200.0, 4000.0), simulator=linear_response, **kw)
