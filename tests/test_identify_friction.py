@@ -192,8 +192,9 @@ def test_bad_band_and_units():
     run = synthetic_run(true_law(), velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=1, duration=1.5)
     with pytest.raises(FividError, match=r"beyond the Nyquist frequency 12800 Hz"):
         identify_friction_law([run], band=(100.0, 20000.0))
-    with pytest.raises(FividError, match="need 0 <= F_LO < F_HI"):
+    with pytest.raises(FividError, match="need 0 <= F_LO < F_HI") as err:
         identify_friction_law([run], band=(500.0, 100.0))
+    assert err.value.key == "band"
     bad = run.copy()
     bad["friction_force"] = bad["friction_force"].assign_attrs(units="kN")
     with pytest.raises(SchemaError, match="'friction_force' has units 'kN'; expected 'N'"):
