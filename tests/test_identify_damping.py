@@ -102,6 +102,8 @@ def test_one_peak_gives_no_rayleigh_and_a_clear_message():
         res.to_yaml()
     with pytest.raises(FividError, match="Nyquist"):
         identify_damping(xr.DataArray(h2, dims="frequency", coords={"frequency": f}), band=(100, 9000))
+    with pytest.raises(FividError, match="n_peaks .* must be an integer >= 1.*got 0"):
+        identify_damping(xr.DataArray(h2, dims="frequency", coords={"frequency": f}), band=(100, 4000), n_peaks=0)
 
 
 @pytest.mark.slow

@@ -107,3 +107,24 @@ def test_inverse_route_with_the_fe_solver():
     tol = 3.29 * 4.34 * np.sqrt(2.0 / (t_rec * b_eff)) + 0.5 + 0.3
     print(f"B_eff {b_eff:.0f} Hz, T {t_rec:.3f} s, tolerance {tol:.2f} dB")
     assert abs(20 * np.log10(res.scale / 2.0)) < tol
+
+
+def test_peak_summary_counts_only_matched_peaks():
+    from fivid.identify.inverse import _peak_summary
+
+    # score_runs marks a measured peak with no simulated partner within the tolerance by NaN
+    scores = xr.Dataset({"peak_frequency_measured": ("peak", [800.0, 2300.0, 5000.0]),
+                         "peak_frequency_simulated": ("peak", [805.0, np.nan, 4990.0]),
+                         "peak_level_diff_db": ("peak", [0.5, np.nan, -1.0])})
+    out = _peak_summary(scores)
+    assert out["n_measured"] == 3 and out["n_matched"] == 2
+
+
+@pytest.mark.parametrize("kw, match", [({"max_iterations": 0}, "inverse-iterations"),
+                                       ({"duration": 0.0}, "inverse-duration")])
+def test_bad_iteration_settings_are_named(kw, match):
+    from fivid.errors import ConfigError
+
+    # max_iterations 0 used to return scale 1 'not converged in 0 iterations' without simulating
+    with pytest.raises(ConfigError, match=match):
+        inverse_amplitude_scale(true_law(), xr.Dataset(), band=(200.0, 4000.0), simulator=linear_response, **kw)

@@ -100,3 +100,15 @@ def test_psd_command_steady_window_and_missing_variable(tmp_path, capsys):
     assert main(["psd", str(tmp_path / "V.nc"), "--variable", "position", "-o", str(tmp_path / "q.nc")]) == 2
     err = capsys.readouterr().err
     assert "run 'V'" in err and "V.nc" in err and "no variable 'position'" in err
+    assert err.count("V.nc") == 1  # the file is named once, not as a prefix and again in the run label
+
+
+def test_summary_does_not_call_an_unjudged_score_within_uncertainty():
+    from fivid.cli.commands.score import _summary
+
+    names = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
+    j = {"simulated": "S", "measured": "M", "variable": "acceleration", "band_hz": [10.0, 100.0], "peaks": [],
+         **{k: 0.5 for k in names}, "significant": {k: False for k in names},
+         "thresholds": {**{k: 1.0 for k in names}, "shape_correlation": None}}
+    lines = _summary(j).splitlines()
+    assert "not judged" in lines[4] and "within uncertainty" in lines[1]

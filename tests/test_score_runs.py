@@ -196,3 +196,10 @@ def test_sensor_selection_survives_resampling():
     b = score_runs(m, s, nperseg=1024, sensor="b", band=(100, 3000))
     assert a.attrs["resampled"].startswith("measured 20000 Hz")
     assert float(a.level_diff_db - b.level_diff_db) == pytest.approx(20 * np.log10(2), abs=1e-9)
+
+
+def test_sensor_given_for_a_variable_without_sensors_is_named():
+    # used to be ignored silently: a typo in --sensor scored the single channel without a word
+    m, s = synthetic_run(1, run_id="M"), synthetic_run(2, run_id="S")
+    with pytest.raises(ConfigError, match=r"sensor 'x' given, but 'acceleration' has no 'sensor' dimension"):
+        score_runs(m, s, nperseg=1024, sensor="x")

@@ -54,3 +54,12 @@ def test_same_rate_is_a_copy():
     ds = run(1000.0, [(10.0, 1.0)])
     out = resample_to(ds, 1000.0)
     np.testing.assert_array_equal(out["acceleration"].values, ds["acceleration"].values)
+
+
+def test_time_dependent_coordinate_is_refused_by_name():
+    from fivid.errors import DataQualityError
+
+    ds = run(48000.0, [(1000.0, 1.0)])
+    ds = ds.assign_coords(phase=("time", np.zeros(ds.sizes["time"])))
+    with pytest.raises(DataQualityError, match="time-dependent coordinate 'phase'"):
+        resample_to(ds, 24000.0)

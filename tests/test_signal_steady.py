@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from fivid.errors import DataQualityError
+from fivid.errors import ConfigError, DataQualityError
 from fivid.signal import steady_sliding_window
 
 
@@ -67,6 +67,13 @@ def test_no_plateau_is_a_clear_error():
     ds = synthetic_run(ramp=1.0)  # a triangle: never steady
     with pytest.raises(DataQualityError, match=r"run 'SYN1'.*no steady sliding.*plateau"):
         steady_sliding_window(ds, tolerance=0.02, smoothing=0.01)
+
+
+@pytest.mark.parametrize("smoothing", [-0.01, float("nan")])
+def test_bad_smoothing_is_named(smoothing):
+    # negative smoothing used to be silently replaced by one sample; NaN crashed in int(round(nan))
+    with pytest.raises(ConfigError, match="smoothing must be a duration >= 0"):
+        steady_sliding_window(synthetic_run(), smoothing=smoothing)
 
 
 def test_standstill_is_a_clear_error():

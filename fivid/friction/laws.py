@@ -22,7 +22,7 @@ import numpy as np
 
 from fivid.errors import FividError
 from fivid.friction.amplitude import AmplitudeModel
-from fivid.friction.synthesis import fft_frequencies, synthesise_perturbation
+from fivid.friction.synthesis import check_sampling, fft_frequencies, synthesise_perturbation
 
 __all__ = ["CoulombLaw", "PerturbedCoulombLaw", "INJECTION_MODES"]
 
@@ -35,20 +35,6 @@ def _sha256_of(content: dict, *arrays: np.ndarray) -> str:
     for a in arrays:
         h.update(np.ascontiguousarray(a, dtype="<f8").tobytes())
     return h.hexdigest()
-
-
-def _check_sampling(duration, sample_rate, n_signals):
-    duration, sample_rate = float(duration), float(sample_rate)
-    if not (np.isfinite(sample_rate) and sample_rate > 0):
-        raise FividError(f"sample_rate = {sample_rate!r} Hz; it must be a positive number")
-    if not (np.isfinite(duration) and duration > 0):
-        raise FividError(f"duration = {duration!r} s; it must be a positive number")
-    if int(n_signals) != n_signals or n_signals < 1:
-        raise FividError(f"n_signals = {n_signals!r}; it must be a positive integer")
-    n = int(round(duration * sample_rate))
-    if n < 4:
-        raise FividError(f"duration {duration} s at {sample_rate} Hz gives {n} samples; at least 4 are needed")
-    return n
 
 
 class CoulombLaw:
@@ -80,7 +66,7 @@ class CoulombLaw:
 
     def sample(self, duration, sample_rate, velocity, roughness, seed, n_signals=1, normal_load=None):
         """μp(t) [-]: zeros, shape ``(n_signals, round(duration * sample_rate))``."""
-        n = _check_sampling(duration, sample_rate, n_signals)
+        n = check_sampling(duration, sample_rate, n_signals)
         return np.zeros((int(n_signals), n))
 
     def describe(self) -> str:
@@ -194,7 +180,7 @@ class PerturbedCoulombLaw:
         -------
         ndarray, shape (n_signals, round(duration * sample_rate))
         """
-        n = _check_sampling(duration, sample_rate, n_signals)
+        n = check_sampling(duration, sample_rate, n_signals)
         f = fft_frequencies(n, sample_rate)
         s = self.normalised_shape(f, velocity)
         s[0] = 0.0

@@ -27,7 +27,7 @@ import numpy as np
 
 from fivid.errors import FividError
 
-__all__ = ["synthesise_perturbation", "fft_frequencies", "SYNTHESIS_METHODS", "inverse_rfft"]
+__all__ = ["synthesise_perturbation", "fft_frequencies", "SYNTHESIS_METHODS", "inverse_rfft", "check_sampling"]
 
 SYNTHESIS_METHODS = ("gaussian", "random_phase")
 
@@ -35,6 +35,31 @@ SYNTHESIS_METHODS = ("gaussian", "random_phase")
 def fft_frequencies(n_samples: int, sample_rate: float) -> np.ndarray:
     """The rfft bin frequencies ``k fs / n`` [Hz] of a record of ``n_samples`` at ``sample_rate`` [Hz]."""
     return np.arange(n_samples // 2 + 1) * (float(sample_rate) / n_samples)
+
+
+def check_sampling(duration, sample_rate, n_signals) -> int:
+    """Validate a record request; return its number of samples ``round(duration * sample_rate)`` (>= 4).
+
+    Parameters
+    ----------
+    duration : float
+        Record length [s], finite and > 0.
+    sample_rate : float
+        [Hz], finite and > 0.
+    n_signals : int
+        Number of series, a positive integer.
+    """
+    duration, sample_rate = float(duration), float(sample_rate)
+    if not (np.isfinite(sample_rate) and sample_rate > 0):
+        raise FividError(f"sample_rate = {sample_rate!r} Hz; it must be a positive number")
+    if not (np.isfinite(duration) and duration > 0):
+        raise FividError(f"duration = {duration!r} s; it must be a positive number")
+    if int(n_signals) != n_signals or n_signals < 1:
+        raise FividError(f"n_signals = {n_signals!r}; it must be a positive integer")
+    n = int(round(duration * sample_rate))
+    if n < 4:
+        raise FividError(f"duration {duration} s at {sample_rate} Hz gives {n} samples; at least 4 are needed")
+    return n
 
 
 def inverse_rfft(coefficients: np.ndarray, n_samples: int, *, backend: str = "auto") -> np.ndarray:
@@ -103,17 +128,8 @@ def synthesise_perturbation(
     >>> x.shape
     (1, 1000)
     """
-    duration = float(duration)
+    n = check_sampling(duration, sample_rate, n_signals)
     sample_rate = float(sample_rate)
-    if not (np.isfinite(sample_rate) and sample_rate > 0):
-        raise FividError(f"sample_rate = {sample_rate!r} Hz; it must be a positive number")
-    if not (np.isfinite(duration) and duration > 0):
-        raise FividError(f"duration = {duration!r} s; it must be a positive number")
-    n = int(round(duration * sample_rate))
-    if n < 4:
-        raise FividError(f"duration {duration} s at {sample_rate} Hz gives {n} samples; at least 4 are needed")
-    if int(n_signals) != n_signals or n_signals < 1:
-        raise FividError(f"n_signals = {n_signals!r}; it must be a positive integer")
     if method not in SYNTHESIS_METHODS:
         raise FividError(f"synthesis method {method!r} is not one of {', '.join(SYNTHESIS_METHODS)}")
     n_signals = int(n_signals)

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fivid.errors import DataQualityError, FividError
+from fivid.errors import ConfigError, DataQualityError, FividError
 
 __all__ = [
     "ModalPeak",
@@ -367,6 +367,9 @@ def identify_damping(source, *, band, n_peaks: int = 4, nperseg: int | None = No
     """
     if method not in ("curve_fit", "half_power"):
         raise FividError(f"damping method {method!r} is not one of 'curve_fit', 'half_power'")
+    if isinstance(n_peaks, bool) or not isinstance(n_peaks, (int, np.integer)) or n_peaks < 1:
+        raise ConfigError(f"n_peaks (--damping-peaks) must be an integer >= 1 (a Rayleigh fit needs 2), "
+                          f"got {n_peaks!r}", key="n_peaks")
     f, p, window, n, q = _spectrum_from(source, nperseg)
     band = (float(band[0]), float(band[1]))
     if band[1] > f[-1] or not band[0] < band[1]:

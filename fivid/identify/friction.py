@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fivid.errors import DataQualityError, FividError
+from fivid.errors import ConfigError, DataQualityError, FividError
 from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
 from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
 from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis, RunSettings,
@@ -210,12 +210,12 @@ def _check_band(band, datasets):
         return (DEFAULT_BAND_LOW, min(DEFAULT_BAND_HIGH, 0.4 * min(rates)))
     lo, hi = (float(b) for b in band)
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi):
-        raise FividError(f"band = ({lo:g}, {hi:g}) Hz; need 0 <= F_LO < F_HI")
+        raise ConfigError(f"band = ({lo:g}, {hi:g}) Hz; need 0 <= F_LO < F_HI", key="band")
     if hi > nyquist:
         slow = [ds.attrs.get("run_id") for ds, r in zip(datasets, rates) if r / 2 < hi]
-        raise FividError(
+        raise ConfigError(
             f"band upper edge {hi:g} Hz is beyond the Nyquist frequency {nyquist:g} Hz of run(s) "
-            f"{', '.join(map(str, slow))}; choose F_HI < {nyquist:g} Hz"
+            f"{', '.join(map(str, slow))}; choose F_HI < {nyquist:g} Hz", key="band"
         )
     return lo, hi
 

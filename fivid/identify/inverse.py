@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fivid.errors import FividError
+from fivid.errors import ConfigError, FividError
 
 __all__ = ["InverseAmplitude", "inverse_amplitude_scale"]
 
@@ -100,6 +100,11 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
     """
     from fivid.score import score_runs
 
+    if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
+        raise ConfigError(f"max_iterations (--inverse-iterations) must be an integer >= 1, got {max_iterations!r}",
+                          key="max_iterations")
+    if not (np.isfinite(duration) and duration > 0):
+        raise ConfigError(f"duration (--inverse-duration) must be > 0 [s], got {duration!r}", key="duration")
     if simulator is None:
         if model is None:
             raise FividError("the inverse route needs an FE model (model=) to simulate")
@@ -163,8 +168,10 @@ def _next_scale(history) -> float:
 
 def _peak_summary(scores) -> dict:
     if "peak" not in scores.dims or scores.sizes["peak"] == 0:
-        return {"n_matched": 0}
-    out = {"n_matched": int(scores.sizes["peak"])}
+        return {"n_measured": 0, "n_matched": 0}
+    # a measured peak with no simulated one within the tolerance has peak_frequency_simulated NaN
+    out = {"n_measured": int(scores.sizes["peak"]),
+           "n_matched": int(np.isfinite(scores["peak_frequency_simulated"].values).sum())}
     for name in ("peak_frequency_measured", "peak_frequency_simulated", "peak_level_diff_db"):
         if name in scores:
             out[name] = [float(x) for x in np.asarray(scores[name].values).ravel()]

@@ -155,6 +155,9 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     if steady:
         measured, simulated = _crop_steady(measured, lm), _crop_steady(simulated, ls)
     da_m, da_s = _signal(measured, variable, sensor, lm), _signal(simulated, variable, sensor, ls)
+    if sensor is not None and not any("sensor" in ds[variable].dims for ds in (measured, simulated)):
+        raise ConfigError(f"sensor {sensor!r} given, but {variable!r} has no 'sensor' dimension in the {lm} nor "
+                          f"in the {ls}; drop sensor= (--sensor)", key="sensor")
     if da_m.attrs["units"] != da_s.attrs["units"]:
         raise UnitError(f"{variable!r} is in {da_m.attrs['units']!r} in the {lm} but in {da_s.attrs['units']!r} "
                         f"in the {ls}; convert one (fivid stores SI units from the registry)")

@@ -60,6 +60,9 @@ def resample_to(ds, sample_rate: float, *, max_denominator: int = 10_000):
     up, down = rational_ratio(fs, float(sample_rate), max_denominator=max_denominator)
     if up == down:
         return ds.copy()
+    for name, var in ds.coords.items():
+        if "time" in var.dims and name != "time":
+            raise DataQualityError(f"{label}: cannot resample the time-dependent coordinate {name!r}")
     n_new = -(-t.size * up // down)
     new_t = t[0] + np.arange(n_new) / float(sample_rate)
     out = ds.drop_vars([name for name, v in ds.variables.items() if "time" in v.dims]).copy()
@@ -74,9 +77,6 @@ def resample_to(ds, sample_rate: float, *, max_denominator: int = 10_000):
             raise DataQualityError(f"{label}: variable {name!r} has too few samples to resample")
         y = scipy.signal.resample_poly(values, up, down, axis=axis, padtype="line")
         out[name] = (var.dims, y, dict(var.attrs))
-    for name, var in ds.coords.items():
-        if "time" in var.dims and name != "time":
-            raise DataQualityError(f"{label}: cannot resample the time-dependent coordinate {name!r}")
     out.attrs = dict(ds.attrs)
     out.attrs["sample_rate"] = float(sample_rate)
     append_history(out, f"resampled from {fs:.10g} Hz to {float(sample_rate):.10g} Hz "

@@ -79,6 +79,8 @@ def steady_sliding_window(ds, *, tolerance=0.05, smoothing=0.05, central_fractio
         raise ConfigError(f"tolerance must be in (0, 1), got {tolerance!r}", key="tolerance")
     if not (0 < central_fraction <= 1):
         raise ConfigError(f"central_fraction must be in (0, 1], got {central_fraction!r}", key="central_fraction")
+    if not (np.isfinite(smoothing) and smoothing >= 0):
+        raise ConfigError(f"smoothing must be a duration >= 0 [s], got {smoothing!r}", key="smoothing")
     t, v, origin = sliding_velocity_signal(ds)
     fs = sample_rate_of(t, label=label)
     duration = t[-1] - t[0]

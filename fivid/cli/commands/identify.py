@@ -65,6 +65,7 @@ def _run(args) -> int:
     import logging
 
     from fivid.identify import identify_friction_law
+    from fivid.identify.friction import load_runs
     from fivid.storage import check_writable, dumps_json, write_text
 
     log = logging.getLogger("fivid")
@@ -73,8 +74,14 @@ def _run(args) -> int:
         check_writable(args.report, overwrite=args.overwrite)
     if args.damping:
         check_writable(args.damping, overwrite=args.overwrite)
+    model = None
+    if args.inverse:  # a bad model file fails here, before the identification
+        from fivid.fe import load_model
+
+        model = load_model(args.inverse)
+    datasets = load_runs(args.runs)  # read once; the damping and inverse routes reuse them
     result = identify_friction_law(
-        args.runs,
+        datasets,
         band=args.band,
         nperseg=args.nperseg,
         tolerance=args.tolerance,
@@ -89,13 +96,12 @@ def _run(args) -> int:
     damping = None
     if args.damping:
         from fivid.identify import identify_damping
-        from fivid.identify.friction import load_runs
 
         band = tuple(args.damping_band) if args.damping_band else result.band
-        damping = identify_damping(load_runs(args.runs), band=band, n_peaks=args.damping_peaks)
+        damping = identify_damping(datasets, band=band, n_peaks=args.damping_peaks)
         report["damping"] = damping.to_json()
     if args.inverse:
-        report["inverse"] = _inverse(args, result)
+        report["inverse"] = _inverse(args, result, model, datasets)
     result.write(args.output, overwrite=args.overwrite)
     log.info("wrote %s", args.output)
     if damping is not None:
@@ -117,14 +123,11 @@ def _run(args) -> int:
     return 0
 
 
-def _inverse(args, result) -> list:
+def _inverse(args, result, model, runs) -> list:
     from fivid.errors import FividError
-    from fivid.fe import load_model
     from fivid.identify import inverse_amplitude_scale
-    from fivid.identify.friction import load_runs
 
-    model = load_model(args.inverse)
-    datasets = {str(ds.attrs.get("run_id")): ds for ds in load_runs(args.runs)}
+    datasets = {str(ds.attrs.get("run_id")): ds for ds in runs}
     used = [r.run_id for r in result.runs if r.used]
     wanted = args.inverse_run or used[:1]
     unknown = [r for r in wanted if r not in datasets]

@@ -57,7 +57,7 @@ def run(args) -> int:
     label = run_label(ds)
     if args.variable not in ds.data_vars:
         raise SchemaError(f"{label} has no variable {args.variable!r}; it has: "
-                          f"{', '.join(sorted(map(str, ds.data_vars)))}", file=args.run_path)
+                          f"{', '.join(sorted(map(str, ds.data_vars)))}")
     window = ""
     if args.steady:
         t0, t1 = steady_sliding_window(ds)

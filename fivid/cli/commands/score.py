@@ -48,7 +48,10 @@ def _summary(j: dict) -> str:
              f"{j['band_hz'][0]:.6g}-{j['band_hz'][1]:.6g} Hz):"]
     for key in ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation"):
         value, thr = j[key], j["thresholds"][key]
-        mark = "significant" if j["significant"][key] else "within uncertainty"
+        if thr is None:  # e.g. shape_correlation of log-PSDs with no spread above their noise
+            mark = "not judged"
+        else:
+            mark = "significant" if j["significant"][key] else "within uncertainty"
         fmt = (lambda v: "n/a" if v is None else f"{v:.4g}")
         lines.append(f"  {key:26s} {fmt(value):>10s}  (threshold {fmt(thr)}: {mark})")
     for p in j["peaks"]:
