@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -39,7 +40,22 @@ def test_modes_with_load_couple_the_bodies_at_the_closed_tip(capsys):
 def test_modes_table(capsys):
     assert main(["modes", COARSE, "-n", "3"]) == 0
     out = capsys.readouterr().out
-    assert "frequency [Hz]" in out and len(out.strip().splitlines()) == 5
+    assert "frequency [Hz]" in out and len(out.strip().splitlines()) == 6  # model, damping, header, 3 modes
+
+
+def test_modes_damping_ratios_and_curve(tmp_path, capsys):
+    """Each mode's damping ratio is the scheme's exact ratio at its frequency; the curve is a PNG."""
+    from fivid.fe import load_model
+    from fivid.fe.damping import damping_ratio
+
+    png = tmp_path / "damping.png"
+    assert main(["modes", COARSE, "-n", "4", "--json", "--damping-curve", str(png)]) == 0
+    j = json.loads(capsys.readouterr().out)
+    model = load_model(COARSE)
+    assert j["damping_scheme"] == "rayleigh" and j["damping_cutoff_hz"] is None
+    np.testing.assert_allclose(j["damping_ratios"], damping_ratio(j["frequencies_hz"], model.rayleigh_alpha,
+                                                                  model.rayleigh_beta), rtol=1e-12)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_cea_json_per_mode(tmp_path, capsys):

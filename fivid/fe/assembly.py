@@ -300,9 +300,8 @@ def rayleigh_from_damping_ratios(f1: float, zeta1: float, f2: float, zeta2: floa
     >>> round(a, 1), round(b * 1e7, 2)
     (50.8, 3.05)
     """
-    w1, w2 = 2.0 * np.pi * float(f1), 2.0 * np.pi * float(f2)
-    if not (w1 > 0 and w2 > 0) or w1 == w2:
+    from fivid.fe.damping import fit_rayleigh
+
+    if not (float(f1) > 0 and float(f2) > 0) or float(f1) == float(f2):
         raise ValueError(f"need two distinct positive frequencies, got {f1} and {f2} Hz")
-    A = np.array([[1.0 / (2.0 * w1), w1 / 2.0], [1.0 / (2.0 * w2), w2 / 2.0]])
-    alpha, beta = np.linalg.solve(A, [zeta1, zeta2])
-    return float(alpha), float(beta)
+    return fit_rayleigh(f1, zeta1, f2, zeta2)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from os import PathLike
 from pathlib import Path
 from typing import Any, Mapping
@@ -385,7 +386,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                                  f"{free.size} of its dofs are free; clamp edge {m['edge']!r} of {block.name!r}")
         reactions.append(fm.Reaction(_name(ctx, m["name"], f"{key}.name"), nodes, t, n))
 
-    alpha, beta = _damping(ctx, data.get("damping"))
+    alpha, beta, cutoff = _damping(ctx, data.get("damping"))
     for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),
                            ("contacts", contacts), ("sensors", sensors), ("reactions", reactions)):
         names = [x.name for x in items]
@@ -395,15 +396,20 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     return fm.Model(plane=plane, blocks=blocks, n_nodes=n_nodes, coords=coords, fixed_dofs=fixed_dofs,
                  motions=tuple(motions), point_masses=tuple(point_masses), springs=tuple(springs),
                  contacts=tuple(contacts), sensors=tuple(sensors), reactions=tuple(reactions),
-                 rayleigh_alpha=alpha, rayleigh_beta=beta, source=origin, config=data)
+                 rayleigh_alpha=alpha, rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data)
 
 
-def _damping(ctx, spec) -> tuple[float, float]:
-    from fivid.fe.assembly import rayleigh_from_damping_ratios
+def _damping(ctx, spec) -> tuple[float, float, float]:
+    """``(alpha [s-1], beta [s], cutoff [Hz])`` of the ``damping`` section (cutoff inf: classic Rayleigh)."""
+    from fivid.fe.damping import fit_rayleigh
 
     if spec is None:
-        return 0.0, 0.0
-    m = _mapping(ctx, spec, "damping", {"alpha": "optional", "beta": "optional", "ratios": "optional"})
+        return 0.0, 0.0, math.inf
+    m = _mapping(ctx, spec, "damping", {"alpha": "optional", "beta": "optional", "ratios": "optional",
+                                        "cutoff": "optional"})
+    cutoff = math.inf
+    if "cutoff" in m and m["cutoff"] not in (None, "none", "inf"):
+        cutoff = _quantity(ctx, m["cutoff"], "damping.cutoff", "Hz", positive=True)
     if "ratios" in m:
         if "alpha" in m or "beta" in m:
             raise ctx.error("damping", "give either {alpha, beta} or ratios, not both")
@@ -416,7 +422,11 @@ def _damping(ctx, spec) -> tuple[float, float]:
                    _quantity(ctx, q["ratio"], f"{k}.ratio", "dimensionless", nonnegative=True)]
         if fz[0] == fz[2]:
             raise ctx.error("damping.ratios", "the two frequencies must differ")
-        return rayleigh_from_damping_ratios(*fz)
+        alpha, beta = fit_rayleigh(*fz, cutoff=cutoff)
+        if alpha < 0 or beta < 0:
+            raise ctx.error("damping.ratios", f"these ratios need a negative Rayleigh coefficient (alpha {alpha:.4g} "
+                                              f"s-1, beta {beta:.4g} s): no Rayleigh curve passes through both points")
+        return alpha, beta, cutoff
     alpha = _quantity(ctx, m.get("alpha", 0.0), "damping.alpha", "s-1", nonnegative=True)
     beta = _quantity(ctx, m.get("beta", 0.0), "damping.beta", "s", nonnegative=True)
-    return alpha, beta
+    return alpha, beta, cutoff

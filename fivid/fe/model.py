@@ -27,6 +27,7 @@ Units: SI everywhere (m, kg, s, N, Pa).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from os import PathLike
 from typing import Any, Mapping
@@ -317,6 +318,9 @@ class Model:
         Mass-proportional Rayleigh coefficient [s-1].
     rayleigh_beta : float
         Stiffness-proportional Rayleigh coefficient [s].
+    damping_cutoff : float
+        Cut-off of the low-pass filter on the velocity the stiffness-proportional damping acts on [Hz]
+        (band-limited Rayleigh, :mod:`fivid.fe.damping`); ``inf``: classic Rayleigh.
     source : str
         ``"<path> sha256:<hex>"`` of the config (or of its canonical JSON for a mapping).
     config : dict
@@ -336,6 +340,7 @@ class Model:
     reactions: tuple = ()
     rayleigh_alpha: float = 0.0
     rayleigh_beta: float = 0.0
+    damping_cutoff: float = math.inf
     source: str = ""
     config: dict = field(default_factory=dict)
 

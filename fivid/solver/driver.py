@@ -177,8 +177,9 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
         if time_step > dt_crit:
             raise ConfigError(
                 f"time step {time_step:.4g} s is above the critical step {dt_crit:.4g} s of this model "
-                f"(omega_max = {stab.omega_max:.4g} rad/s, beta-damping ratio of that mode xi = {stab.xi:.3g}: "
-                f"dt_crit = (2/omega_max)(sqrt(1+xi^2) - xi)); central differences would diverge. "
+                f"(omega_max = {stab.omega_max:.4g} rad/s, {stab.damping_scheme} damping, beta-damping ratio of that "
+                f"mode xi = {stab.xi:.3g}; classic Rayleigh: dt_crit = (2/omega_max)(sqrt(1+xi^2) - xi)); central "
+                f"differences would diverge. "
                 f"Use a step <= {dt_crit:.4g} s or leave it out ({safety:g} * dt_crit is used)")
         dt_max = time_step
     else:

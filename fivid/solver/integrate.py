@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["RawRecords", "integrate", "RUNAWAY_FACTOR"]
+__all__ = ["RawRecords", "integrate", "velocity_filter_gain", "RUNAWAY_FACTOR"]
 
 #: guard: the stiffness-damping loss inferred as W_int - U may not fall below -RUNAWAY_FACTOR x (KE + U)
 RUNAWAY_FACTOR = 2.0
@@ -31,6 +31,18 @@ class RawRecords:
     steps: int
 
 
+def velocity_filter_gain(cutoff: float, dt: float) -> float:
+    """Gain ``1 - exp(-2 pi cutoff dt)`` of the band-limited damping's velocity filter per step [-].
+
+    ``cutoff`` [Hz] inf gives 1: classic Rayleigh (the kernel then uses ``v`` itself, bit for bit).
+    """
+    import math
+
+    if not math.isfinite(cutoff):
+        return 1.0
+    return float(-math.expm1(-2.0 * math.pi * cutoff * dt))
+
+
 def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     """Run the time loop of ``settings.n_intervals`` output intervals; :class:`SimulationDiverged` on failure."""
     from tqdm.auto import tqdm
@@ -48,6 +60,8 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
         p = ka.grp_par[ka.con_grp[c]]
         v[d] = K.constrained_velocity(int(p[0]), p[1], p[2], p[3], -dt, dt)
     beta = float(model.rayleigh_beta)
+    a_filt = velocity_filter_gain(model.damping_cutoff, dt)
+    vf = v.copy()  # the filtered velocity of band-limited damping starts at the initial velocity
     w = u + beta * v
     f = np.zeros_like(u)
     scratch = np.zeros_like(u)
@@ -83,7 +97,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
         while r0 < n_int:
             nr = min(chunk, n_int - r0)
             status, done = K.run_steps(
-                r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, n_sub, st.npd,
+                r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, a_filt, n_sub, st.npd,
                 st.blocks, st.c_uni, st.lst_idx, st.lst_stride, st.lst_coef, ka.mass, ka.minv,
                 ka.spr_dof, ka.spr_kc,
                 ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
@@ -92,7 +106,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
                 ka.cnode_slot, ka.cnodes,
                 ka.sens_node, ka.sens_dir,
-                u, v, w, f, scratch, acc, react_acc,
+                u, v, w, vf, f, scratch, acc, react_acc,
                 rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], RUNAWAY_FACTOR, diag,
             )
             if status != K.OK:

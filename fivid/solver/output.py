@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.fe.damping import scheme_name
 from fivid.solver import _kernels as K
 
 __all__ = ["run_dataset"]
@@ -131,6 +132,8 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "preload_displacement": float(schedule.load_displacement) if schedule.load_displacement is not None else np.nan,
         "rayleigh_alpha": float(model.rayleigh_alpha),
         "rayleigh_beta": float(model.rayleigh_beta),
+        "damping_scheme": scheme_name(model.rayleigh_beta, model.damping_cutoff),
+        "damping_cutoff": float(model.damping_cutoff),
         "contact_method": "node-to-segment, forward-increment Lagrange multipliers, Coulomb stick/slip, Gauss-Seidel",
         "contact_gs_tolerance": settings.gs_tolerance,
         "contact_gs_mean_sweeps": float(raw.acc[K.GS_SWEEPS] / max(raw.steps, 1)),

@@ -8,6 +8,12 @@ For ``M a + (alpha M + beta K) v + K u = f`` the central-difference scheme is st
 where ``omega_max^2`` is the largest eigenvalue of ``M^-1 K`` on the free dofs (lumped ``M`` with the
 point masses, ``K`` with the discrete springs). Dashpots of discrete elements are integrated explicitly
 too and add the condition ``dt < 2 m / c`` for each dof they load.
+
+With band-limited damping (:mod:`fivid.fe.damping`: ``beta K`` acting on a low-pass filtered velocity) no
+closed form is at hand, so the step is found from the scheme itself: the amplification matrix of one step of
+the kernel's update for a mode of angular frequency ``omega`` (state: displacement, half-step velocity,
+filtered velocity) must have spectral radius <= 1 for every ``omega`` up to ``omega_max``; the largest such
+``dt`` is found by bisection (for classic Rayleigh this reproduces the closed form above, which a test checks).
 """
 
 from __future__ import annotations
@@ -17,8 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.damping import scheme_name
 
-__all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step"]
+__all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step", "amplification_matrix"]
 
 
 @dataclass(frozen=True)
@@ -30,17 +37,21 @@ class StableStep:
     omega_max : float
         Highest angular frequency of the free, undamped, unconstrained-contact system [rad s-1].
     xi : float
-        Damping ratio of that mode from Rayleigh's beta, ``beta omega_max / 2`` [-].
+        Damping ratio of that mode from Rayleigh's beta, ``beta omega_max / 2`` [-] (classic Rayleigh).
     critical_time_step : float
-        ``(2/omega_max)(sqrt(1+xi^2) - xi)``, further limited by explicit dashpots [s].
+        Classic Rayleigh: ``(2/omega_max)(sqrt(1+xi^2) - xi)``; band-limited: from the amplification matrix;
+        further limited by explicit dashpots [s].
     undamped_time_step : float
         ``2/omega_max`` [s].
+    damping_scheme : str
+        ``"rayleigh"`` or ``"band_limited"`` (:mod:`fivid.fe.damping`).
     """
 
     omega_max: float
     xi: float
     critical_time_step: float
     undamped_time_step: float
+    damping_scheme: str = "rayleigh"
 
 
 def max_angular_frequency(model, *, tol: float = 1e-10) -> float:
@@ -85,18 +96,62 @@ def _dashpot_limit(model) -> float:
     return float(np.min(m[loaded] / c[loaded])) if loaded.any() else float("inf")
 
 
+def amplification_matrix(omega, dt: float, alpha: float, beta: float, cutoff: float) -> np.ndarray:
+    """One kernel step for modes of angular frequency ``omega`` [rad s-1]: ``s_{n+1} = A s_n``, shape (..., 3, 3).
+
+    State ``s = (u_n, v_{n-1/2}, vf_n)`` of :func:`fivid.solver._kernels._predictor`:
+    ``v' = (1 - alpha dt) v - dt omega^2 (u + beta vf)``, ``u' = u + dt v'``, ``vf' = vf + a (v' - vf)`` with
+    ``a = 1 - exp(-2 pi cutoff dt)`` (1 for classic Rayleigh, ``cutoff`` inf: then ``vf`` is ``v``).
+    """
+    from fivid.solver.integrate import velocity_filter_gain
+
+    w2 = np.asarray(omega, dtype=float)[..., None] ** 2
+    a = velocity_filter_gain(cutoff, dt)
+    zero = np.zeros_like(w2)
+    if a >= 1.0:  # vf is v itself
+        rv = np.concatenate([-dt * w2, 1.0 - alpha * dt - dt * w2 * beta + zero, zero], axis=-1)
+    else:
+        rv = np.concatenate([-dt * w2, 1.0 - alpha * dt + zero, -dt * w2 * beta], axis=-1)
+    ru = np.concatenate([1.0 + zero, zero, zero], axis=-1) + dt * rv
+    rf = np.concatenate([zero, zero, (1.0 - a) + zero], axis=-1) + a * rv
+    return np.stack([ru, rv, rf], axis=-2)
+
+
+def _largest_stable_step(omega_max: float, alpha: float, beta: float, cutoff: float) -> float:
+    """Largest ``dt`` [s] with spectral radius <= 1 (+ round-off) for every mode up to ``omega_max`` (bisection)."""
+    omegas = omega_max * np.concatenate([np.geomspace(1e-4, 1.0, 400), [1.0]])
+
+    def stable(dt):
+        rho = np.abs(np.linalg.eigvals(amplification_matrix(omegas, dt, alpha, beta, cutoff))).max()
+        return rho <= 1.0 + 1e-12
+
+    lo, hi = 0.0, 2.0 / omega_max * (1.0 + 1e-9)
+    if stable(hi):
+        return hi
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo
+
+
 def stable_step(model) -> StableStep:
-    """The :class:`StableStep` of ``model`` (Rayleigh ``beta`` from the model)."""
+    """The :class:`StableStep` of ``model`` (Rayleigh ``alpha``, ``beta`` and damping cut-off from the model)."""
     omega = max_angular_frequency(model)
     if omega <= 0.0:
         raise ConfigError("the model has no stiffness on its free dofs (omega_max = 0): nothing to integrate")
     xi = 0.5 * model.rayleigh_beta * omega
     undamped = 2.0 / omega
-    dt = undamped * (np.sqrt(1.0 + xi * xi) - xi)
+    cutoff = float(model.damping_cutoff)
+    scheme = scheme_name(model.rayleigh_beta, cutoff)
+    if scheme == "band_limited":
+        dt = _largest_stable_step(omega, float(model.rayleigh_alpha), float(model.rayleigh_beta), cutoff)
+    else:
+        dt = undamped * (np.sqrt(1.0 + xi * xi) - xi)
     dt = min(dt, _dashpot_limit(model))
     if model.rayleigh_alpha > 0.0:
         dt = min(dt, 2.0 / model.rayleigh_alpha)
-    return StableStep(omega_max=omega, xi=float(xi), critical_time_step=float(dt), undamped_time_step=undamped)
+    return StableStep(omega_max=omega, xi=float(xi), critical_time_step=float(dt), undamped_time_step=undamped,
+                      damping_scheme=scheme)
 
 
 def critical_time_step(model) -> float:

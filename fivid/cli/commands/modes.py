@@ -28,6 +28,9 @@ def register(subparsers) -> None:
                    help="normal load with unit, e.g. '5 N': couple the bodies by normal penalty springs at the slave "
                         "nodes closed under it (static preload solve; no friction)")
     p.add_argument("--contact", action="store_true", help="same as --load (which it needs): kept for clarity")
+    p.add_argument("--damping-curve", metavar="PNG",
+                   help="plot the modal damping ratio vs frequency of the model's damping scheme (classic or "
+                        "band-limited Rayleigh, docs/model-config.md) with the modes marked, to this PNG file")
     p.set_defaults(func=run)
 
 
@@ -42,6 +45,8 @@ def run(args) -> int:
         raise ConfigError(f"-n must be >= 1, got {args.n_modes}")
     if args.output:
         check_writable(args.output, overwrite=args.overwrite)
+    if args.damping_curve:
+        check_writable(args.damping_curve, overwrite=True)
     from fivid.units import parse_quantity
 
     if args.contact and args.load is None:
@@ -53,6 +58,10 @@ def run(args) -> int:
     if args.output:
         write_modes(ds, args.output, overwrite=args.overwrite)
     summary = modes_to_json(ds)
+    summary.update(_damping_summary(model, summary["frequencies_hz"]))
+    if args.damping_curve:
+        _plot_damping_curve(model, summary["frequencies_hz"], args.damping_curve)
+        summary["damping_curve"] = str(args.damping_curve)
     if args.output:
         summary["output"] = str(args.output)
     if args.json:
@@ -61,12 +70,61 @@ def run(args) -> int:
         print(f"{model.describe()}; {ds.attrs['n_free_dofs']} free dofs; {args.mass} mass")
         if load is not None:
             print(f"contact closed under {load:g} N at slave node(s) {summary['closed_slave_nodes']}")
-        print(" mode   frequency [Hz]")
-        for i, f in enumerate(summary["frequencies_hz"], 1):
-            print(f"{i:5d}   {f:14.2f}")
+        print(f"damping: {summary['damping_scheme']}")
+        print(" mode   frequency [Hz]   damping ratio")
+        for i, (f, z) in enumerate(zip(summary["frequencies_hz"], summary["damping_ratios"]), 1):
+            print(f"{i:5d}   {f:14.2f}   {z:13.5f}")
         if args.output:
             print(f"mode shapes written to {args.output}", file=sys.stderr)
     return 0
+
+
+def _damping_summary(model, frequencies) -> dict:
+    """The damping scheme and each mode's exact damping ratio under it (``fivid.fe.damping``)."""
+    import numpy as np
+
+    from fivid.fe.damping import damping_ratio, scheme_name
+
+    f = np.asarray(frequencies, dtype=float)
+    pos = f > 0
+    z = np.full(f.shape, np.nan)
+    z[pos] = damping_ratio(f[pos], model.rayleigh_alpha, model.rayleigh_beta, model.damping_cutoff)
+    return {"damping_scheme": scheme_name(model.rayleigh_beta, model.damping_cutoff),
+            "rayleigh_alpha": model.rayleigh_alpha, "rayleigh_beta": model.rayleigh_beta,
+            "damping_cutoff_hz": None if not np.isfinite(model.damping_cutoff) else model.damping_cutoff,
+            "damping_ratios": [None if not np.isfinite(v) else float(v) for v in z]}
+
+
+def _plot_damping_curve(model, frequencies, path) -> None:
+    """PNG of zeta(f) for the model's scheme (and classic Rayleigh with the same alpha, beta for comparison)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from fivid.fe.damping import damping_ratio, scheme_name
+    from fivid.storage import atomic_path
+
+    f_modes = np.asarray([f for f in frequencies if f > 0])
+    hi = max(1e5, 3 * f_modes.max()) if f_modes.size else 1e5
+    f = np.geomspace(10.0, hi, 400)
+    a, b, fc = model.rayleigh_alpha, model.rayleigh_beta, model.damping_cutoff
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.loglog(f, damping_ratio(f, a, b, fc), label=f"{scheme_name(b, fc)} (this model)")
+    if np.isfinite(fc):
+        ax.loglog(f, damping_ratio(f, a, b), "--", color="0.5", label="classic Rayleigh, same alpha and beta")
+        ax.axvline(fc, color="0.7", lw=0.8)
+    if f_modes.size:
+        ax.loglog(f_modes, damping_ratio(f_modes, a, b, fc), "o", ms=4, label="modes")
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("modal damping ratio [-]")
+    ax.set_title(f"damping of {model.config.get('name', 'model')}: alpha {a:.4g} 1/s, beta {b:.4g} s")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=120, bbox_inches="tight")
+    plt.close(fig)
 
 
 def _positive_load(text, parse_quantity) -> float:
