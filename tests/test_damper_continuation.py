@@ -92,7 +92,7 @@ def _stick_pattern_envelope(stick):
 def test_floquet_multiplier_predicts_time_domain_decay(model1, normal_load, frequency):
     """Perturb the Newmark steady state: the perturbation decays per period like the largest Floquet
     multiplier (stick-slip orbits, where the multiplier is well below the free-beam value)."""
-    from fivid.damper._newmark_kernels import newmark_jenkins
+    from fivid.friction._jenkins_kernels import newmark_jenkins
 
     fs, k = model1.slip_force(normal_load), model1.contact_stiffness
     om = 2 * np.pi * frequency
