@@ -1,7 +1,7 @@
 """Jenkins element kernels (L0: numpy and numba only).
 
 A Jenkins element is a spring of stiffness ``k`` in series with a Coulomb slider of slip force
-``fs``. Its one update rule, :func:`jenkins_force` (elastic predictor, return to the slip surface), serves
+``fs``. Its one update rule, :func:`jenkins_return_map` (elastic predictor, return to the slip surface), serves
 both kernels here: :func:`jenkins_march` drives the element by a displacement history (rate independent:
 exact for a piecewise-linear path between samples), :func:`newmark_jenkins` marches a modal structure with
 one Jenkins contact in time (the friction dampers of seed 004, :mod:`fivid.damper.timedomain`).
@@ -11,11 +11,11 @@ import math
 
 from numba import njit
 
-__all__ = ["jenkins_force", "jenkins_march", "newmark_jenkins"]
+__all__ = ["jenkins_return_map", "jenkins_march", "newmark_jenkins"]
 
 
 @njit(cache=True)
-def jenkins_force(f_prev, dx, stiffness, slip_force):
+def jenkins_return_map(f_prev, dx, stiffness, slip_force):
     """Force after a displacement increment ``dx`` [m] from force ``f_prev`` [N]: ``(f [N], slipped)``.
 
     Elastic predictor ``f_prev + stiffness dx``, returned to ``+-slip_force`` when it leaves the slip surface.
@@ -59,7 +59,7 @@ def jenkins_march(x, stiffness, slip_force, initial_force, n_passes, force_out, 
         for _ in range(n_passes):
             for j in range(n):
                 xj = x[p, j]
-                f, slipped = jenkins_force(f, xj - xprev, stiffness, slip_force)
+                f, slipped = jenkins_return_map(f, xj - xprev, stiffness, slip_force)
                 if slipped:
                     anchor = -1
                 elif anchor == -1:
@@ -114,7 +114,7 @@ def newmark_jenkins(omega2, damping, phi_c, phi_e, phi_m, force_amplitude, angul
             x_lin += phi_c[r] * rhs / (c0 + c1 * damping[r] + omega2[r])
         # stick trial (x_c from the linear system with the stick law), then return to the slip surface
         xc = (x_lin + g * (stiffness * xc_prev - f_prev)) / (1.0 + g * stiffness)
-        f, slipped = jenkins_force(f_prev, xc - xc_prev, stiffness, slip_force)
+        f, slipped = jenkins_return_map(f_prev, xc - xc_prev, stiffness, slip_force)
         if slipped:
             xc = x_lin - g * f
         xm = 0.0

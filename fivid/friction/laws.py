@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -24,10 +25,39 @@ from fivid.errors import FividError
 from fivid.friction.amplitude import AmplitudeModel
 from fivid.friction.synthesis import check_sampling, fft_frequencies, synthesise_perturbation
 
-__all__ = ["CoulombLaw", "PerturbedCoulombLaw", "INJECTION_MODES"]
+__all__ = ["FrictionLaw", "FRICTION_LAW_MEMBERS", "CoulombLaw", "PerturbedCoulombLaw", "INJECTION_MODES"]
 
 INJECTION_MODES = ("uniform", "per_node", "convected")
 _log = logging.getLogger("fivid")
+
+
+@runtime_checkable
+class FrictionLaw(Protocol):
+    """What the solver asks of a friction law: μ0, the injection mode, samples of μp(t), a description, a hash.
+
+    :class:`CoulombLaw` and :class:`PerturbedCoulombLaw` implement it; any object with these members can be
+    simulated (``isinstance(obj, FrictionLaw)`` checks that they exist).
+    """
+
+    mu0: float
+    injection: str
+
+    @property
+    def sha256(self) -> str:
+        """Content hash of the law (recorded in the simulation's provenance)."""
+
+    def amplitude(self, velocity, roughness, normal_load=None):
+        """RMS of μp [-] at sliding velocity [m s-1], roughness Ra [m], normal load [N]."""
+
+    def sample(self, duration, sample_rate, velocity, roughness, seed, n_signals=1, normal_load=None):
+        """μp(t) [-], shape (n_signals, round(duration * sample_rate)), reproducible from ``seed``."""
+
+    def describe(self) -> str:
+        """One line saying what the law is."""
+
+
+#: members of :class:`FrictionLaw`, for error messages that name what an object lacks
+FRICTION_LAW_MEMBERS = ("mu0", "injection", "sha256", "amplitude", "sample", "describe")
 
 
 def _sha256_of(content: dict, *arrays: np.ndarray) -> str:

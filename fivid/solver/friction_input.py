@@ -79,9 +79,12 @@ def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, *, law=No
             desc = "Coulomb, mu of each contact pair from the model: " + ", ".join(
                 f"{c.name} {c.mu:g}" for c in model.contacts)
         return FrictionTable(values, 1.0, desc, "", "constant")
-    for attr in ("mu0", "injection", "sample"):
-        if not hasattr(law, attr):
-            raise ConfigError(f"the friction law object has no {attr!r}; expected the fivid.friction law interface")
+    from fivid.friction.laws import FRICTION_LAW_MEMBERS, FrictionLaw
+
+    if not isinstance(law, FrictionLaw):
+        missing = [m for m in FRICTION_LAW_MEMBERS if not hasattr(law, m)]
+        raise ConfigError(f"the friction law object ({type(law).__name__}) lacks {', '.join(map(repr, missing))}; "
+                          "expected the fivid.friction.FrictionLaw interface")
     mode = str(law.injection)
     if mode not in INJECTION_MODES:
         raise ConfigError(f"friction law injection {mode!r} is not one of {', '.join(INJECTION_MODES)}")
@@ -105,8 +108,8 @@ def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, *, law=No
         grid = np.arange(sig.size) / rate
         mup = np.stack([np.interp(t + lag[k], grid, sig) for k in range(ns)], axis=1)
     mu0 = float(law.mu0)
-    desc = law.describe() if hasattr(law, "describe") else type(law).__name__
-    sha = str(getattr(law, "sha256", ""))
+    desc = law.describe()
+    sha = str(law.sha256)
     return FrictionTable(np.ascontiguousarray(mu0 + mup), rate, f"{desc}; injection {mode}", sha, mode)
 
 
