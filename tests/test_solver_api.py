@@ -110,6 +110,23 @@ def test_friction_injection_modes():
     np.testing.assert_array_equal(again.mu, per.mu)  # reproducible from the seed
 
 
+def test_friction_law_protocol():
+    """The laws and a duck-typed stand-in satisfy fivid.friction.FrictionLaw; an object lacking members is refused
+    with the members named (not an AttributeError deep in the solver)."""
+    from fivid.friction import CoulombLaw, FrictionLaw
+    from fivid.solver.friction_input import friction_table
+
+    assert isinstance(CoulombLaw(0.3), FrictionLaw) and isinstance(StandInLaw(), FrictionLaw)
+
+    class NoSample:
+        mu0, injection = 0.3, "uniform"
+
+    model = load_model(block_on_base())
+    with pytest.raises(ConfigError, match="NoSample.*'sha256', 'amplitude', 'sample', 'describe'"):
+        friction_table(model, np.zeros(1, dtype=np.int64), np.zeros(1), law=NoSample(), total_time=0.01, dt=1e-7,
+                       sample_rate=5e4, sliding_velocity=1.0, roughness_ra=None, normal_load=None, seed=0)
+
+
 def test_run_is_a_scoreable_rundataset_and_reproducible(tmp_path):
     """A short preload-and-slide run with a stand-in law: valid RunDataset, written and read back, the energy
     balance closes to round-off, and the same seed gives the same run."""

@@ -19,7 +19,7 @@ from fivid.friction.jenkins import (
 )
 from fivid.friction.amplitude import AMPLITUDE_FORMS, AmplitudeModel, amplitude_design_matrix
 from fivid.friction.lawfile import law_dataset, law_from_dataset, load_law, write_law
-from fivid.friction.laws import INJECTION_MODES, CoulombLaw, PerturbedCoulombLaw
+from fivid.friction.laws import INJECTION_MODES, CoulombLaw, FrictionLaw, PerturbedCoulombLaw
 from fivid.friction.synthesis import synthesise_perturbation
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "AmplitudeModel",
     "amplitude_design_matrix",
     "CoulombLaw",
+    "FrictionLaw",
     "PerturbedCoulombLaw",
     "INJECTION_MODES",
     "load_law",
