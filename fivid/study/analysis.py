@@ -1,0 +1,105 @@
+"""What a transient did: growth rate, onset, limit cycle, stick share, and the regime it falls in (seed 002).
+
+Regimes (decided in this order, from the record's contact states and its envelope):
+
+``stick_slip``
+    the contact sticks in at least ``STICK_SHARE`` of the samples of the record's second half (stick phases in
+    the contact state history);
+``mode_coupling``
+    continuous sliding, the envelope grows exponentially (a fitted growth phase with rate > 3 standard errors)
+    and then saturates (limit cycle);
+``stable``
+    otherwise: the disturbance decays or no growth is found.
+
+The growth rate is fitted on the last factor 30 of the envelope's rise (:func:`fivid.signal.transient.growth_phase`)
+and before the contact first leaves continuous sliding: beyond it the system is not the linear one a CEA
+describes. ``onset_time`` is the end of that window: when the instability has grown to where the
+nonlinearity takes over. The limit cycle is the last quarter of the record: its dominant frequency (Welch PSD
+peak) and RMS.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fivid.signal.transient import envelope, envelope_growth_rate, growth_phase
+
+__all__ = ["STICK_SHARE", "analyse_transient"]
+
+#: share of stick samples (second half of the record) from which a run is called stick-slip
+STICK_SHARE = 0.01
+
+
+def _peak_frequency(x, fs: float) -> float:
+    from scipy.signal import welch
+
+    n = min(x.size, 4096)
+    f, p = welch(x - x.mean(), fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant")
+    return float(f[1:][np.argmax(p[1:])])
+
+
+def analyse_transient(t, x, *, sliding=None, stick=None) -> dict:
+    """Growth, onset, limit cycle and regime of a response record.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s], uniform.
+    x : array_like
+        Response (displacement, velocity or acceleration; any units).
+    sliding : array_like of bool, optional
+        Per sample: the contact slides continuously (no stick, no opening). The growth fit stops at the first
+        False.
+    stick : array_like of float, optional
+        Per sample: share of the contact sticking (0..1).
+
+    Returns
+    -------
+    dict
+        ``regime``; ``growth_rate`` [s-1] and ``growth_rate_stderr`` (NaN without a growth phase);
+        ``onset_time`` [s] (NaN unless mode coupling); ``frequency`` [Hz] and ``amplitude`` (RMS, units of x) of
+        the last quarter; ``stick_fraction`` [-] over the second half.
+    """
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    fs = 1.0 / float(np.median(np.diff(t)))
+    n = t.size
+    tail = x[3 * n // 4:]
+    f_lc = _peak_frequency(tail, fs) if tail.size >= 16 else float("nan")
+    f_all = _peak_frequency(x, fs)
+    stick_fraction = float(np.mean(np.asarray(stick, dtype=float)[n // 2:])) if stick is not None else 0.0
+    out = {"frequency": f_lc, "amplitude": float(np.sqrt(np.mean((tail - tail.mean()) ** 2))),
+           "stick_fraction": stick_fraction, "growth_rate": float("nan"), "growth_rate_stderr": float("nan"),
+           "onset_time": float("nan")}
+    band = (f_all / 1.5, min(f_all * 1.5, 0.45 * fs)) if f_all > 0 else None
+    linear_until = None
+    if sliding is not None:
+        off = np.flatnonzero(~np.asarray(sliding, dtype=bool))
+        linear_until = float(t[off[0]]) if off.size else None
+    growing = False
+    if band is not None and band[0] < band[1]:
+        env = envelope(x, fs, band)
+        edge = 10.0 / (band[1] - band[0])  # the zero-phase band-pass's start/end transients (signal.transient)
+        usable = t <= t[-1] - edge  # the growth window's start is the envelope's 1 %: the start edge is harmless
+        window = growth_phase(t[usable], env[usable], linear_until=linear_until) if usable.sum() > 16 else None
+        if window is not None and window[1] - window[0] > 2.0 / f_all:
+            fit = envelope_growth_rate(t, x, band=band, window=window)
+            growing = fit.rate > 3.0 * fit.stderr
+            if growing:
+                out["onset_time"] = window[1]
+        else:
+            # no full growth phase in the record: fit the interior (before the first stick or opening); a
+            # significant positive rate is a growth that has not saturated yet (no onset time)
+            stop = t[-1] - edge if linear_until is None else min(t[-1] - edge, linear_until)
+            fit = envelope_growth_rate(t, x, band=band, window=(t[0] + edge, stop)) if stop > t[0] + 2 * edge \
+                else None
+            growing = fit is not None and fit.rate > 3.0 * fit.stderr
+        if fit is not None:
+            out.update(growth_rate=fit.rate, growth_rate_stderr=fit.stderr)
+    if stick_fraction >= STICK_SHARE:
+        out["regime"] = "stick_slip"
+    elif growing:
+        out["regime"] = "mode_coupling"
+    else:
+        out["regime"] = "stable"
+    return out

@@ -1,0 +1,107 @@
+"""The study's report section: the points table, the regime map and the CEA, as one self-contained HTML page."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fivid.report.html import Page, figure_data_uri, table
+
+__all__ = ["render_study_report", "study_section"]
+
+_COLOURS = {"stable": "C2", "mode_coupling": "C1", "stick_slip": "C3"}
+
+
+def _figure(width: float = 7.0, height: float = 4.0):
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(figsize=(width, height), layout="constrained")
+
+
+def _response_figure(ds, axis: str, name: str, label: str, cea_curve=None) -> str:
+    """``name`` against the swept ``axis``, one marker per point coloured by regime."""
+    fig, ax = _figure()
+    x = ds[axis].values
+    y = ds[name].values
+    regimes = ds["regime"].values.astype(str) if "regime" in ds else np.array(["point"] * x.size)
+    for reg in dict.fromkeys(regimes):
+        sel = regimes == reg
+        ax.plot(x[sel], y[sel], "o", color=_COLOURS.get(reg, "C0"), label=reg.replace("_", " "))
+    if cea_curve is not None:
+        ax.plot(*cea_curve, "-", color="0.4", lw=1, label="CEA: largest Re(λ)")
+    units = ds[axis].attrs.get("units", "")
+    ax.set_xlabel(f"{ds[axis].attrs.get('long_name', axis)} [{units}]")
+    ax.set_ylabel(label)
+    if axis in ("normal_load", "sliding_velocity", "roughness_ra") and np.all(x > 0):
+        ax.set_xscale("log")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    return figure_data_uri(fig)
+
+
+def _cea_figure(ds) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True, layout="constrained")
+    mu = ds["cea_mu"].values
+    for k in range(ds.sizes["cea_mode"]):
+        a1.plot(mu, ds["cea_frequency"].values[:, k], lw=1)
+        a2.plot(mu, ds["cea_real_part"].values[:, k], lw=1)
+    a2.axhline(0.0, color="0.3", lw=0.8)
+    a1.set_ylabel("frequency [Hz]")
+    a2.set_ylabel("Re(λ) [1/s]  (> 0 unstable)")
+    a2.set_xlabel("friction coefficient μ [-]")
+    for a in (a1, a2):
+        a.grid(True, alpha=0.3)
+    return figure_data_uri(fig)
+
+
+def study_section(page: Page, ds, summary: dict) -> None:
+    """Add the study's section to ``page`` (a study report, or a pipeline report that embeds one)."""
+    page.heading(f"Study {summary['study']}")
+    if summary.get("description"):
+        page.paragraph(summary["description"])
+    page.paragraph(f"{summary['n_done']} of {summary['n_points']} points done"
+                   + (" (--quick resolution)" if summary.get("quick") else "") + f"; source {summary['source']}.")
+    crit = summary.get("critical_mu", "absent")
+    if crit != "absent":
+        page.paragraph("CEA: stable over the analysed μ range." if crit is None else
+                       f"CEA: critical μ = {crit['value']:.4g} (mode {crit['mode']}, coalescing with mode "
+                       f"{crit['partner_mode']}, {crit['frequency']:.4g} Hz).")
+    axes = [a for a in ("normal_load", "sliding_velocity", "roughness_ra", "mu", "mu_static", "seed")
+            if any(a in p for p in summary["points"])]
+    cols = ["regime", "growth_rate", "cea_growth_rate", "frequency", "onset_time", "level_db", "status"]
+    cols = [c for c in cols if any(c in p for p in summary["points"])]
+    rows = [[p.get(a) for a in axes] + [p.get(c) for c in cols] for p in summary["points"]]
+    page.raw(table(axes + cols, rows))
+    if summary["failed"]:
+        page.paragraph("Failed points: " + "; ".join(f"point {f['point']}: {f['error']}" for f in summary["failed"]),
+                       cls="fail")
+    if ds.sizes.get("point", 0) and axes:
+        axis = axes[0]
+        if "growth_rate" in ds:
+            curve = None
+            if "cea_mu" in ds.coords and axis == "mu":
+                curve = (ds["cea_mu"].values, ds["cea_real_part"].values.max(axis=1))
+            page.figure(_response_figure(ds, axis, "growth_rate", "envelope growth rate [1/s]", curve),
+                        "Growth rate of each transient (fitted on its envelope) against the swept condition, by "
+                        "regime" + (", with the CEA's largest real part." if curve else "."), "growth rates")
+        if "level_db" in ds:
+            page.figure(_response_figure(ds, axis, "level_db", "acceleration level [dB re 1e-6 m/s²]"),
+                        "Response level of each point's steady part.", "levels")
+    if "cea_mu" in ds.coords:
+        page.figure(_cea_figure(ds), "CEA: frequencies and real parts of the eigenvalues against μ.", "CEA")
+
+
+def render_study_report(path, study, ds, summary: dict):
+    """Write ``report.html`` for a study (atomically); returns the path."""
+    from fivid.storage import write_text
+
+    page = Page(f"fivid study report: {study.name}")
+    study_section(page, ds, summary)
+    return write_text(path, page.render())

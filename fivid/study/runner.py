@@ -1,0 +1,272 @@
+"""Run a study: points on dask (or in-process), incrementally and atomically; assemble, summarise, report.
+
+Layout of the output folder ``DIR``:
+
+``points/p0007-<key>.nc``
+    one file per finished point, written atomically; ``key`` hashes the point's conditions and everything it
+    depends on (model file, task settings). A re-run skips the points whose file exists, so a killed study
+    resumes where it stopped and a changed setting recomputes only what it changes. A failing point is
+    reported and written nowhere (the next run tries it again); the other points finish.
+``study.nc``
+    all points along a ``point`` dimension, the swept conditions as ``point`` coordinates with units (open it
+    with :func:`open_study` to select by condition: ``open_study(p).sel(normal_load=5.0)``), and the study-level
+    CEA on ``cea_mu``.
+``summary.json``
+    the output contract (docs/studies.md): provenance, ``points`` (conditions in SI, ``regime``, ``growth_rate``,
+    ``frequency``, ``onset_time`` where they apply, ``status``), ``critical_mu`` (null if stable over the CEA's
+    range), failures, timing (wall time per point and parallel efficiency).
+``report.html``
+    the report section: the summary table and figures.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from fivid.errors import FividError
+
+__all__ = ["run_study", "open_study", "point_key"]
+
+log = logging.getLogger("fivid")
+
+
+def point_key(study, conditions: dict) -> str:
+    """sha256 (hex) of a point: the study's digest and the point's conditions."""
+    text = json.dumps({"study": study.digest, "conditions": {k: float(v) for k, v in conditions.items()}},
+                      sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _system(study) -> dict:
+    return {"lumped": study.lumped} if study.lumped is not None else {"model_path": str(study.model_path)}
+
+
+def _safe_evaluate(system, tasks, conditions):
+    """Evaluate one point; a failure comes back as ``(None, message)`` so that the other points go on."""
+    from fivid.study.tasks import evaluate_point
+
+    try:
+        return evaluate_point(system, tasks, conditions), None
+    except Exception as exc:  # noqa: BLE001 - any failure of one point is reported, the study goes on
+        return None, f"{type(exc).__name__}: {exc}"
+
+
+def _in_process(items: dict):
+    for name, args in items.items():
+        t0 = time.perf_counter()
+        out = _safe_evaluate(*args)
+        yield name, out, time.perf_counter() - t0, os.getpid()
+
+
+def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, progress=None) -> dict:
+    """Run ``study`` into ``outdir``; returns the summary (also written to ``outdir/summary.json``).
+
+    Parameters
+    ----------
+    study : Study
+        From :func:`fivid.study.load_study`.
+    outdir : path-like
+        Output folder (created; locked while the study runs).
+    workers : int
+        Worker processes of the dask LocalCluster; 0 runs the points in this process (no dask).
+    scheduler : str, optional
+        ``tcp://host:port`` of a running dask scheduler (then ``workers`` is ignored).
+    progress : bool, optional
+        Progress bar (default: when the terminal is interactive).
+    """
+    from tqdm.auto import tqdm
+
+    from fivid.pipeline.lock import OutputLock
+    from fivid.storage import write_json, write_netcdf
+
+    outdir = Path(outdir)
+    started = time.perf_counter()
+    with OutputLock(outdir):
+        pdir = outdir / "points"
+        pdir.mkdir(parents=True, exist_ok=True)
+        table = study.point_table()
+        files = [pdir / f"p{i:04d}-{point_key(study, c)[:16]}.nc" for i, c in enumerate(table)]
+        todo = {i: (_system(study), study.points, table[i]) for i, f in enumerate(files) if not f.exists()}
+        log.info("study %s: %d points, %d to compute", study.name, len(table), len(todo))
+        timing, failed = {}, {}
+        if todo and study.points:
+            if workers == 0 and scheduler is None:
+                results = _in_process(todo)
+            else:
+                from fivid.pipeline.sweep import map_tasks
+
+                results = map_tasks(_safe_evaluate, todo, workers=max(workers, 1), scheduler=scheduler)
+            with tqdm(total=len(todo), desc=f"study {study.name}", unit="point", leave=False,
+                      disable=None if progress is None else not progress) as bar:
+                for i, (ds, error), seconds, pid in results:
+                    timing[i] = seconds
+                    if error is not None:
+                        failed[i] = error
+                        log.warning("study %s: point %d %s failed: %s", study.name, i, table[i], error)
+                    else:
+                        ds.attrs.update({"point": i, "seconds": seconds, "worker_pid": pid,
+                                         "study_digest": study.digest,
+                                         **{f"condition_{k}": float(v) for k, v in table[i].items()}})
+                        write_netcdf(ds, files[i])
+                    bar.update(1)
+        wall = time.perf_counter() - started
+        done = [i for i, f in enumerate(files) if f.exists()]
+        cea = _study_cea(study)
+        ds = _assemble(study, table, files, done, cea)
+        write_netcdf(ds, outdir / "study.nc")
+        summary = _summary(study, table, ds, done, failed, cea, timing, wall, workers if scheduler is None else None)
+        write_json(outdir / "summary.json", summary)
+        from fivid.study.report import render_study_report
+
+        render_study_report(outdir / "report.html", study, ds, summary)
+    return summary
+
+
+def _study_cea(study):
+    """The study-level CEA: ``{"mu", "eigenvalues", "critical_mu", "partner"}`` or None."""
+    if study.cea is None:
+        return None
+    mu = study.cea["mu"]
+    if "mu" in study.axes:  # evaluate exactly at the transients' mu too (near a threshold Re(lambda) ~ sqrt)
+        swept = study.axes["mu"]
+        mu = np.union1d(mu, swept[(swept >= mu[0]) & (swept <= mu[-1])])
+    if study.lumped is not None:
+        from fivid.study.lumped import HoffmannSystem
+
+        res = HoffmannSystem(**study.lumped["parameters"]).cea(mu)
+    else:
+        from fivid.fe import load_model
+        from fivid.fe.cea import complex_eigenvalue_analysis
+
+        load = study.cea.get("normal_load")
+        ds = complex_eigenvalue_analysis(load_model(study.model_path), mu, normal_load=load)
+        lam = ds["real_part"].transpose("mu", "mode").values + 2j * np.pi * ds["frequency"].transpose("mu", "mode").values
+        p = ds["partner"].values  # mode numbers (1-based), -1 for none
+        res = {"eigenvalues": lam, "critical_mu": ds["critical_mu"].values, "partner": np.where(p > 0, p - 1, -1)}
+    return {"mu": mu, **{k: res[k] for k in ("eigenvalues", "critical_mu", "partner")}}
+
+
+def _assemble(study, table, files, done, cea):
+    import xarray as xr
+
+    from fivid.study.config import AXES
+
+    parts = []
+    for i in done:
+        with xr.open_dataset(files[i]) as d:
+            part = d.load()
+        if "regime" in part:
+            part["regime"] = part["regime"].astype(object)
+        parts.append(part.assign_coords(point=i))
+    if parts:
+        ds = xr.concat(parts, dim="point", coords="minimal", compat="override", join="outer",
+                       combine_attrs="drop")
+        if "regime" in ds:  # netCDF gives fixed-width strings back; concat would truncate to the first width
+            ds["regime"] = ds["regime"].astype(object)
+    else:
+        ds = xr.Dataset(coords={"point": ("point", np.array([], dtype=np.int64))})
+    for name in study.axes:
+        units, long = AXES[name]
+        vals = np.array([table[i][name] for i in ds["point"].values.astype(int)])
+        ds = ds.assign_coords({name: ("point", vals, {"units": units, "long_name": long})})
+    ds["point"].attrs["long_name"] = "sweep point index"
+    if cea is not None:
+        lam = np.asarray(cea["eigenvalues"])
+        ds = ds.assign_coords(cea_mu=("cea_mu", cea["mu"], {"units": "1", "long_name": "friction coefficient (CEA)"}),
+                              cea_mode=("cea_mode", np.arange(1, lam.shape[1] + 1)))
+        ds["cea_real_part"] = (("cea_mu", "cea_mode"), lam.real, {"units": "s-1", "long_name": "Re(lambda)"})
+        ds["cea_frequency"] = (("cea_mu", "cea_mode"), np.abs(lam.imag) / (2 * np.pi), {"units": "Hz"})
+        ds["cea_critical_mu"] = (("cea_mode",), np.asarray(cea["critical_mu"], dtype=float), {"units": "1"})
+    from fivid import __version__
+    from fivid.schema import new_history
+
+    ds.attrs.update({"title": f"fivid study {study.name}", "study": study.name, "description": study.description,
+                     "source": study.source, "quick": int(study.quick), "fivid_version": __version__,
+                     "history": new_history(f"study {study.name}: {len(done)}/{len(table)} points")})
+    return ds
+
+
+def open_study(path):
+    """Open ``study.nc`` with an index on every swept condition, so ``.sel(normal_load=...)`` works."""
+    import xarray as xr
+
+    ds = xr.open_dataset(path)
+    for name in [c for c in ds.coords if ds[c].dims == ("point",) and c != "point"]:
+        ds = ds.set_xindex(name)
+    return ds
+
+
+def _scalar(ds, name, i):
+    if name not in ds:
+        return None
+    v = ds[name].sel(point=i).values
+    v = v.item() if hasattr(v, "item") else v
+    if isinstance(v, float) and not np.isfinite(v):
+        return None
+    return v
+
+
+def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict:
+    from fivid import __version__
+
+    points = []
+    for i, cond in enumerate(table):
+        p = {k: (int(v) if k == "seed" else float(v)) for k, v in cond.items()}
+        if i in done:
+            p["status"] = "done"
+            for name, key in (("regime", "regime"), ("growth_rate", "growth_rate"), ("response_frequency", "frequency"),
+                              ("onset_time", "onset_time"), ("rms", "rms"), ("level_db", "level_db"),
+                              ("stick_fraction", "stick_fraction")):
+                val = _scalar(ds, name, i)
+                if val is not None:
+                    p[key] = val
+            if cea is not None and "mu" in cond and "regime" in p:
+                p.update(_cea_at(cea, float(cond["mu"])))
+        else:
+            p["status"] = "failed" if i in failed else "missing"
+            if i in failed:
+                p["error"] = failed[i]
+        points.append(p)
+    out = {"study": study.name, "description": study.description, "source": study.source,
+           "fivid_version": __version__, "quick": study.quick, "n_points": len(table), "n_done": len(done),
+           "failed": [{"point": i, **{k: float(v) for k, v in table[i].items()}, "error": e}
+                      for i, e in sorted(failed.items())],
+           "points": points}
+    if cea is not None:
+        crit = np.asarray(cea["critical_mu"], dtype=float)
+        if np.isfinite(crit).any():
+            k = int(np.nanargmin(crit))
+            partner = int(cea["partner"][k]) if cea["partner"] is not None else -1
+            j = int(np.searchsorted(cea["mu"], crit[k]))
+            lam = np.asarray(cea["eigenvalues"])[min(j, len(cea["mu"]) - 1)]
+            out["critical_mu"] = {"value": float(crit[k]), "mode": k + 1,
+                                  "partner_mode": partner + 1 if partner >= 0 else None,
+                                  "frequency": float(abs(lam[k].imag) / (2 * np.pi)),
+                                  "cea_mu_range": [float(cea["mu"][0]), float(cea["mu"][-1])]}
+        else:
+            out["critical_mu"] = None
+    seconds = list(timing.values())
+    out["timing"] = {"wall_s": round(wall, 3), "computed_points": len(seconds),
+                     "mean_point_s": round(float(np.mean(seconds)), 3) if seconds else None}
+    if seconds and workers:
+        out["timing"]["workers"] = workers
+        out["timing"]["parallel_efficiency"] = round(float(np.sum(seconds) / (wall * workers)), 3)
+    return out
+
+
+def _cea_at(cea, mu: float) -> dict:
+    """CEA's most unstable eigenvalue at ``mu`` (linear interpolation on the sweep): growth rate, frequency."""
+    m = np.asarray(cea["mu"])
+    lam = np.asarray(cea["eigenvalues"])
+    if not m[0] <= mu <= m[-1]:
+        return {}
+    re = np.array([np.interp(mu, m, lam[:, k].real) for k in range(lam.shape[1])])
+    k = int(np.argmax(re))
+    return {"cea_growth_rate": float(re[k]), "cea_frequency": float(np.interp(mu, m, np.abs(lam[:, k].imag)) / (2 * np.pi))}

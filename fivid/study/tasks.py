@@ -1,0 +1,120 @@
+"""One study point: its analyses, run on a dask worker, returned as a small Dataset (no ``point`` dimension).
+
+``evaluate_point(system, tasks, conditions)`` takes plain data (picklable): ``system`` is ``{"model_path": str}``
+or ``{"lumped": {"kind": ..., "parameters": {...}}}``, ``tasks`` the study's per-point settings (SI),
+``conditions`` the point's ``{axis: value}``. Variables (each only when its task ran):
+
+- ``modes``: ``mode_frequency(mode)`` [Hz], preloaded at the point's normal load (FE);
+- ``transient``: ``regime``, ``growth_rate`` [s-1], ``growth_rate_stderr``, ``onset_time`` [s], ``response_frequency`` [Hz],
+  ``amplitude`` (limit-cycle RMS), ``stick_fraction``, ``rms`` and ``level_db`` of the response's steady part;
+- ``psd``: ``psd(frequency)`` of the response's steady part (Welch, Hann, half overlap).
+
+The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``) and
+the normal displacement ``y`` for the lumped model.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["evaluate_point", "REGIMES"]
+
+REGIMES = ("stable", "mode_coupling", "stick_slip")
+
+
+def evaluate_point(system: dict, tasks: dict, conditions: dict):
+    """Run the point's tasks; returns an xarray Dataset (see the module docstring)."""
+    import xarray as xr
+
+    data, coords = {}, {}
+    if "lumped" in system:
+        t, x, units, state = _lumped_transient(system["lumped"], tasks, conditions) if "transient" in tasks \
+            else (None, None, None, None)
+    else:
+        from fivid.fe import load_model
+
+        model = load_model(system["model_path"])
+        if "modes" in tasks:
+            from fivid.fe.modal import modal_analysis
+
+            load = conditions.get("normal_load")
+            ds = modal_analysis(model, tasks["modes"]["n_modes"], include_contact=load is not None and bool(model.contacts),
+                                normal_load=load)
+            data["mode_frequency"] = (("mode",), ds["frequency"].values, {"units": "Hz", "long_name": "natural frequency"})
+            coords["mode"] = ("mode", np.arange(1, ds.sizes["mode"] + 1))
+        t, x, units, state = _fe_transient(model, tasks, conditions) if "transient" in tasks else (None,) * 4
+    if t is not None:
+        from fivid.study.analysis import analyse_transient
+
+        fs = 1.0 / float(np.median(np.diff(t)))
+        a = analyse_transient(t, x, sliding=state["sliding"], stick=state["stick"])
+        rms = float(np.sqrt(np.mean((x - x.mean()) ** 2)))
+        data.update({
+            "regime": ((), np.array(a["regime"], dtype=object), {"long_name": "regime of the transient", "allowed": " ".join(REGIMES)}),
+            "growth_rate": ((), a["growth_rate"], {"units": "s-1", "long_name": "envelope growth rate"}),
+            "growth_rate_stderr": ((), a["growth_rate_stderr"], {"units": "s-1"}),
+            "onset_time": ((), a["onset_time"], {"units": "s", "long_name": "end of the linear growth phase"}),
+            "response_frequency": ((), a["frequency"], {"units": "Hz",
+                                                        "long_name": "dominant frequency of the last quarter"}),
+            "amplitude": ((), a["amplitude"], {"units": units, "long_name": "RMS of the last quarter"}),
+            "stick_fraction": ((), a["stick_fraction"], {"units": "1", "long_name": "stick share, second half"}),
+            "rms": ((), rms, {"units": units, "long_name": "RMS of the response"}),
+        })
+        if units == "m s-2":  # level re 1e-6 m s-2 (ISO 1683 acceleration reference)
+            data["level_db"] = ((), 20.0 * np.log10(rms / 1e-6) if rms > 0 else -np.inf,
+                                {"units": "dB", "long_name": "acceleration level re 1e-6 m s-2"})
+        if "psd" in tasks:
+            from scipy.signal import welch
+
+            n = min(tasks["psd"]["nperseg"], x.size)
+            f, p = welch(x, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
+            if "band" in tasks["psd"]:
+                sel = (f >= tasks["psd"]["band"][0]) & (f <= tasks["psd"]["band"][1])
+                f, p = f[sel], p[sel]
+            data["psd"] = (("frequency",), p, {"units": f"({units})^2 Hz-1", "long_name": "Welch PSD of the response",
+                                                "nperseg": n, "window": "hann", "noverlap": n // 2})
+            coords["frequency"] = ("frequency", f, {"units": "Hz"})
+    return xr.Dataset(data, coords=coords)
+
+
+def _lumped_transient(spec, tasks, conditions):
+    from fivid.study.lumped import HoffmannSystem
+
+    system = HoffmannSystem(**spec["parameters"])
+    tr = tasks["transient"]
+    ds = system.transient(float(conditions["mu"]), duration=tr["duration"], sample_rate=tr["sample_rate"],
+                          perturbation=tr.get("perturbation", 1e-7), mu_static=conditions.get("mu_static"))
+    st = ds["contact_state"].values
+    return ds["time"].values, ds["y"].values, "m", {"sliding": st == 2, "stick": (st == 1).astype(float)}
+
+
+def _fe_transient(model, tasks, conditions):
+    from fivid.solver import simulate
+
+    tr = tasks["transient"]
+    kw = {}
+    if "law" in tr:
+        from fivid.friction import load_law
+
+        kw["law"] = load_law(tr["law"])
+    elif "mu" in conditions:
+        kw["mu"] = float(conditions["mu"])
+    for name in ("sliding_velocity", "normal_load", "roughness_ra"):
+        if name in conditions:
+            kw[name] = float(conditions[name])
+    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"],
+                  seed=int(conditions.get("seed", 0)), progress=False, **kw)
+    steady = ds["time"].values >= ds.attrs["transient_end"]
+    acc = ds["acceleration"]
+    if "sensor" in acc.dims:
+        acc = acc.isel(sensor=0)
+    t = ds["time"].values[steady]
+    x = acc.values[steady]
+    if "stick_fraction" in ds:  # per pair: share of the slave nodes sticking (open ones count as neither)
+        stick = ds["stick_fraction"]
+        stick = (stick.mean("contact") if "contact" in stick.dims else stick).values[steady]
+    else:
+        stick = np.zeros(t.size)
+    sliding = stick <= 0.0  # the CEA's sliding equilibrium holds while no node sticks
+    return t, x, "m s-2", {"sliding": sliding, "stick": stick}
+

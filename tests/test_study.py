@@ -1,0 +1,189 @@
+"""Parametric studies (fivid.study): the 2-DOF mode-coupling oracle, resumption, coordinates, failures, dask."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from fivid.cli import main
+from fivid.errors import ConfigError
+from fivid.study import HoffmannSystem, load_study, open_study, run_study
+
+ROOT = Path(__file__).resolve().parents[1]
+HOFFMANN = ROOT / "configs" / "studies" / "hoffmann_mu_sweep.yaml"
+PARAMS = {"mass": "1 kg", "k1": "1e6 N/m", "k2": "1.6e6 N/m", "k3": "0.8e6 N/m", "damping": "20 N s/m",
+          "preload": "100 N", "belt_velocity": "1 m/s"}
+
+
+def _study(mu, *, cea=True, duration="0.6 s", extra_sweep=None, combine=None):
+    sweep = {"mu": {"values": list(mu)}, **(extra_sweep or {})}
+    if combine:
+        sweep["combine"] = combine
+    cfg = {"fivid-study": 1, "name": "hoffmann", "system": {"lumped": "hoffmann", "parameters": PARAMS},
+           "sweep": sweep, "points": {"transient": {"duration": duration, "sample_rate": "20 kHz",
+                                                    "perturbation": "1e-7 m"}}}
+    if cea:
+        cfg["cea"] = {"mu": {"start": 0, "stop": 2, "num": 41}}
+    return load_study(cfg)
+
+
+def test_cea_finds_the_closed_form_threshold_and_transients_follow_it(tmp_path):
+    """Hoffmann et al. (2002): the study's CEA gives mu_c in closed form (damped; Brent to ~sqrt(eps) on Re,
+    as in tests/test_fe_cea.py); a transient 5 % above it grows at the CEA's rate, one 5 % below decays.
+
+    Growth within 2 %: the envelope fit is unbiased for one exponential; the window (last factor 30 of the
+    growth, ended at the first loss of continuous sliding) leaves the decaying partner mode below 1/30 ** (|Re
+    partner| / Re) of the growing one, and the explicit step (200 per period) changes Re(lambda) by O((w dt)^2).
+    """
+    mc = HoffmannSystem().critical_mu()
+    summary = run_study(_study([0.95 * mc, 1.05 * mc]), tmp_path / "out", workers=0, progress=False)
+    assert summary["critical_mu"]["value"] == pytest.approx(mc, rel=1e-6)
+    assert summary["critical_mu"]["partner_mode"] == 3 - summary["critical_mu"]["mode"]
+    below, above = summary["points"]
+    assert below["regime"] == "stable" and below["growth_rate"] < 0
+    assert above["regime"] == "mode_coupling"
+    assert above["cea_growth_rate"] > 0
+    assert above["growth_rate"] == pytest.approx(above["cea_growth_rate"], rel=0.02)
+    assert above["onset_time"] > 0
+    assert below["growth_rate"] == pytest.approx(below["cea_growth_rate"], rel=0.1)  # two modes beat: coarser
+
+
+def test_regimes_across_the_threshold_and_stick_slip():
+    """Far above mu_c the limit cycle reaches the belt speed: stick phases (stick_slip); mu_s > mu_k below mu_c
+    with a small disturbance stays stable (a run that never sticks cannot show static friction)."""
+    mc = HoffmannSystem().critical_mu()
+    study = _study([1.6 * mc], cea=False, duration="0.3 s")
+    from fivid.study.tasks import evaluate_point
+
+    ds = evaluate_point({"lumped": study.lumped}, study.points, {"mu": 1.6 * mc})
+    assert str(ds["regime"].values) == "stick_slip" and float(ds["stick_fraction"]) > 0.01
+    ds = evaluate_point({"lumped": study.lumped}, study.points, {"mu": 0.5, "mu_static": 0.8})
+    assert str(ds["regime"].values) == "stable"
+
+
+def test_points_are_coordinates_and_select_by_condition(tmp_path):
+    out = tmp_path / "out"
+    study = _study([0.5, 1.2], cea=False, duration="0.2 s", extra_sweep={"seed": {"values": [1, 2]}})
+    summary = run_study(study, out, workers=0, progress=False)
+    assert summary["n_points"] == 4 and summary["n_done"] == 4
+    ds = open_study(out / "study.nc")
+    assert ds["mu"].attrs["units"] == "1" and ds.sizes["point"] == 4
+    sel = ds.sel(mu=1.2)
+    assert sel.sizes["point"] == 2 and set(sel["seed"].values.tolist()) == {1, 2}
+    assert set(ds["regime"].values.astype(str)) <= {"stable", "mode_coupling", "stick_slip"}
+    # the summary's points carry their conditions in SI and the regime
+    assert [(p["mu"], p["seed"]) for p in summary["points"]] == [(0.5, 1), (0.5, 2), (1.2, 1), (1.2, 2)]
+    assert all(p["status"] == "done" and "regime" in p for p in summary["points"])
+    assert (out / "report.html").read_text().count("<figure>") >= 1
+
+
+def test_rerun_computes_nothing_and_a_lost_point_only(tmp_path):
+    out = tmp_path / "out"
+    study = _study([0.5, 0.9, 1.2], cea=False, duration="0.2 s")
+    first = run_study(study, out, workers=0, progress=False)
+    assert first["timing"]["computed_points"] == 3
+    again = run_study(study, out, workers=0, progress=False)
+    assert again["timing"]["computed_points"] == 0 and again["points"] == first["points"]
+    victim = sorted((out / "points").glob("p0001-*.nc"))[0]
+    victim.unlink()
+    third = run_study(study, out, workers=0, progress=False)
+    assert third["timing"]["computed_points"] == 1 and third["points"] == first["points"]
+
+
+_KILLABLE = """
+import sys
+from fivid.study import load_study, run_study
+run_study(load_study(sys.argv[1]), sys.argv[2], workers=0, progress=False)
+"""
+
+
+def test_killed_study_resumes_and_equals_an_uninterrupted_run(tmp_path):
+    """SIGKILL while points are being computed: the points written are complete files (atomic), the re-run
+    computes the rest only, and study.nc equals that of a run never interrupted."""
+    cfg = tmp_path / "s.yaml"
+    cfg.write_text(HOFFMANN.read_text().replace("duration: 0.6 s", "duration: 1.5 s"))
+    out = tmp_path / "killed"
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-c", _KILLABLE, str(cfg), str(out)], cwd=ROOT, env=env)
+    deadline = time.time() + 120
+    while time.time() < deadline and not list((out / "points").glob("p0001-*.nc")):
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n_before = len(list((out / "points").glob("*.nc")))
+    assert 2 <= n_before < 5, "the kill came too late to test resumption"
+    for f in (out / "points").glob("*.nc"):
+        xr.open_dataset(f).close()  # every written point opens
+    resumed = run_study(load_study(cfg), out, workers=0, progress=False)
+    assert resumed["timing"]["computed_points"] == 5 - n_before
+    clean = run_study(load_study(cfg), tmp_path / "clean", workers=0, progress=False)
+    assert resumed["points"] == clean["points"]
+    a = xr.open_dataset(out / "study.nc")
+    b = xr.open_dataset(tmp_path / "clean" / "study.nc")
+    xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
+
+
+def test_a_failing_point_is_reported_and_the_others_finish(tmp_path, capsys):
+    """mu_static below mu is refused inside that point only; the CLI exits 1 and names it."""
+    cfg = {"fivid-study": 1, "name": "fails", "system": {"lumped": "hoffmann", "parameters": PARAMS},
+           "sweep": {"mu": {"values": [0.5, 0.5]}, "mu_static": {"values": [0.8, 0.2]}, "combine": "zip"},
+           "points": {"transient": {"duration": "0.1 s", "sample_rate": "20 kHz"}}}
+    path = tmp_path / "fails.yaml"
+    import yaml
+
+    path.write_text(yaml.safe_dump(cfg))
+    rc = main(["study", str(path), "-o", str(tmp_path / "out"), "--workers", "0", "--json", "--no-progress"])
+    assert rc == 1
+    summary = json.loads(capsys.readouterr().out)
+    assert [p["status"] for p in summary["points"]] == ["done", "failed"]
+    assert summary["failed"][0]["point"] == 1 and "mu_kinetic <= mu_static" in summary["failed"][0]["error"]
+    assert len(list((tmp_path / "out" / "points").glob("*.nc"))) == 1
+
+
+@pytest.mark.parametrize("key, value, where", [
+    ("sweep", {"mu": {"start": 0, "num": 3}}, "sweep.mu"),
+    ("sweep", {"velocity": {"values": [1]}}, "sweep.velocity"),
+    ("sweep", {"normal_load": {"values": ["5 m"]}}, "sweep.normal_load.values[0]"),
+    ("points", {"psd": {"nperseg": 256}}, "points.psd"),
+    ("cea", {"mu": {"values": [1, 0.5]}}, "cea.mu"),
+])
+def test_config_errors_name_the_key(tmp_path, key, value, where):
+    import yaml
+
+    cfg = {"fivid-study": 1, "name": "x", "system": {"lumped": "hoffmann"}, "sweep": {"mu": {"values": [1.0]}}}
+    cfg[key] = value
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    with pytest.raises(ConfigError) as err:
+        load_study(path)
+    assert err.value.key.startswith(where) and err.value.file == str(path) and err.value.line is not None
+
+
+def test_cli_help_and_bad_config_exit_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["study", "--help"])
+    assert e.value.code == 0 and "resumes" in capsys.readouterr().out
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("fivid-study: 2\n")
+    assert main(["study", str(bad), "-o", str(tmp_path / "o")]) == 2
+    assert "fivid-study" in capsys.readouterr().err
+
+
+def test_external_dask_scheduler(tmp_path):
+    """--scheduler: the points go to an existing cluster (here a LocalCluster started by the test)."""
+    from distributed import LocalCluster
+
+    study = _study([0.5, 1.2], cea=False, duration="0.1 s")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        summary = run_study(study, tmp_path / "out", scheduler=cluster.scheduler_address, progress=False)
+    assert summary["n_done"] == 2 and "parallel_efficiency" not in summary["timing"]
+    ref = run_study(study, tmp_path / "ref", workers=0, progress=False)
+    assert summary["points"] == ref["points"]
