@@ -187,3 +187,46 @@ def test_external_dask_scheduler(tmp_path):
     assert summary["n_done"] == 2 and "parallel_efficiency" not in summary["timing"]
     ref = run_study(study, tmp_path / "ref", workers=0, progress=False)
     assert summary["points"] == ref["points"]
+
+
+def _block_model(stiffness):
+    """A block pressed flat on a clamped base (tests/solver_models.py) with a given contact penalty [N/m^3]."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from solver_models import block_on_base
+
+    cfg = block_on_base(load=-2e-6)
+    cfg["bodies"]["block"]["divisions"] = [4, 2]
+    cfg["contacts"][0]["normal_stiffness"] = f"{stiffness} N/m^3"
+    cfg["bodies"]["block"]["clamp"] = ["top"]  # the loading clamp (its y dofs follow the load motion)
+    cfg["reactions"] = [{"name": "loader", "body": "block", "edge": "top", "tangential": "x", "normal": "y"}]
+    return cfg
+
+
+def test_coupling_indicator_spans_uncoupled_to_tied():
+    """Rayleigh's monotonicity: every preloaded frequency lies between its uncoupled and tied bounds, so kappa
+    is in [0, 1]; a vanishing contact stiffness gives kappa ~ 0 (the uncoupled frequencies), a stiffness far
+    above the bodies' (every slave node closed) kappa ~ 1; kappa grows with the stiffness in between."""
+    from fivid.fe import load_model
+    from fivid.fe.modal import modal_analysis
+    from fivid.study.coupling import coupling_bounds, coupling_indicator
+
+    kappas = []
+    for k in (1e8, 1e13, 1e15, 1e18):
+        model = load_model(_block_model(k))
+        f0, fi = coupling_bounds(model, 8)
+        assert np.all(fi >= f0 * (1 - 1e-9))
+        f = modal_analysis(model, 8, include_contact=True, normal_load=1.0)["frequency"].values
+        assert np.all(f >= f0 * (1 - 1e-9)) and np.all(f <= fi * (1 + 1e-6))
+        kappas.append(coupling_indicator(f, f0, fi))
+    assert kappas[0] < 1e-3 and kappas[-1] > 0.99
+    assert np.all(np.diff(kappas) > 0)
+
+
+def test_transition_load_is_bracketed():
+    from fivid.study.runner import _transition_load
+
+    pts = [{"normal_load": f, "coupling_indicator": k} for f, k in ((0.5, 0.1), (2.0, 0.3), (8.0, 0.7), (32.0, 0.9))]
+    t = _transition_load(pts)
+    assert t["bracket"] == [2.0, 8.0]
+    assert t["value"] == pytest.approx(np.exp(np.log(2.0) + 0.5 * np.log(4.0)))  # halfway in log load
+    assert _transition_load(pts[2:])["value"] is None

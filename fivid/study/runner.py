@@ -45,7 +45,21 @@ def point_key(study, conditions: dict) -> str:
 
 
 def _system(study) -> dict:
-    return {"lumped": study.lumped} if study.lumped is not None else {"model_path": str(study.model_path)}
+    """What a worker needs to build the system (plain data), with the study-wide coupling bounds when modes are
+    computed on a model with contacts (computed once here, not at every point)."""
+    if study.lumped is not None:
+        return {"lumped": study.lumped}
+    out = {"model_path": str(study.model_path)}
+    if "modes" in study.points:
+        from fivid.fe import load_model
+
+        model = load_model(study.model_path)
+        if model.contacts:
+            from fivid.study.coupling import coupling_bounds
+
+            f0, fi = coupling_bounds(model, study.points["modes"]["n_modes"])
+            out["coupling_bounds"] = (f0.tolist(), fi.tolist())
+    return out
 
 
 def _safe_evaluate(system, tasks, conditions):
@@ -93,7 +107,9 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
         pdir.mkdir(parents=True, exist_ok=True)
         table = study.point_table()
         files = [pdir / f"p{i:04d}-{point_key(study, c)[:16]}.nc" for i, c in enumerate(table)]
-        todo = {i: (_system(study), study.points, table[i]) for i, f in enumerate(files) if not f.exists()}
+        missing = [i for i, f in enumerate(files) if not f.exists()]
+        system = _system(study) if missing and study.points else None
+        todo = {i: (system, study.points, table[i]) for i in missing}
         log.info("study %s: %d points, %d to compute", study.name, len(table), len(todo))
         timing, failed = {}, {}
         if todo and study.points:
@@ -162,14 +178,16 @@ def _assemble(study, table, files, done, cea):
     for i in done:
         with xr.open_dataset(files[i]) as d:
             part = d.load()
-        if "regime" in part:
-            part["regime"] = part["regime"].astype(object)
+        for name in ("regime", "coupling"):  # concat would truncate strings to the first point's width
+            if name in part:
+                part[name] = part[name].astype(object)
         parts.append(part.assign_coords(point=i))
     if parts:
         ds = xr.concat(parts, dim="point", coords="minimal", compat="override", join="outer",
                        combine_attrs="drop")
-        if "regime" in ds:  # netCDF gives fixed-width strings back; concat would truncate to the first width
-            ds["regime"] = ds["regime"].astype(object)
+        for name in ("regime", "coupling"):  # netCDF gives fixed-width strings back: keep them whole
+            if name in ds:
+                ds[name] = ds[name].astype(object)
     else:
         ds = xr.Dataset(coords={"point": ("point", np.array([], dtype=np.int64))})
     for name in study.axes:
@@ -223,7 +241,8 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
             p["status"] = "done"
             for name, key in (("regime", "regime"), ("growth_rate", "growth_rate"), ("response_frequency", "frequency"),
                               ("onset_time", "onset_time"), ("rms", "rms"), ("level_db", "level_db"),
-                              ("stick_fraction", "stick_fraction")):
+                              ("stick_fraction", "stick_fraction"), ("narrowband_fraction", "narrowband_fraction"),
+                              ("coupling_indicator", "coupling_indicator"), ("coupling", "coupling")):
                 val = _scalar(ds, name, i)
                 if val is not None:
                     p[key] = val
@@ -252,6 +271,9 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
                                   "cea_mu_range": [float(cea["mu"][0]), float(cea["mu"][-1])]}
         else:
             out["critical_mu"] = None
+    transition = _transition_load(points)
+    if transition is not None:
+        out["transition_load"] = transition
     seconds = list(timing.values())
     out["timing"] = {"wall_s": round(wall, 3), "computed_points": len(seconds),
                      "mean_point_s": round(float(np.mean(seconds)), 3) if seconds else None}
@@ -259,6 +281,35 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
         out["timing"]["workers"] = workers
         out["timing"]["parallel_efficiency"] = round(float(np.sum(seconds) / (wall * workers)), 3)
     return out
+
+
+def _transition_load(points) -> dict | None:
+    """Where the coupling indicator first crosses the weak/strong threshold along the normal load.
+
+    ``{"value" [N], "bracket": [lo, hi] [N], "threshold"}``: kappa interpolated linearly in log load between the two
+    swept loads that bracket the crossing (other axes: the first point of each load, in sweep order). None
+    without a load sweep or an indicator; ``value`` null when kappa stays on one side over the swept loads.
+    """
+    from fivid.study.coupling import WEAK_STRONG_THRESHOLD
+
+    by_load = {}
+    for p in points:
+        if "normal_load" in p and "coupling_indicator" in p:
+            by_load.setdefault(p["normal_load"], p["coupling_indicator"])
+    if len(by_load) < 2:
+        return None
+    loads = np.array(sorted(by_load))
+    kappa = np.array([by_load[f] for f in loads])
+    above = kappa >= WEAK_STRONG_THRESHOLD
+    k = np.flatnonzero(~above[:-1] & above[1:])
+    if k.size == 0:
+        return {"value": None, "bracket": None, "threshold": WEAK_STRONG_THRESHOLD,
+                "note": "strong at every swept load" if above.all() else "weak at every swept load"
+                if not above.any() else "kappa does not rise through the threshold"}
+    i = int(k[0])
+    w = (WEAK_STRONG_THRESHOLD - kappa[i]) / (kappa[i + 1] - kappa[i])
+    value = float(np.exp(np.log(loads[i]) + w * (np.log(loads[i + 1]) - np.log(loads[i]))))
+    return {"value": value, "bracket": [float(loads[i]), float(loads[i + 1])], "threshold": WEAK_STRONG_THRESHOLD}
 
 
 def _cea_at(cea, mu: float) -> dict:

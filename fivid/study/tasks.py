@@ -4,9 +4,11 @@
 or ``{"lumped": {"kind": ..., "parameters": {...}}}``, ``tasks`` the study's per-point settings (SI),
 ``conditions`` the point's ``{axis: value}``. Variables (each only when its task ran):
 
-- ``modes``: ``mode_frequency(mode)`` [Hz], preloaded at the point's normal load (FE);
+- ``modes``: ``mode_frequency(mode)`` [Hz], preloaded at the point's normal load (FE); with a contact, the
+  coupling indicator ``coupling_indicator`` and ``coupling`` (weak/strong, :mod:`fivid.study.coupling`);
 - ``transient``: ``regime``, ``growth_rate`` [s-1], ``growth_rate_stderr``, ``onset_time`` [s], ``response_frequency`` [Hz],
-  ``amplitude`` (limit-cycle RMS), ``stick_fraction``, ``rms`` and ``level_db`` of the response's steady part;
+  ``amplitude`` (limit-cycle RMS), ``stick_fraction``, ``rms`` and ``level_db`` of the response's steady part,
+  ``narrowband_fraction`` (share of its power in prominent peaks: tonal vs broadband);
 - ``psd``: ``psd(frequency)`` of the response's steady part (Welch, Hann, half overlap).
 
 The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``) and
@@ -42,6 +44,14 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
                                 normal_load=load)
             data["mode_frequency"] = (("mode",), ds["frequency"].values, {"units": "Hz", "long_name": "natural frequency"})
             coords["mode"] = ("mode", np.arange(1, ds.sizes["mode"] + 1))
+            if "coupling_bounds" in system:
+                from fivid.study.coupling import WEAK_STRONG_THRESHOLD, coupling_indicator
+
+                kappa = coupling_indicator(ds["frequency"].values, *system["coupling_bounds"])
+                data["coupling_indicator"] = ((), kappa, {"units": "1", "long_name": "coupling indicator kappa "
+                                                          "(0 uncoupled, 1 interface tied)"})
+                data["coupling"] = ((), np.array("weak" if kappa < WEAK_STRONG_THRESHOLD else "strong", dtype=object),
+                                    {"long_name": "weak or strong contact (kappa < 0.5: weak)"})
         t, x, units, state = _fe_transient(model, tasks, conditions) if "transient" in tasks else (None,) * 4
     if t is not None:
         from fivid.study.analysis import analyse_transient
@@ -49,6 +59,13 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
         fs = 1.0 / float(np.median(np.diff(t)))
         a = analyse_transient(t, x, sliding=state["sliding"], stick=state["stick"])
         rms = float(np.sqrt(np.mean((x - x.mean()) ** 2)))
+        from fivid.signal.transient import narrowband_fraction
+        from scipy.signal import welch
+
+        n_nb = min(x.size, 4096)
+        fb, pb = welch(x, fs=fs, window="hann", nperseg=n_nb, noverlap=n_nb // 2, detrend="constant")
+        data["narrowband_fraction"] = ((), narrowband_fraction(fb, pb), {
+            "units": "1", "long_name": "share of the response power in prominent spectral peaks"})
         data.update({
             "regime": ((), np.array(a["regime"], dtype=object), {"long_name": "regime of the transient", "allowed": " ".join(REGIMES)}),
             "growth_rate": ((), a["growth_rate"], {"units": "s-1", "long_name": "envelope growth rate"}),
