@@ -269,7 +269,7 @@ def _points(ctx, spec, lumped: bool, base: Path) -> dict:
         out["modes"] = {"n_modes": n}
     if "transient" in spec:
         t = _mapping(ctx, spec["transient"] or {}, "points.transient",
-                     {"duration", "sample_rate", "perturbation", "law", "oversample"})
+                     {"duration", "sample_rate", "perturbation", "law", "coulomb_reference"})
         tr = {"duration": _quantity(ctx, t.get("duration", "0.1 s"), "points.transient.duration", "s"),
               "sample_rate": _quantity(ctx, t.get("sample_rate", "51.2 kHz"), "points.transient.sample_rate", "Hz")}
         if not (tr["duration"] > 0 and tr["sample_rate"] > 0):
@@ -283,6 +283,10 @@ def _points(ctx, spec, lumped: bool, base: Path) -> dict:
             if not law.is_file():
                 raise ctx.error("points.transient.law", f"no such law file: {str(law)!r}")
             tr["law"] = str(law)
+        if t.get("coulomb_reference"):
+            if "law" not in tr:
+                raise ctx.error("points.transient.coulomb_reference", "compares a law with its mu0: give 'law' too")
+            tr["coulomb_reference"] = True
         out["transient"] = tr
     if "psd" in spec:
         if "transient" not in out:

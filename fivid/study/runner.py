@@ -242,7 +242,8 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
             for name, key in (("regime", "regime"), ("growth_rate", "growth_rate"), ("response_frequency", "frequency"),
                               ("onset_time", "onset_time"), ("rms", "rms"), ("level_db", "level_db"),
                               ("stick_fraction", "stick_fraction"), ("narrowband_fraction", "narrowband_fraction"),
-                              ("coupling_indicator", "coupling_indicator"), ("coupling", "coupling")):
+                              ("coupling_indicator", "coupling_indicator"), ("coupling", "coupling"),
+                              ("perturbation_gain_db", "perturbation_gain_db")):
                 val = _scalar(ds, name, i)
                 if val is not None:
                     p[key] = val
@@ -274,6 +275,11 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
     transition = _transition_load(points)
     if transition is not None:
         out["transition_load"] = transition
+    from fivid.study.fits import power_law_fit
+
+    fit = power_law_fit(points, "rms")
+    if fit is not None:
+        out["fits"] = {"rms": fit}
     seconds = list(timing.values())
     out["timing"] = {"wall_s": round(wall, 3), "computed_points": len(seconds),
                      "mean_point_s": round(float(np.mean(seconds)), 3) if seconds else None}

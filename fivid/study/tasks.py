@@ -7,9 +7,12 @@ or ``{"lumped": {"kind": ..., "parameters": {...}}}``, ``tasks`` the study's per
 - ``modes``: ``mode_frequency(mode)`` [Hz], preloaded at the point's normal load (FE); with a contact, the
   coupling indicator ``coupling_indicator`` and ``coupling`` (weak/strong, :mod:`fivid.study.coupling`);
 - ``transient``: ``regime``, ``growth_rate`` [s-1], ``growth_rate_stderr``, ``onset_time`` [s], ``response_frequency`` [Hz],
-  ``amplitude`` (limit-cycle RMS), ``stick_fraction``, ``rms`` and ``level_db`` of the response's steady part,
-  ``narrowband_fraction`` (share of its power in prominent peaks: tonal vs broadband);
-- ``psd``: ``psd(frequency)`` of the response's steady part (Welch, Hann, half overlap).
+  ``amplitude`` (limit-cycle RMS), ``stick_fraction``, ``rms`` and ``level_db`` (of the second half of the
+  response's steady part: the start-up ring-down excluded),
+  ``narrowband_fraction`` (share of its power in prominent peaks: tonal vs broadband); with
+  ``coulomb_reference: true`` (and a law) also ``rms_coulomb`` and ``perturbation_gain_db``, the same point
+  simulated with the law's mu0 alone (what the perturbation adds);
+- ``psd``: ``psd(frequency)`` of the second half of the response's steady part (Welch, Hann, half overlap).
 
 The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``) and
 the normal displacement ``y`` for the lumped model.
@@ -58,12 +61,14 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
 
         fs = 1.0 / float(np.median(np.diff(t)))
         a = analyse_transient(t, x, sliding=state["sliding"], stick=state["stick"])
-        rms = float(np.sqrt(np.mean((x - x.mean()) ** 2)))
-        from fivid.signal.transient import narrowband_fraction
         from scipy.signal import welch
 
-        n_nb = min(x.size, 4096)
-        fb, pb = welch(x, fs=fs, window="hann", nperseg=n_nb, noverlap=n_nb // 2, detrend="constant")
+        from fivid.signal.transient import narrowband_fraction
+
+        late = x[x.size // 2:]  # levels and spectra of the steady state: the record's second half
+        rms = float(np.sqrt(np.mean((late - late.mean()) ** 2)))
+        n_nb = min(late.size, 4096)
+        fb, pb = welch(late, fs=fs, window="hann", nperseg=n_nb, noverlap=n_nb // 2, detrend="constant")
         data["narrowband_fraction"] = ((), narrowband_fraction(fb, pb), {
             "units": "1", "long_name": "share of the response power in prominent spectral peaks"})
         data.update({
@@ -75,16 +80,29 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
                                                         "long_name": "dominant frequency of the last quarter"}),
             "amplitude": ((), a["amplitude"], {"units": units, "long_name": "RMS of the last quarter"}),
             "stick_fraction": ((), a["stick_fraction"], {"units": "1", "long_name": "stick share, second half"}),
-            "rms": ((), rms, {"units": units, "long_name": "RMS of the response"}),
+            "rms": ((), rms, {"units": units, "long_name": "RMS of the response, second half of the record"}),
         })
+        if tasks["transient"].get("coulomb_reference"):
+            # the same point with the law's mean friction only: what the perturbation adds (seed 001's claim)
+            ref = dict(tasks["transient"])
+            del ref["law"], ref["coulomb_reference"]
+            from fivid.friction import load_law
+
+            mu0 = load_law(tasks["transient"]["law"]).mu0
+            _, xc, _, _ = _fe_transient(model, {"transient": ref}, {**conditions, "mu": mu0})
+            xc = xc[xc.size // 2:]
+            rms_c = float(np.sqrt(np.mean((xc - xc.mean()) ** 2)))
+            data["rms_coulomb"] = ((), rms_c, {"units": units, "long_name": "RMS with Coulomb friction mu0 only"})
+            data["perturbation_gain_db"] = ((), 20 * np.log10(rms / rms_c) if rms_c > 0 else np.inf, {
+                "units": "dB", "long_name": "response level with the law minus with Coulomb mu0"})
         if units == "m s-2":  # level re 1e-6 m s-2 (ISO 1683 acceleration reference)
             data["level_db"] = ((), 20.0 * np.log10(rms / 1e-6) if rms > 0 else -np.inf,
                                 {"units": "dB", "long_name": "acceleration level re 1e-6 m s-2"})
         if "psd" in tasks:
             from scipy.signal import welch
 
-            n = min(tasks["psd"]["nperseg"], x.size)
-            f, p = welch(x, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
+            n = min(tasks["psd"]["nperseg"], late.size)
+            f, p = welch(late, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
             if "band" in tasks["psd"]:
                 sel = (f >= tasks["psd"]["band"][0]) & (f <= tasks["psd"]["band"][1])
                 f, p = f[sel], p[sel]

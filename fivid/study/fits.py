@@ -1,0 +1,45 @@
+"""How a study's response scales with its conditions: power laws fitted in log-log by statsmodels OLS.
+
+``rms = c * prod_a x_a^n_a`` over the numeric condition axes that vary (normal load, sliding velocity,
+roughness), i.e. ``log rms = log c + sum_a n_a log x_a``, fitted on the points that finished; exponents with
+their 95 % confidence intervals (t distribution, ``n - p`` degrees of freedom), ``r2`` and the number of points.
+In dB, ``level = 20 log10(rms / ref)`` has slope ``20 n_a`` per decade of ``x_a``. Seeds 001 and 003 make the
+vibration level a power law of load, velocity and roughness; the exponents are results, not targets.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["POWER_LAW_AXES", "power_law_fit"]
+
+#: condition axes a power law can use (positive physical quantities)
+POWER_LAW_AXES = ("normal_load", "sliding_velocity", "roughness_ra")
+
+
+def power_law_fit(points: list[dict], response: str = "rms") -> dict | None:
+    """Fit ``response = c prod x_a^n_a`` over the varying axes of ``points`` (summary point dicts).
+
+    Returns ``{"response", "exponents": {axis: {"value", "ci": [lo, hi], "stderr"}}, "prefactor", "r2", "n",
+    "axes"}`` or None when fewer points than parameters + 1 (no residual degree of freedom) or nothing varies.
+    """
+    import statsmodels.api as sm
+
+    rows = [p for p in points if p.get("status") == "done" and p.get(response) is not None and p[response] > 0]
+    axes = [a for a in POWER_LAW_AXES if len({p.get(a) for p in rows if p.get(a) is not None}) > 1
+            and all(p.get(a) is not None and p[a] > 0 for p in rows)]
+    if not axes or len(rows) < len(axes) + 2:
+        return None
+    X = sm.add_constant(np.column_stack([np.log([p[a] for p in rows]) for a in axes]), has_constant="add")
+    y = np.log([p[response] for p in rows])
+    res = sm.OLS(y, X).fit()
+    ci = res.conf_int(alpha=0.05)
+    return {
+        "response": response,
+        "axes": axes,
+        "exponents": {a: {"value": float(res.params[i + 1]), "ci": [float(ci[i + 1, 0]), float(ci[i + 1, 1])],
+                          "stderr": float(res.bse[i + 1])} for i, a in enumerate(axes)},
+        "prefactor": float(np.exp(res.params[0])),
+        "r2": float(res.rsquared),
+        "n": int(res.nobs),
+    }
