@@ -36,7 +36,8 @@ def test_stencil_equals_assembled_stiffness(root, config):
 
 def test_mapped_block_uses_per_node_coefficients():
     st = block_stencils(load_model(cantilever(mapped=True)))
-    assert st.blocks.shape[0] == 0 and st.lst_idx.size == 68
+    # one mapped patch of all 17 x 4 nodes with per-node coefficients, nothing listed
+    assert st.blocks.tolist() == [[st.pad, 17, 4, 17, 2, 0]] and st.lst_idx.size == 0 and st.c_map.shape == (36, 68)
     st = block_stencils(load_model(cantilever()))
     assert st.blocks.shape[0] == 5 and st.lst_idx.size == 4  # interior + 4 edges; corners listed
     # rectangles: the 13-term stencil in the interior; at an edge one element row is missing and the xy
@@ -71,8 +72,9 @@ def _run(fn, model, st, ka, fric, n_int, n_sub, dt, u0, v0):
     contact = np.zeros((n_int, npairs, 5))
     status, done = fn(
         0, n_int * n_sub, dt, model.rayleigh_alpha, model.rayleigh_beta, n_sub, st.npd,
-        st.blocks, st.c_uni, st.lst_idx, st.lst_stride, st.lst_coef, ka.mass, ka.minv, ka.spr_dof, ka.spr_kc,
+        *st.kernel_args, ka.mass, ka.minv, ka.spr_dof, ka.spr_kc,
         ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
+        ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
         ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
         ka.seg.copy(), np.zeros((ns, 7)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
         100, 1e-12, fric.mu, fric.rate, np.zeros(ns), np.zeros((ka.cnodes.size, 4)), ka.cnode_slot, ka.cnodes,
