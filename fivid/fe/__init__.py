@@ -10,14 +10,13 @@ from fivid.fe.assembly import (
     damping_matrix,
     element_mass_q4,
     element_stiffness_q4,
-    external_load_vector,
     lumped_mass,
-    pressure_forces,
     rayleigh_from_damping_ratios,
     stiffness_matrix,
 )
 from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
 from fivid.fe.contact import linearise_contact, linearise_preloaded_contact
+from fivid.fe.loads import external_load_vector, pressure_forces, static_response
 from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
 from fivid.fe.model import (
     Block,
@@ -55,6 +54,7 @@ __all__ = [
     "rayleigh_from_damping_ratios",
     "pressure_forces",
     "external_load_vector",
+    "static_response",
     "linearise_contact",
     "linearise_preloaded_contact",
     "preload_state",

@@ -27,8 +27,6 @@ __all__ = [
     "lumped_mass",
     "damping_matrix",
     "rayleigh_from_damping_ratios",
-    "pressure_forces",
-    "external_load_vector",
 ]
 
 _G = 1.0 / np.sqrt(3.0)
@@ -275,34 +273,6 @@ def damping_matrix(model, *, mass: str = "lumped", stiffness=None):
     if model.springs:
         C = C + _discrete_matrix(model, "damping")
     return sp.csr_matrix(C)
-
-
-def pressure_forces(model, load) -> np.ndarray:
-    """Consistent nodal forces of one :class:`~fivid.fe.model.PressureLoad` at full pressure [N], shape (n_dofs,).
-
-    A uniform traction ``-p n`` on a straight segment ``(a, b)`` of length ``L`` integrates against the linear
-    shape functions to ``-p t L/2 n`` on each end node (exact). With the outward normal
-    ``n L = (dy, -dx)`` (``b - a`` turned clockwise) each node gets ``-p t/2 (dy, -dx)``; reference geometry.
-    The resultant on a straight edge is ``-p L_edge t n``; on a closed edge it is zero.
-    """
-    block = model.block(load.body)
-    seg = np.asarray(load.segments, dtype=np.int64).reshape(-1, 2)
-    d = model.coords[seg[:, 1]] - model.coords[seg[:, 0]]
-    fx = -0.5 * load.pressure * block.thickness * d[:, 1]
-    fy = 0.5 * load.pressure * block.thickness * d[:, 0]
-    f = np.zeros(model.n_dofs)
-    for end in (0, 1):
-        np.add.at(f, 2 * seg[:, end], fx)
-        np.add.at(f, 2 * seg[:, end] + 1, fy)
-    return f
-
-
-def external_load_vector(model) -> np.ndarray:
-    """Sum of the nodal forces of all pressure loads at their full (end-of-ramp) values [N], shape (n_dofs,)."""
-    f = np.zeros(model.n_dofs)
-    for load in model.loads:
-        f += pressure_forces(model, load)
-    return f
 
 
 def rayleigh_from_damping_ratios(f1: float, zeta1: float, f2: float, zeta2: float) -> tuple[float, float]:

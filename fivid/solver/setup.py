@@ -97,7 +97,8 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     ``tangential_sign``/``normal_sign`` orient the transducer: ``friction_force = tangential_sign * sum R_t``,
     ``normal_force = normal_sign * sum R_n`` over the reaction nodes of the first Reaction.
     """
-    from fivid.fe.assembly import lumped_mass, pressure_forces
+    from fivid.fe.assembly import lumped_mass
+    from fivid.fe.loads import pressure_forces
 
     n_dofs = model.n_dofs
     mass_g = lumped_mass(model)
