@@ -253,3 +253,23 @@ def test_bad_annulus_is_a_config_error():
         cfg["bodies"]["ring"]["clamp"] = ["left"]
         load_model(cfg)
     assert exc.value.key == "bodies.ring.clamp[0]" and "inner" in str(exc.value)
+
+
+def test_rough_pair_profiles_are_reproduced_by_their_script_and_followed_by_the_mesh(root):
+    """The committed profiles are what make_rough_profiles.py generates (to the file's 4 decimals: 5e-5 um), and
+    the example's profiled edges sit on them (linear interpolation at the node x)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_rough", root / "configs/models/profiles/make_rough_profiles.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    model = load_model(root / "configs/models/rough_pair.yaml")
+    for body, edge, seed, y0 in (("lower", "top", 3, 8e-3), ("upper", "bottom", 4, 8.0372498e-3)):
+        x, z = mod.rough_profile(seed)
+        table = np.loadtxt(root / f"configs/models/profiles/rough_{body}.csv", delimiter=",")
+        np.testing.assert_allclose(table[:, 1] * 1e-6, z, rtol=0, atol=5.01e-11)
+        np.testing.assert_allclose(table[:, 0] * 1e-3, x, rtol=0, atol=5.01e-8)
+        xy = model.coords[model.block(body).edge_nodes(edge)]
+        h = np.interp(xy[:, 0], table[:, 0] * 1e-3, table[:, 1] * 1e-6)
+        np.testing.assert_allclose(xy[:, 1], y0 + h, rtol=0, atol=8 * EPS * 16e-3)
+        assert 5e-6 < np.sqrt(np.mean(h * h)) < 15e-6  # Rq 10 um, as sampled by the mesh
