@@ -273,3 +273,15 @@ def test_rough_pair_profiles_are_reproduced_by_their_script_and_followed_by_the_
         h = np.interp(xy[:, 0], table[:, 0] * 1e-3, table[:, 1] * 1e-6)
         np.testing.assert_allclose(xy[:, 1], y0 + h, rtol=0, atol=8 * EPS * 16e-3)
         assert 5e-6 < np.sqrt(np.mean(h * h)) < 15e-6  # Rq 10 um, as sampled by the mesh
+
+
+def test_ungraded_quadrilaterals_keep_their_node_coordinates_bit_for_bit(root):
+    """Ungraded blocks are still the bilinear map of the corners at numpy.linspace fractions: the default rig's
+    nodes (hence its matrices and simulated signals) are unchanged to the last bit by the geometry options."""
+    model = load_model(root / "configs/models/triboair_coarse.yaml")
+    for b in model.blocks:
+        s = np.linspace(0.0, 1.0, b.nx + 1)[None, :, None]
+        t = np.linspace(0.0, 1.0, b.ny + 1)[:, None, None]
+        c0, c1, c2, c3 = b.corners
+        expected = (1 - s) * (1 - t) * c0 + s * (1 - t) * c1 + s * t * c2 + (1 - s) * t * c3
+        np.testing.assert_array_equal(b.coords, expected)

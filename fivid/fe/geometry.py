@@ -47,6 +47,8 @@ def graded_fractions(n: int, ratio: float = 1.0, *, toward_end: bool = True) -> 
     >>> graded_fractions(3, 2.0).round(4).tolist()
     [0.0, 0.5714, 0.8571, 1.0]
     """
+    if ratio == 1.0:  # exactly the equal divisions (and node coordinates) of ungraded blocks
+        return np.linspace(0.0, 1.0, n + 1)
     k = np.arange(n)
     h = float(ratio) ** ((n - 1 - k) if toward_end else k)
     s = np.concatenate([[0.0], np.cumsum(h)])
