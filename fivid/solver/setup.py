@@ -39,6 +39,8 @@ class Schedule:
         Velocity of the "base" motion [m s-1] (None: as configured).
     base_ramp : float
         Ramp time of the base velocity [s].
+    pressure_ramp : float
+        Longest ramp of the pressure loads (they start at t = 0) [s].
     """
 
     load_displacement: float | None
@@ -46,11 +48,12 @@ class Schedule:
     base_start: float
     base_velocity: float | None
     base_ramp: float
+    pressure_ramp: float = 0.0
 
     @property
     def transient_end(self) -> float:
-        """End of the base ramp: steady sliding from here [s]."""
-        return self.base_start + self.base_ramp
+        """End of the base ramp (and of the pressure ramps): steady sliding from here [s]."""
+        return max(self.base_start + self.base_ramp, self.pressure_ramp)
 
 
 @dataclass
