@@ -181,3 +181,22 @@ def test_pressurised_free_ring_stays_axisymmetric_in_the_explicit_solver():
     assert np.abs(ut).max() <= tol
     assert np.abs(u.mean(axis=0)).max() <= tol
     assert ur[rows[0]].mean() > 0  # the inner pressure expands the ring
+
+
+def test_pressure_on_part_of_a_ring_edge_across_the_seam():
+    """An x-range of a full ring's outer edge that straddles the seam (angle 0) is loaded on exactly the segments
+    between its nodes: resultant = -p t x (chord of the loaded arc) along +x for a symmetric arc about angle 0."""
+    n, R, t, p = 36, 0.05, 0.01, 1e6
+    model = load_model({"bodies": {"ring": {"annulus": {"center": [0, 0], "inner_radius": "30 mm",
+                                                        "outer_radius": "50 mm"},
+                                            "divisions": [n, 2], "material": PC, "thickness": "10 mm"}},
+                        "loads": [{"name": "p", "body": "ring", "edge": "outer", "x": ["40 mm", "60 mm"],
+                                   "pressure": "1 MPa"}]})
+    seg = model.loads[0].segments
+    ang = np.degrees(np.arctan2(model.coords[seg, 1], model.coords[seg, 0]))
+    # x >= 40 mm at R = 50 mm keeps |angle| <= 36.9 deg: the outer nodes at 0, +-10, +-20, +-30 deg (6 segments)
+    assert seg.shape == (6, 2) and np.all(np.abs(ang) <= 30.0 + 1e-9)
+    F = pressure_forces(model, model.loads[0]).reshape(-1, 2).sum(axis=0)
+    half = 30.0
+    chord = 2 * R * np.sin(np.radians(half))
+    np.testing.assert_allclose(F, [-p * t * chord, 0.0], rtol=0, atol=1e-12 * p * t * R)

@@ -197,17 +197,20 @@ class Block:
         return n[::-1, 0].copy()
 
     def edge_segments(self, edge: str, nodes=None) -> np.ndarray:
-        """Node pairs ``(a, b)`` of the segments of ``edge`` (or of a contiguous run ``nodes`` of it), shape (n, 2).
+        """Node pairs ``(a, b)`` of the segments of ``edge`` whose two nodes are both in ``nodes`` (default: all),
+        shape (n, 2), in edge order.
 
-        Consecutive nodes in edge order; on a periodic ring a complete inner/outer edge also gets the closing
-        segment from its last node back to its first. The outward normal of a segment is ``b - a`` turned
-        clockwise.
+        A periodic ring's inner/outer edge is closed: its last node is joined back to its first (so a subset
+        across the seam keeps its segments, and never joins nodes that are not neighbours). The outward normal
+        of a segment is ``b - a`` turned clockwise.
         """
         full = self.edge_nodes(edge)
-        nodes = full if nodes is None else np.asarray(nodes)
-        seg = np.column_stack([nodes[:-1], nodes[1:]])
-        if self.periodic and nodes.size == full.size:
-            seg = np.vstack([seg, [nodes[-1], nodes[0]]])
+        seg = np.column_stack([full[:-1], full[1:]])
+        if self.periodic:
+            seg = np.vstack([seg, [full[-1], full[0]]])
+        if nodes is not None:
+            keep = np.isin(seg, np.asarray(nodes)).all(axis=1)
+            seg = seg[keep]
         return seg.astype(np.int64)
 
     def _wrapped(self, a: np.ndarray) -> np.ndarray:
