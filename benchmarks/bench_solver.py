@@ -12,11 +12,20 @@ rectangular-element sparsity (13 terms per force), unsigned indices, no contact 
 ``prange`` variant (``bare_stencil_parallel_dof_updates_per_s``) to show whether two threads pay at this size.
 Also the wall time to simulate 0.1 s of the coarse and of the default rig: measured (coarse, full mode) or
 projected from the measured step rate (``*_projected``).
+
+Mapped blocks (per-node stencil patches, DESIGN §7/§11): the same ``fraction_of_bare_stencil`` for a curved model
+(``configs/models/ring_pressure.yaml``: a periodic annular ring under pressure, no contact) as
+``curved_fraction_of_bare_stencil``, and for a rough-edged model (``configs/models/rough_pair.yaml``: two
+profiled, graded blocks in sliding contact) as ``rough_fraction_of_bare_stencil``; each against the bare
+rectangular stencil on a ghost-padded grid of the same node count per block (the speed the model would have
+if its blocks were uniform rectangles). ``rough_no_contact_*`` is the rough model with its contact pair removed:
+the mapped stencil's own cost, separated from the contact solve over its 481 slave nodes.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -52,17 +61,41 @@ def _bare_kernels():
     return njit(cache=False)(steps), njit(cache=False, parallel=True)(steps)
 
 
-def _bare_layout(model, st):
-    """Ghost-padded copy of every block: one stencil patch covers all real nodes of the block."""
+def _bare_layout(model, c_rect):
+    """Ghost-padded copy of every block: one rectangular-element stencil ``c_rect`` (36,) covers all its real nodes."""
     rows, off = [], 0
     for block in model.blocks:
-        stride = block.nx + 3
-        rows.append((off + stride + 1, block.nx + 1, block.ny + 1, stride))
+        stride = block.n_cols + 2
+        rows.append((off + stride + 1, block.n_cols, block.ny + 1, stride))
         off += stride * (block.ny + 3)
     blocks = np.array(rows, dtype=np.int64)
-    # the interior patch of each uniform block comes first in its group of five
-    c_uni = np.ascontiguousarray(st.c_uni[::5][: len(model.blocks)])
+    c_uni = np.ascontiguousarray(np.tile(c_rect, (len(model.blocks), 1)))
     return off, blocks, c_uni
+
+
+def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
+    """``(fraction_of_bare_stencil, dof_updates_per_s, mapped node share, mean Gauss-Seidel sweeps or None)`` of a
+    model with mapped blocks."""
+    from fivid.solver.driver import prepare_run
+
+    prep = prepare_run(model, duration=duration, **kw)
+    s = prep.settings
+    steps = s.n_intervals * s.steps_per_interval
+    npd, blocks, c_uni = _bare_layout(model, c_rect)
+    arrays = [np.zeros(2 * npd) for _ in range(4)]
+    mb = np.full(2 * npd, 1.0 / float(np.mean(prep.arrays.mass[prep.arrays.mass > 0])))
+    dt, a, b = s.time_step, model.rayleigh_alpha, model.rayleigh_beta
+    bare(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    prep.run(progress=False)  # compile/load the kernels for this model's argument types
+    t_run = t_bare = np.inf
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        ds = prep.run(progress=False)
+        t_run = min(t_run, (time.perf_counter() - t0) / steps)
+        t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
+    st = prep.stencils
+    mapped = int(st.blocks[st.blocks[:, 4] == 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)
+    return t_bare / t_run, model.n_dofs / t_run, mapped / model.n_nodes, ds.attrs.get("contact_gs_mean_sweeps")
 
 
 def _time(fn, *args, repeat=3):
@@ -116,7 +149,8 @@ def main(argv=None) -> int:
 
     st = block_stencils(default)
     bare, bare_par = _bare_kernels()
-    npd, blocks, c_uni = _bare_layout(default, st)
+    c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
+    npd, blocks, c_uni = _bare_layout(default, c_rect)
     arrays = [np.zeros(2 * npd) for _ in range(4)]
     mb = np.full(2 * npd, minv[minv > 0].mean())
     bare(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
@@ -151,6 +185,22 @@ def main(argv=None) -> int:
         "fraction_of_bare_stencil": t_bare / t_fivid,
         "wall_0p1s_default_projected_s": 0.1 / dt * t_fivid,
     }
+    # ---- mapped blocks: a curved (annular, periodic) and a rough-edged (profiled, graded, contact) model
+    rounds = 2 if args.quick else 3
+    for key, path, extra in (("curved", "configs/models/ring_pressure.yaml", {"sliding_velocity": None}),
+                             ("rough", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03}),
+                             ("rough_no_contact", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03})):
+        mkw = dict(kw, normal_load=None, mu=None, **extra)
+        model = load_model(ROOT / path)
+        if key == "rough_no_contact":  # the same mapped mesh without its contact pair: the stencil's own cost
+            model = dataclasses.replace(model, contacts=())
+        frac, rate, share, sweeps = _mapped_fraction(model, c_rect, bare, mkw, duration / 2, rounds)
+        out[f"{key}_model"] = path
+        out[f"{key}_fraction_of_bare_stencil"] = frac
+        out[f"{key}_dof_updates_per_s"] = rate
+        out[f"{key}_mapped_node_share"] = share
+        if sweeps is not None:
+            out[f"{key}_contact_gs_mean_sweeps"] = sweeps
     # ---- wall time to simulate 0.1 s
     cprep = prepare_run(coarse, duration=1e-3 if args.quick else 0.1 - (2e-4 + 1e-4), **kw)
     t0 = time.perf_counter()

@@ -16,6 +16,7 @@ from fivid.fe.assembly import (
 )
 from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
 from fivid.fe.contact import linearise_contact, linearise_preloaded_contact
+from fivid.fe.loads import external_load_vector, pressure_forces, static_response
 from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
 from fivid.fe.model import (
     Block,
@@ -24,6 +25,7 @@ from fivid.fe.model import (
     Model,
     Motion,
     PointMass,
+    PressureLoad,
     Reaction,
     Sensor,
     Spring,
@@ -38,6 +40,7 @@ __all__ = [
     "Model",
     "Motion",
     "PointMass",
+    "PressureLoad",
     "Reaction",
     "Sensor",
     "Spring",
@@ -49,6 +52,9 @@ __all__ = [
     "consistent_mass",
     "damping_matrix",
     "rayleigh_from_damping_ratios",
+    "pressure_forces",
+    "external_load_vector",
+    "static_response",
     "linearise_contact",
     "linearise_preloaded_contact",
     "preload_state",

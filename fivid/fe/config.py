@@ -26,9 +26,15 @@ _TOP_KEYS = {
     "name": "optional", "description": "optional", "plane": "optional", "materials": "optional",
     "bodies": "required", "damping": "optional", "contacts": "optional", "motions": "optional",
     "point_masses": "optional", "springs": "optional", "sensors": "optional", "reactions": "optional",
+    "loads": "optional",
 }
-_BODY_KEYS = {"corners": "required", "divisions": "required", "material": "required", "thickness": "required",
+_BODY_KEYS = {"corners": "optional", "annulus": "optional", "profile": "optional", "grading": "optional",
+              "divisions": "required", "material": "required", "thickness": "required",
               "clamp": "optional", "initial_velocity": "optional"}
+_ANNULUS_KEYS = {"center": "required", "inner_radius": "required", "outer_radius": "required", "angles": "optional"}
+_PROFILE_KEYS = {"edge": "required", "x": "optional", "z": "optional", "file": "optional", "units": "optional",
+                 "sine": "optional", "gaussian": "optional"}
+_GRADING_KEYS = {"edge": "optional", "ratio": "required"}
 _MATERIAL_KEYS = {"E": "required", "nu": "required", "rho": "required"}
 _COMPONENTS = {"x": 0, "y": 1}
 
@@ -178,12 +184,187 @@ def _check_corners(ctx, corners: np.ndarray, key: str) -> None:
                                  "convex quadrilateral counter-clockwise from bottom-left")
 
 
-def _block_coords(corners: np.ndarray, nx: int, ny: int) -> np.ndarray:
-    """Bilinear map of the corners onto an (ny+1, nx+1) grid [m]."""
-    s = np.linspace(0.0, 1.0, nx + 1)[None, :, None]
-    t = np.linspace(0.0, 1.0, ny + 1)[:, None, None]
-    c0, c1, c2, c3 = corners
-    return (1 - s) * (1 - t) * c0 + s * (1 - t) * c1 + s * t * c2 + (1 - s) * t * c3
+def _grading(ctx, b, key, shape: str, profile_edge: str | None) -> tuple[str | None, float]:
+    """``grading: {edge, ratio}`` -> (graded edge or None, ratio); a profile block grades toward its profile."""
+    if "grading" not in b:
+        return None, 1.0
+    g = _mapping(ctx, b["grading"], f"{key}.grading", _GRADING_KEYS)
+    ratio = _quantity(ctx, g["ratio"], f"{key}.grading.ratio", "dimensionless", positive=True)
+    edges = fm.EDGES + (tuple(fm.ANNULUS_EDGES) if shape == "annulus" else ())
+    if "edge" not in g and profile_edge is None:
+        raise ctx.error(f"{key}.grading", "missing 'edge': the edge the mesh is refined toward "
+                                          f"({', '.join(edges)}; a profile block defaults to its profiled edge)")
+    edge = _choice(ctx, g.get("edge", profile_edge), f"{key}.grading.edge", edges)
+    return fm.ANNULUS_EDGES.get(edge, edge), ratio
+
+
+def _fractions(n: int, graded: str | None, ratio: float, axis: str) -> np.ndarray:
+    """Node fractions along ``axis`` ("s": c0->c1, bottom-to-top "t") with the grading toward ``graded``."""
+    from fivid.fe.geometry import graded_fractions
+
+    ends = {"s": ("left", "right"), "t": ("bottom", "top")}[axis]
+    if graded not in ends:
+        return graded_fractions(n)
+    return graded_fractions(n, ratio, toward_end=graded == ends[1])
+
+
+def _annulus(ctx, spec, key, nx: int, t: np.ndarray) -> tuple[np.ndarray, bool]:
+    from fivid.fe.geometry import annulus_coords
+
+    a = _mapping(ctx, spec, key, _ANNULUS_KEYS)
+    center = np.array([_quantity(ctx, v, f"{key}.center[{i}]", "m") for i, v in
+                       enumerate(_list(ctx, a["center"], f"{key}.center", 2))])
+    r_in = _quantity(ctx, a["inner_radius"], f"{key}.inner_radius", "m", positive=True)
+    r_out = _quantity(ctx, a["outer_radius"], f"{key}.outer_radius", "m", positive=True)
+    if not r_out > r_in:
+        raise ctx.error(f"{key}.outer_radius", f"outer radius {r_out} m must exceed the inner radius {r_in} m")
+    if "angles" in a:
+        a0, a1 = (_quantity(ctx, v, f"{key}.angles[{i}]", "rad") for i, v in
+                  enumerate(_list(ctx, a["angles"], f"{key}.angles", 2)))
+    else:
+        a0, a1 = 0.0, 2.0 * np.pi
+    span = a1 - a0
+    if not 0.0 < span <= 2.0 * np.pi * (1.0 + 1e-12):
+        raise ctx.error(f"{key}.angles", f"need start < end <= start + 360 deg (counter-clockwise), got "
+                                         f"[{np.degrees(a0):.6g} deg, {np.degrees(a1):.6g} deg]")
+    periodic = abs(span - 2.0 * np.pi) <= 1e-12 * 2.0 * np.pi
+    if periodic and nx < 3:
+        raise ctx.error(f"{key}", f"a full ring needs at least 3 divisions around, got {nx}")
+    if not periodic and span / nx > np.pi / 2:
+        raise ctx.error(f"{key}", f"{nx} divisions over {np.degrees(span):.6g} deg: an element may span at most 90 deg")
+    return annulus_coords(center, r_in, r_out, a0, a0 + 2.0 * np.pi if periodic else a1, nx, t,
+                          periodic=periodic), periodic
+
+
+def _float_array(ctx, value, key) -> np.ndarray:
+    if isinstance(value, np.ndarray):
+        arr = np.asarray(value, dtype=float).ravel()
+    else:
+        items = _list(ctx, value, key)
+        try:
+            arr = np.array([float(v) for v in items])
+        except (TypeError, ValueError):
+            raise ctx.error(key, "expected a list of plain numbers (their unit is given by 'units')") from None
+    if not np.all(np.isfinite(arr)):
+        raise ctx.error(key, "contains values that are not finite")
+    return arr
+
+
+def _profile_table(ctx, p: dict, key) -> tuple[np.ndarray, np.ndarray]:
+    """The (x, z) points of a measured profile [m], from arrays or a two-column file, with ``units: {x, z}``."""
+    units = _mapping(ctx, p.get("units", {}), f"{key}.units", {"x": "optional", "z": "optional"})
+    scale = [_quantity(ctx, f"1 {units[c]}" if c in units else 1.0, f"{key}.units.{c}", "m") for c in ("x", "z")]
+    if "file" in p:
+        if "x" in p or "z" in p:
+            raise ctx.error(f"{key}.file", "give the profile either as 'file' or as 'x' and 'z' arrays, not both")
+        path = Path(str(p["file"]))
+        if not path.is_absolute() and ctx.file is not None:
+            path = Path(ctx.file).parent / path
+        try:
+            text = path.read_text().replace(",", " ").replace(";", " ")
+            rows = [ln.split() for ln in text.splitlines()]
+            rows = [r for r in rows if r and not r[0].startswith("#")]
+            if rows and not _is_number(rows[0][0]):
+                rows = rows[1:]  # a header line
+            table = np.array([[float(v) for v in r[:2]] for r in rows])
+        except OSError as exc:
+            raise ctx.error(f"{key}.file", f"cannot read the profile file {str(path)!r}: {exc.strerror}") from None
+        except (ValueError, IndexError):
+            raise ctx.error(f"{key}.file", f"{str(path)!r} is not a two-column table of numbers (x, z)") from None
+        if table.ndim != 2 or table.shape[0] < 2:
+            raise ctx.error(f"{key}.file", f"{str(path)!r} needs at least 2 rows of (x, z)")
+        x, z = table[:, 0], table[:, 1]
+    else:
+        if "x" not in p or "z" not in p:
+            raise ctx.error(key, "a measured profile needs both 'x' and 'z' (or 'file', 'sine' or 'gaussian')")
+        x, z = _float_array(ctx, p["x"], f"{key}.x"), _float_array(ctx, p["z"], f"{key}.z")
+        if x.size != z.size or x.size < 2:
+            raise ctx.error(f"{key}.z", f"x and z need the same length >= 2, got {x.size} and {z.size}")
+    if not np.all(np.diff(x) > 0):
+        raise ctx.error(f"{key}.x", "profile x must increase strictly")
+    return x * scale[0], z * scale[1]
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _profile(ctx, spec, key, corners: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Coordinates of a rectangle whose bottom/top edge follows the profile ``spec`` (x from the left end)."""
+    from fivid.fe.geometry import gaussian_profile, profile_coords, sine_profile
+
+    p = _mapping(ctx, spec, key, _PROFILE_KEYS)
+    edge = _choice(ctx, p["edge"], f"{key}.edge", ("bottom", "top"))
+    c = corners
+    if not (c[0, 1] == c[1, 1] and c[2, 1] == c[3, 1] and c[0, 0] == c[3, 0] and c[1, 0] == c[2, 0]):
+        raise ctx.error(f"{key}", f"a profiled body needs axis-aligned rectangular corners, got {c.tolist()}")
+    length = c[1, 0] - c[0, 0]
+    xs = length * s  # node x measured from the left end
+    kinds = [k for k in ("sine", "gaussian", "file", "x") if k in p]
+    if len(kinds) != 1 and not (kinds == ["file", "x"]):
+        raise ctx.error(key, "give exactly one profile: 'sine', 'gaussian', 'file', or 'x' and 'z' arrays")
+    if "sine" in p:
+        q = _mapping(ctx, p["sine"], f"{key}.sine", {"amplitude": "required", "wavelength": "required",
+                                                       "phase": "optional"})
+        h = sine_profile(xs, _quantity(ctx, q["amplitude"], f"{key}.sine.amplitude", "m"),
+                         _quantity(ctx, q["wavelength"], f"{key}.sine.wavelength", "m", positive=True),
+                         _quantity(ctx, q.get("phase", 0.0), f"{key}.sine.phase", "rad"))
+    elif "gaussian" in p:
+        q = _mapping(ctx, p["gaussian"], f"{key}.gaussian", {"amplitude": "required", "width": "required",
+                                                               "center": "required"})
+        h = gaussian_profile(xs, _quantity(ctx, q["amplitude"], f"{key}.gaussian.amplitude", "m"),
+                             _quantity(ctx, q["width"], f"{key}.gaussian.width", "m", positive=True),
+                             _quantity(ctx, q["center"], f"{key}.gaussian.center", "m"))
+    else:
+        x, z = _profile_table(ctx, p, key)
+        tol = 1e-9 * length
+        if x[0] > tol or x[-1] < length - tol:
+            raise ctx.error(f"{key}.x", f"the profile covers x = [{x[0]:.6g}, {x[-1]:.6g}] m from the body's left "
+                                        f"end; it must cover the whole edge [0, {length:.6g}] m")
+        h = np.interp(xs, x, z)
+    depth = c[3, 1] - c[0, 1]
+    if (edge == "bottom" and h.max() >= depth) or (edge == "top" and -h.min() >= depth):
+        raise ctx.error(key, f"profile heights [{h.min():.3g}, {h.max():.3g}] m fold the body (depth {depth:.3g} m)")
+    return profile_coords(c, edge, h, s, t), edge
+
+
+def _corners(ctx, b, key) -> np.ndarray:
+    corners = np.array([[_quantity(ctx, v, f"{key}.corners[{i}][{j}]", "m") for j, v in
+                         enumerate(_list(ctx, c, f"{key}.corners[{i}]", 2))]
+                        for i, c in enumerate(_list(ctx, b["corners"], f"{key}.corners", 4))])
+    _check_corners(ctx, corners, f"{key}.corners")
+    return corners
+
+
+def _block_geometry(ctx, b, key, nx: int, ny: int) -> tuple[np.ndarray, str, bool]:
+    """(coords (ny+1, n_cols, 2), shape, periodic) of a body spec."""
+    from fivid.fe.geometry import bilinear_coords
+
+    if ("annulus" in b) == ("corners" in b):
+        raise ctx.error(key, "give exactly one of 'corners' (a quadrilateral) or 'annulus' (a ring or arc)")
+    if "annulus" in b:
+        if "profile" in b:
+            raise ctx.error(f"{key}.profile", "a profile edge is available on 'corners' bodies only")
+        graded, ratio = _grading(ctx, b, key, "annulus", None)
+        if graded in ("left", "right"):
+            raise ctx.error(f"{key}.grading.edge", "an annulus grades radially only: edge inner or outer")
+        xy, periodic = _annulus(ctx, b["annulus"], f"{key}.annulus", nx, _fractions(ny, graded, ratio, "t"))
+        return xy, "annulus", periodic
+    corners = _corners(ctx, b, key)
+    pedge = None
+    if "profile" in b:
+        pedge = b["profile"].get("edge") if isinstance(b["profile"], Mapping) else None
+    graded, ratio = _grading(ctx, b, key, "quad", pedge)
+    s = _fractions(nx, graded, ratio, "s")
+    t = _fractions(ny, graded, ratio, "t")
+    if "profile" in b:
+        xy, _ = _profile(ctx, b["profile"], f"{key}.profile", corners, s, t)
+        return xy, "profile", False
+    return bilinear_coords(corners, s, t), "quad", False
 
 
 def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ...]]]:
@@ -194,30 +375,28 @@ def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ..
     for name, spec in bodies.items():
         key = f"bodies.{name}"
         b = _mapping(ctx, spec, key, _BODY_KEYS)
-        corners = np.array([[_quantity(ctx, v, f"{key}.corners[{i}][{j}]", "m") for j, v in
-                             enumerate(_list(ctx, c, f"{key}.corners[{i}]", 2))]
-                            for i, c in enumerate(_list(ctx, b["corners"], f"{key}.corners", 4))])
-        _check_corners(ctx, corners, f"{key}.corners")
         div = _list(ctx, b["divisions"], f"{key}.divisions", 2)
         for i, d in enumerate(div):
             if isinstance(d, bool) or not isinstance(d, int) or d < 1:
                 raise ctx.error(f"{key}.divisions[{i}]", f"divisions must be integers >= 1, got {d!r}")
+        nx, ny = div
+        coords, shape, periodic = _block_geometry(ctx, b, key, nx, ny)
         material = _material(ctx, b["material"], f"{key}.material", materials)
         thickness = _quantity(ctx, b["thickness"], f"{key}.thickness", "m", positive=True)
         v0 = np.zeros(2)
         if "initial_velocity" in b:
             v0 = np.array([_quantity(ctx, v, f"{key}.initial_velocity[{i}]", "m s-1") for i, v in
                            enumerate(_list(ctx, b["initial_velocity"], f"{key}.initial_velocity", 2))])
+        block = fm.Block(name=str(name), corners=coords[[0, 0, -1, -1], [0, -1, -1, 0]].copy(), nx=nx, ny=ny,
+                         material=material, thickness=thickness, plane=plane, node_offset=offset, coords=coords,
+                         initial_velocity=v0, shape=shape, periodic=periodic)
         clamp = b.get("clamp", [])
         clamp = [clamp] if isinstance(clamp, str) else _list(ctx, clamp, f"{key}.clamp")
         for i, e in enumerate(clamp):
-            _choice(ctx, e, f"{key}.clamp[{i}]", fm.EDGES)
+            _choice(ctx, e, f"{key}.clamp[{i}]", block.edge_names)
         clamps[name] = tuple(clamp)
-        nx, ny = div
-        blocks.append(fm.Block(name=str(name), corners=corners, nx=nx, ny=ny, material=material, thickness=thickness,
-                            plane=plane, node_offset=offset, coords=_block_coords(corners, nx, ny),
-                            initial_velocity=v0))
-        offset += (nx + 1) * (ny + 1)
+        blocks.append(block)
+        offset += block.n_nodes
     return tuple(blocks), clamps
 
 
@@ -233,14 +412,14 @@ def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[fm.Block, 
     allowed = {"body": "required", "edge": "required", "x": "optional", "y": "optional", **extra}
     m = _mapping(ctx, spec, key, allowed)
     block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
-    _choice(ctx, m["edge"], f"{key}.edge", fm.EDGES)
+    _choice(ctx, m["edge"], f"{key}.edge", block.edge_names)
     nodes = block.edge_nodes(m["edge"])
     coords = block.coords.reshape(-1, 2)[nodes - block.node_offset]
     for axis, c in (("x", 0), ("y", 1)):
         if axis in m:
             lo, hi = (_quantity(ctx, v, f"{key}.{axis}[{i}]", "m") for i, v in
                       enumerate(_list(ctx, m[axis], f"{key}.{axis}", 2)))
-            tol = 1e-9 * float(np.ptp(block.corners, axis=0).max())
+            tol = 1e-9 * float(np.ptp(block.coords.reshape(-1, 2), axis=0).max())
             keep = (coords[:, c] >= min(lo, hi) - tol) & (coords[:, c] <= max(lo, hi) + tol)
             nodes, coords = nodes[keep], coords[keep]
             if nodes.size == 0:
@@ -258,7 +437,8 @@ def _point_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[int, dict
     xy = block.coords.reshape(-1, 2)
     d = np.hypot(*(xy - at).T)
     k = int(np.argmin(d))
-    size = max(np.hypot(*(block.coords[0, 1] - block.coords[0, 0])), np.hypot(*(block.coords[1, 0] - block.coords[0, 0])))
+    size = max(float(np.hypot(*np.diff(block.coords, axis=a).reshape(-1, 2).T).max()) if block.coords.shape[a] > 1
+               else 0.0 for a in (0, 1))  # the longest element side
     if d[k] > size:
         raise ctx.error(f"{key}.at", f"point {at.tolist()} m is not on body {block.name!r} (nearest node "
                                      f"{xy[k].tolist()} is {d[k]:.3g} m away)")
@@ -386,16 +566,30 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                                  f"{free.size} of its dofs are free; clamp edge {m['edge']!r} of {block.name!r}")
         reactions.append(fm.Reaction(_name(ctx, m["name"], f"{key}.name"), nodes, t, n))
 
+    loads = []
+    for i, spec in enumerate(_items(ctx, data, "loads")):
+        key = f"loads[{i}]"
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "pressure": "required",
+                                                               "ramp_time": "optional"})
+        if nodes.size < 2:
+            raise ctx.error(key, "a pressure load needs at least 2 nodes of the edge (one segment)")
+        loads.append(fm.PressureLoad(_name(ctx, m["name"], f"{key}.name"), block.name,
+                                     block.edge_segments(m["edge"], nodes),
+                                     _quantity(ctx, m["pressure"], f"{key}.pressure", "Pa"),
+                                     _quantity(ctx, m.get("ramp_time", 0.0), f"{key}.ramp_time", "s",
+                                               nonnegative=True)))
+
     alpha, beta, cutoff = _damping(ctx, data.get("damping"))
     for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),
-                           ("contacts", contacts), ("sensors", sensors), ("reactions", reactions)):
+                           ("contacts", contacts), ("sensors", sensors), ("reactions", reactions),
+                           ("loads", loads)):
         names = [x.name for x in items]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
             raise ctx.error(section, f"duplicate name(s) {sorted(dup)}; names must be unique within '{section}'")
     return fm.Model(plane=plane, blocks=blocks, n_nodes=n_nodes, coords=coords, fixed_dofs=fixed_dofs,
                  motions=tuple(motions), point_masses=tuple(point_masses), springs=tuple(springs),
-                 contacts=tuple(contacts), sensors=tuple(sensors), reactions=tuple(reactions),
+                 contacts=tuple(contacts), sensors=tuple(sensors), reactions=tuple(reactions), loads=tuple(loads),
                  rayleigh_alpha=alpha, rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data)
 
 

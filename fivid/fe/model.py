@@ -15,6 +15,15 @@ share nodes; contact pairs couple them. Edges: ``bottom`` (c0 -> c1), ``right`` 
 ``top`` (c2 -> c3), ``left`` (c3 -> c0); :meth:`Block.edge_nodes` lists an edge's nodes in that
 direction (so the outward normal of a segment ``(a, b)`` is the tangent ``b - a`` turned clockwise).
 
+Mapped blocks keep this numbering; only the node coordinates change. An annular block (``shape =
+"annulus"``) runs ``i`` clockwise (decreasing angle, from the end angle to the start angle) and ``j``
+outward from the inner radius, so that its elements are counter-clockwise: ``bottom`` is the inner
+surface (alias ``inner``), ``top`` the outer (``outer``), ``right`` the start-angle side (``start``),
+``left`` the end-angle side (``end``). A full ring is ``periodic``: it has ``nx`` node columns, not
+``nx + 1`` (column ``nx`` *is* column 0, the seam), node ``(i, j)`` is ``node_offset + j*nx + i mod nx``,
+and it has no left/right edge. A ``profile`` block is a rectangle whose bottom or top edge follows a
+height profile h(x).
+
 Constraints
 -----------
 ``fixed_dofs`` is every constrained dof: the dofs of clamped edges and the dofs carrying a
@@ -43,12 +52,17 @@ __all__ = [
     "Spring",
     "ContactPair",
     "Sensor",
+    "PressureLoad",
     "Reaction",
     "Model",
     "load_model",
 ]
 
 EDGES = ("bottom", "right", "top", "left")
+#: edge names of annular blocks, as aliases of :data:`EDGES`
+ANNULUS_EDGES = {"inner": "bottom", "start": "right", "outer": "top", "end": "left"}
+#: block shapes
+SHAPES = ("quad", "annulus", "profile")
 
 
 @dataclass(frozen=True)
@@ -109,6 +123,12 @@ class Block:
         Node coordinates [m], ``coords[j, i]`` is local node ``(i, j)``.
     initial_velocity : ndarray, shape (2,)
         Initial velocity of every node of the block [m s-1].
+    shape : {"quad", "annulus", "profile"}
+        How ``coords`` were generated: bilinear map of the corners, annular sector, or a rectangle with one
+        edge following a height profile (see the module docstring). ``corners`` of mapped blocks are the
+        coordinates of their four corner nodes (of the last column for a periodic ring).
+    periodic : bool
+        A full ring closing on itself: ``nx`` node columns, column ``nx`` wraps to column 0.
     """
 
     name: str
@@ -121,11 +141,18 @@ class Block:
     node_offset: int
     coords: np.ndarray
     initial_velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    shape: str = "quad"
+    periodic: bool = False
+
+    @property
+    def n_cols(self) -> int:
+        """Node columns per row: ``nx + 1``, or ``nx`` for a periodic ring (also the row stride)."""
+        return self.nx if self.periodic else self.nx + 1
 
     @property
     def n_nodes(self) -> int:
-        """Number of nodes ``(nx+1)(ny+1)``."""
-        return (self.nx + 1) * (self.ny + 1)
+        """Number of nodes ``n_cols (ny+1)``."""
+        return self.n_cols * (self.ny + 1)
 
     @property
     def n_elements(self) -> int:
@@ -133,34 +160,72 @@ class Block:
         return self.nx * self.ny
 
     def node(self, i, j):
-        """Global node number(s) of local node(s) ``(i, j)``."""
-        return self.node_offset + np.asarray(j) * (self.nx + 1) + np.asarray(i)
+        """Global node number(s) of local node(s) ``(i, j)`` (``i`` taken modulo ``nx`` on a periodic ring)."""
+        i = np.asarray(i) % self.nx if self.periodic else np.asarray(i)
+        return self.node_offset + np.asarray(j) * self.n_cols + i
 
     def node_numbers(self) -> np.ndarray:
-        """Global node numbers, shape (ny+1, nx+1), ``[j, i]``."""
-        return self.node_offset + np.arange(self.n_nodes).reshape(self.ny + 1, self.nx + 1)
+        """Global node numbers, shape (ny+1, n_cols), ``[j, i]``."""
+        return self.node_offset + np.arange(self.n_nodes).reshape(self.ny + 1, self.n_cols)
+
+    @property
+    def edge_names(self) -> tuple:
+        """The edges this block has (annular blocks also accept the names of :data:`ANNULUS_EDGES`)."""
+        names = ("bottom", "top") if self.periodic else EDGES
+        if self.shape == "annulus":
+            names = names + tuple(k for k, v in ANNULUS_EDGES.items() if v in names)
+        return names
+
+    def _edge(self, edge: str) -> str:
+        if edge not in self.edge_names:
+            raise ValueError(f"edge must be one of {self.edge_names} for body {self.name!r}, got {edge!r}")
+        return ANNULUS_EDGES.get(edge, edge)
 
     def edge_nodes(self, edge: str) -> np.ndarray:
-        """Global node numbers along ``edge`` in its direction (bottom c0->c1, right c1->c2, top c2->c3, left c3->c0)."""
+        """Global node numbers along ``edge`` in its direction (bottom c0->c1, right c1->c2, top c2->c3, left c3->c0).
+
+        On a periodic ring the inner (bottom) and outer (top) edges are closed: every node appears once, and
+        the last node is followed by the first (see :meth:`edge_segments`).
+        """
         n = self.node_numbers()
+        edge = self._edge(edge)
         if edge == "bottom":
             return n[0, :].copy()
         if edge == "right":
             return n[:, -1].copy()
         if edge == "top":
             return n[-1, ::-1].copy()
-        if edge == "left":
-            return n[::-1, 0].copy()
-        raise ValueError(f"edge must be one of {EDGES}, got {edge!r}")
+        return n[::-1, 0].copy()
+
+    def edge_segments(self, edge: str, nodes=None) -> np.ndarray:
+        """Node pairs ``(a, b)`` of the segments of ``edge`` whose two nodes are both in ``nodes`` (default: all),
+        shape (n, 2), in edge order.
+
+        A periodic ring's inner/outer edge is closed: its last node is joined back to its first (so a subset
+        across the seam keeps its segments, and never joins nodes that are not neighbours). The outward normal
+        of a segment is ``b - a`` turned clockwise.
+        """
+        full = self.edge_nodes(edge)
+        seg = np.column_stack([full[:-1], full[1:]])
+        if self.periodic:
+            seg = np.vstack([seg, [full[-1], full[0]]])
+        if nodes is not None:
+            keep = np.isin(seg, np.asarray(nodes)).all(axis=1)
+            seg = seg[keep]
+        return seg.astype(np.int64)
+
+    def _wrapped(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (ny+1, n_cols, ...) with column 0 appended after the last on a periodic ring: (ny+1, nx+1, ...)."""
+        return np.concatenate([a, a[:, :1]], axis=1) if self.periodic else a
 
     def element_nodes(self) -> np.ndarray:
         """Global node numbers of every element, shape (ny, nx, 4), counter-clockwise from the element's (i, j)."""
-        n = self.node_numbers()
+        n = self._wrapped(self.node_numbers())
         return np.stack([n[:-1, :-1], n[:-1, 1:], n[1:, 1:], n[1:, :-1]], axis=-1)
 
     def element_corners(self) -> np.ndarray:
         """Coordinates of every element's 4 nodes [m], shape (ny, nx, 4, 2), same order as :meth:`element_nodes`."""
-        c = self.coords
+        c = self._wrapped(self.coords)
         return np.stack([c[:-1, :-1], c[:-1, 1:], c[1:, 1:], c[1:, :-1]], axis=-2)
 
     def element_dofs(self) -> np.ndarray:
@@ -278,6 +343,34 @@ class ContactPair:
 
 
 @dataclass(frozen=True, eq=False)
+class PressureLoad:
+    """A uniform pressure on (part of) a body's edge, ramped smoothly from 0 to ``pressure``.
+
+    Positive pressure pushes on the surface (along the inward normal). The nodal forces are the consistent
+    forces of a uniform traction on the reference (undeformed) segments, ``-p t L/2 n`` on each end node of a
+    segment of length ``L`` and outward normal ``n``, and their direction is fixed (a dead load, not a
+    follower load): the small-displacement solver has no geometry update to follow.
+
+    Parameters
+    ----------
+    name : str
+    body : str
+    segments : ndarray of int, shape (n_seg, 2)
+        Global node pairs ``(a, b)`` of the loaded segments (outward normal ``b - a`` turned clockwise).
+    pressure : float
+        Final pressure [Pa] (may be negative: suction).
+    ramp_time : float
+        Duration of the smooth ramp ``r(s) = s - sin(2 pi s)/(2 pi)`` from 0 to ``pressure`` [s].
+    """
+
+    name: str
+    body: str
+    segments: np.ndarray
+    pressure: float
+    ramp_time: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
 class Sensor:
     """An accelerometer: a node and a measuring direction (unit vector)."""
 
@@ -313,7 +406,7 @@ class Model:
         Node coordinates [m].
     fixed_dofs : ndarray of int
         Sorted, unique constrained dofs (clamps and motions).
-    motions, point_masses, springs, contacts, sensors, reactions : tuple
+    motions, point_masses, springs, contacts, sensors, reactions, loads : tuple
     rayleigh_alpha : float
         Mass-proportional Rayleigh coefficient [s-1].
     rayleigh_beta : float
@@ -338,6 +431,7 @@ class Model:
     contacts: tuple = ()
     sensors: tuple = ()
     reactions: tuple = ()
+    loads: tuple = ()
     rayleigh_alpha: float = 0.0
     rayleigh_beta: float = 0.0
     damping_cutoff: float = math.inf

@@ -122,6 +122,9 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
                          direction: float, mu: np.ndarray | None = None, max_iterations: int = 50) -> Preload:
     """Clamp displacement giving the transducer normal force ``normal_load`` [N] (see the module docstring).
 
+    The model's pressure loads (:func:`fivid.fe.loads.external_load_vector`, full value) act throughout: they
+    are part of the zero-clamp-displacement solution, and the transducer reads ``K u - F`` at its dofs.
+
     Parameters
     ----------
     model : Model
@@ -140,6 +143,7 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
     from scipy.sparse.linalg import splu
 
     from fivid.fe.assembly import stiffness_matrix
+    from fivid.fe.loads import external_load_vector
 
     geo = contact_geometry(model)
     usable = geo.segment >= 0
@@ -175,6 +179,7 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
     slip = np.zeros(geo.gap.size)  # sign of the tangential force of nodes slipping on the cone (0: not slipping)
     Kff = K[free][:, free]
     Kfc_e = (K[:, fixed] @ e[fixed])[free]
+    f_ext = external_load_vector(model)  # pressure loads at full value, part of the zero-clamp solution ua
     for it in range(1, max_iterations + 1):
         idx = np.flatnonzero(active)
         tdx = np.flatnonzero(tied)
@@ -187,6 +192,7 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
         nf = free.size
         rhs = np.zeros((A.shape[0], 2))
         rhs[nf:nf + idx.size, 0] = -g0[idx]
+        rhs[:nf, 0] = f_ext[free]
         rhs[:nf, 1] = -Kfc_e
         rhs[nf:, 1] = -(C @ e)
         sol = lu.solve(rhs)
@@ -194,7 +200,7 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
         ub = e.copy()
         ua[free] = sol[:nf, 0]
         ub[free] = sol[:nf, 1]
-        Fa = float(normal_weights @ (K @ ua))
+        Fa = float(normal_weights @ (K @ ua - f_ext))
         Fb = float(normal_weights @ (K @ ub))
         if not Fb > 0.0:
             raise ConfigError(

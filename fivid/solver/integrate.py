@@ -98,9 +98,10 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
             nr = min(chunk, n_int - r0)
             status, done = K.run_steps(
                 r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, a_filt, n_sub, st.npd,
-                st.blocks, st.c_uni, st.lst_idx, st.lst_stride, st.lst_coef, ka.mass, ka.minv,
+                *st.kernel_args, ka.mass, ka.minv,
                 ka.spr_dof, ka.spr_kc,
                 ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
+                ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
                 ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
                 seg, geo, lam, cstate,
                 settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
@@ -125,7 +126,7 @@ def _diagnosis(model, st, status, diag, dt, settings, u, v) -> str:
         b = model.block_of_node(node)
         loc = node - b.node_offset
         x, y = model.coords[node]
-        where += (f" (body {b.name!r}, local i={loc % (b.nx + 1)}, j={loc // (b.nx + 1)}, at x={x:.4g} m, y={y:.4g} m;"
+        where += (f" (body {b.name!r}, local i={loc % b.n_cols}, j={loc // b.n_cols}, at x={x:.4g} m, y={y:.4g} m;"
                   f" |v| = {float(np.hypot(v[st.pad + node], v[st.npd + st.pad + node])):.3g} m/s)")
     return (f"the simulation diverged at step {step} (t = {step * dt:.6g} s): {what}; largest speed at {where}. "
             f"Time step {dt:.4g} s, critical {settings.critical_time_step:.4g} s. Check the model (contact geometry, "

@@ -61,13 +61,15 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     friction = -e[:, K.R_WCT]
     impact = -e[:, K.R_WCN]
     wext = e[:, K.R_WEXT]
-    closure = wext - (ke - raw.ke0 + strain + damping + friction + impact)
+    wload = e[:, K.R_WLOAD]
+    closure = wext + wload - (ke - raw.ke0 + strain + damping + friction + impact)
     data = {
         "friction_force": (("time",), ft),
         "normal_force": (("time",), fn),
         "kinetic_energy": (("time",), ke),
         "strain_energy": (("time",), strain),
         "external_work": (("time",), wext),
+        "load_work": (("time",), wload),
         "damping_dissipation": (("time",), damping),
         "friction_dissipation": (("time",), friction),
         "impact_dissipation": (("time",), impact),
@@ -102,7 +104,8 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
             description="value at the end of the first oversampled interval of each output period")
     ds["impact_dissipation"].attrs["description"] = "minus the work of the normal contact multipliers"
     ds["energy_balance_error"].attrs["description"] = (
-        "external_work - (kinetic - kinetic(0) + strain + damping + friction + impact); round-off for a correct run")
+        "external_work + load_work - (kinetic - kinetic(0) + strain + damping + friction + impact); round-off for a "
+        "correct run")
     if len(sensors) == 1:
         ds["acceleration"].attrs["sensor"] = sensors[0]
     mu_desc = fric.description

@@ -39,6 +39,8 @@ class Schedule:
         Velocity of the "base" motion [m s-1] (None: as configured).
     base_ramp : float
         Ramp time of the base velocity [s].
+    pressure_ramp : float
+        Longest ramp of the pressure loads (they start at t = 0) [s].
     """
 
     load_displacement: float | None
@@ -46,11 +48,12 @@ class Schedule:
     base_start: float
     base_velocity: float | None
     base_ramp: float
+    pressure_ramp: float = 0.0
 
     @property
     def transient_end(self) -> float:
-        """End of the base ramp: steady sliding from here [s]."""
-        return self.base_start + self.base_ramp
+        """End of the base ramp (and of the pressure ramps): steady sliding from here [s]."""
+        return max(self.base_start + self.base_ramp, self.pressure_ramp)
 
 
 @dataclass
@@ -79,6 +82,10 @@ class KernelArrays:
     cnode_slot: np.ndarray
     sens_node: np.ndarray
     sens_dir: np.ndarray
+    ld_dof: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    ld_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    ld_grp: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    ld_par: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     extras: dict = field(default_factory=dict)
 
 
@@ -94,6 +101,7 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     ``normal_force = normal_sign * sum R_n`` over the reaction nodes of the first Reaction.
     """
     from fivid.fe.assembly import lumped_mass
+    from fivid.fe.loads import pressure_forces
 
     n_dofs = model.n_dofs
     mass_g = lumped_mass(model)
@@ -161,6 +169,15 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
         m = _idx(master[ptr[p]:ptr[p + 1]])
         mid = 0.5 * (model.coords[m[:-1]] + model.coords[m[1:]])
         seg[k] = int(np.argmin(np.linalg.norm(mid - model.coords[s], axis=1)))
+    # ---- pressure loads: the non-zero nodal forces of each load, ramped from t = 0
+    ld_dof, ld_force, ld_grp = [], [], []
+    for g, load in enumerate(model.loads):
+        fl = pressure_forces(model, load)
+        nz = np.flatnonzero(fl)
+        ld_dof.append(st.dof_index(nz))
+        ld_force.append(fl[nz])
+        ld_grp.append(np.full(nz.size, g))
+    ld_par = np.array([[0.0, float(ld.ramp_time)] for ld in model.loads]).reshape(-1, 2)
     # ---- sensors
     sens_node = _idx([st.node_index(s.node) for s in model.sensors])
     sens_dir = np.array([np.asarray(s.direction, float) for s in model.sensors]).reshape(-1, 2)
@@ -174,4 +191,7 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
         pair_sign=np.ones(len(model.contacts)), seg=seg,
         cnodes=_idx(st.node_index(cnodes_g)), cnode_slot=cnode_slot,
         sens_node=sens_node, sens_dir=np.ascontiguousarray(sens_dir),
+        ld_dof=_idx(np.concatenate(ld_dof) if ld_dof else []),
+        ld_force=np.ascontiguousarray(np.concatenate(ld_force) if ld_force else np.zeros(0)),
+        ld_grp=_idx(np.concatenate(ld_grp) if ld_grp else []), ld_par=np.ascontiguousarray(ld_par),
     )

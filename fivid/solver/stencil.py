@@ -1,11 +1,19 @@
 """Per-block stencil coefficients of the Q4 stiffness (DESIGN §7): ``K u`` as a 3x3-neighbourhood stencil.
 
 Node ``p = (i, j)`` of a structured block couples with its 3x3 neighbourhood through 2x2 blocks of
-``K``; the coefficient of dof ``a`` of ``p`` on dof ``b`` of ``p + dj*(nx+1) + di`` is the sum, over the
+``K``; the coefficient of dof ``a`` of ``p`` on dof ``b`` of ``p + dj*stride + di`` is the sum, over the
 (up to four) elements holding both nodes, of the element stiffness entries
-(:func:`fivid.fe.assembly.element_stiffness_q4`). When every element of a block has the same stiffness
-(rectangles and parallelograms of equal size), all interior nodes share one coefficient set
-(``uniform``); boundary nodes and the nodes of mapped blocks use per-node coefficients.
+(:func:`fivid.fe.assembly.element_stiffness_q4`). Three storage kinds, all without per-node index arrays
+except the last:
+
+- uniform blocks (every element the same: rectangles, parallelograms of equal size): the interior and the
+  four edges (corners excluded) each share one coefficient set (``c_uni``);
+- mapped blocks (annular sectors, profiled or general quadrilaterals): per-node coefficients ``c_map`` in
+  component-major layout ``(36, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch
+  covering the whole block (neighbours outside it have zero coefficients; the padding keeps their indices
+  in bounds); on a periodic ring the patch covers columns 1..nx-2;
+- listed nodes with explicit neighbour indices: the corners of uniform blocks and the two seam columns of
+  a periodic ring (whose neighbours across the seam are ``nx - 1`` columns away).
 """
 
 from __future__ import annotations
@@ -25,6 +33,12 @@ def stencil_index(dj: int, di: int, a: int, b: int) -> int:
     return ((dj + 1) * 3 + (di + 1)) * 4 + 2 * a + b
 
 
+# patch kinds (column 4 of BlockStencils.blocks)
+PATCH_UNIFORM = 0
+PATCH_RECT = 1
+PATCH_MAPPED = 2
+
+
 @dataclass(frozen=True)
 class BlockStencils:
     """Stencil data and dof layout of a model for :mod:`fivid.solver._kernels`.
@@ -36,16 +50,22 @@ class BlockStencils:
         Zero entries before node 0 (and after the last node) in each component half.
     npd : int
         Length of one component half, ``n_nodes + 2*pad``.
-    blocks : ndarray of int64, shape (n_patch, 5)
-        Patches of nodes sharing one stencil, ``first x-index, columns, rows, row stride, rectangular``:
-        the interior and each edge (corners excluded) of every uniform block; ``rectangular`` = 1 when the
-        xy couplings with the axis neighbours vanish (rectangular elements: 13 terms per force instead of 18).
-    c_uni : ndarray, shape (n_patch, 36)
-        Patch coefficients [N m-1].
-    lst_idx, lst_stride : ndarray of int64, shape (n_list,)
-        x-index and row stride of every other node (corners of uniform blocks, all nodes of mapped blocks).
+    blocks : ndarray of int64, shape (n_patch, 6)
+        Patches of nodes, ``first x-index, columns, rows, row stride, kind, coefficients``: kind
+        ``PATCH_UNIFORM``/``PATCH_RECT`` share the stencil ``c_uni[coefficients]`` (rect: the xy couplings with
+        the axis neighbours vanish, 13 terms per force instead of 18); ``PATCH_MAPPED`` has per-node stencils
+        in ``c_map[:, coefficients + row*columns + column]``.
+    c_uni : ndarray, shape (n_uniform, 36)
+        Shared stencils [N m-1].
+    c_map : ndarray, shape (36, n_mapped)
+        Per-node stencils of mapped patches [N m-1], component-major.
+    lst_idx : ndarray of int64, shape (n_list,)
+        x-index of every listed node (corners of uniform blocks, seam columns of periodic rings).
+    lst_nbr : ndarray of int64, shape (n_list, 9)
+        x-indices of their 3x3 neighbours, row-major from ``(di, dj) = (-1, -1)`` (neighbours outside the
+        block: any in-bounds index, their coefficients are zero).
     lst_coef : ndarray, shape (n_list, 36)
-        Their coefficients [N m-1].
+        Their stencils [N m-1].
     """
 
     n_nodes: int
@@ -53,9 +73,15 @@ class BlockStencils:
     npd: int
     blocks: np.ndarray
     c_uni: np.ndarray
+    c_map: np.ndarray
     lst_idx: np.ndarray
-    lst_stride: np.ndarray
+    lst_nbr: np.ndarray
     lst_coef: np.ndarray
+
+    @property
+    def kernel_args(self) -> tuple:
+        """The stencil arguments of :func:`fivid.solver._kernels.block_forces` after ``npd``, in order."""
+        return self.blocks, self.c_uni, self.c_map, self.lst_idx, self.lst_nbr, self.lst_coef
 
     def dof_index(self, dof) -> np.ndarray:
         """Flat kernel index of global dof(s) ``2*node + c``."""
@@ -88,52 +114,86 @@ def _node_coefficients(ke: np.ndarray) -> np.ndarray:
     return c
 
 
+def _block_coefficients(block, ke: np.ndarray) -> np.ndarray:
+    """Node stencils of a block, shape (ny+1, n_cols, 36); a periodic ring folds column nx onto column 0."""
+    c = _node_coefficients(ke)
+    if block.periodic:
+        c[:, 0] += c[:, -1]
+        c = c[:, :-1]
+    return c.reshape(block.ny + 1, block.n_cols, 36)
+
+
+def _neighbours(block, pad: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """x-indices of the 3x3 neighbours of local nodes (i, j), shape (n, 9); outside the block: the node itself."""
+    out = np.empty((i.size, 9), dtype=np.int64)
+    own = pad + block.node(i, j)
+    for dj in (-1, 0, 1):
+        for di in (-1, 0, 1):
+            ii, jj = i + di, j + dj
+            inside = (jj >= 0) & (jj <= block.ny)
+            if not block.periodic:
+                inside &= (ii >= 0) & (ii <= block.nx)
+            nb = pad + block.node(np.where(inside, ii, i), np.where(inside, jj, j))
+            out[:, (dj + 1) * 3 + di + 1] = np.where(inside, nb, own)
+    return out
+
+
 def block_stencils(model) -> BlockStencils:
     """Stencil coefficients of every block of ``model`` (springs and constraints not included).
 
     A block is uniform when all its element stiffnesses agree to ``1e-12`` of their largest entry
     (float resolution of the element integration, ~10 ulp): its interior nodes then share one coefficient
-    set, and so do the nodes of each edge (neighbours outside the block get zero coefficients; the padding
-    keeps their indices in bounds). Blocks with fewer than 3x3 nodes are listed node by node.
+    set, and so do the nodes of each edge. Other blocks (and blocks with fewer than 3x3 nodes) are mapped
+    patches with per-node coefficients; periodic rings list their two seam columns with explicit neighbours.
     """
     from fivid.fe.assembly import block_element_stiffness
 
-    pad = max(b.nx + 1 for b in model.blocks) + 1
+    pad = max(b.n_cols for b in model.blocks) + 1
     npd = model.n_nodes + 2 * pad
-    uni_rows, uni_coef, lst_idx, lst_stride, lst_coef = [], [], [], [], []
+    rows, uni_coef, map_coef, n_map = [], [], [], 0
+    lst_idx, lst_nbr, lst_coef = [], [], []
     for block in model.blocks:
         ke = block_element_stiffness(block)
         uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=1e-12 * np.abs(ke[0, 0]).max()))
-        uniform = uniform and block.nx >= 2 and block.ny >= 2
-        c = _node_coefficients(ke).reshape(block.ny + 1, block.nx + 1, 36)
-        listed = np.ones((block.ny + 1, block.nx + 1), dtype=bool)
+        uniform = uniform and block.nx >= 2 and block.ny >= 2 and not block.periodic
+        c = _block_coefficients(block, ke)
+        o = pad + block.node_offset
+        stride = block.n_cols
+        listed = np.zeros((block.ny + 1, block.n_cols), dtype=bool)
         if uniform:
-            nx, ny, stride = block.nx, block.ny, block.nx + 1
-            o = pad + block.node_offset
-            for (j, i), cols, rows in (((1, 1), nx - 1, ny - 1), ((0, 1), nx - 1, 1), ((ny, 1), nx - 1, 1),
-                                       ((1, 0), 1, ny - 1), ((1, nx), 1, ny - 1)):
+            nx, ny = block.nx, block.ny
+            for (j, i), cols, nrows in (((1, 1), nx - 1, ny - 1), ((0, 1), nx - 1, 1), ((ny, 1), nx - 1, 1),
+                                        ((1, 0), 1, ny - 1), ((1, nx), 1, ny - 1)):
                 cc = c[j, i].reshape(9, 2, 2)
                 # rectangular elements: no xy coupling with the axis neighbours and the node itself (exactly
                 # zero up to the Gauss-sum round-off, ~1e-18 of the diagonal), the kernel skips those terms
                 cross = np.abs(cc[[1, 3, 4, 5, 7]][:, [0, 1], [1, 0]])
-                rect = int(cross.max() <= 1e-12 * np.abs(cc).max())
-                uni_rows.append((o + j * stride + i, cols, rows, stride, rect))
+                kind = PATCH_RECT if cross.max() <= 1e-12 * np.abs(cc).max() else PATCH_UNIFORM
+                rows.append((o + j * stride + i, cols, nrows, stride, kind, len(uni_coef)))
                 uni_coef.append(c[j, i])
-            listed[:, :] = False
             listed[[0, 0, -1, -1], [0, -1, 0, -1]] = True
-        nodes = block.node_numbers()[listed]
-        lst_idx.append(pad + nodes)
-        lst_stride.append(np.full(nodes.size, block.nx + 1))
+        else:
+            i0, i1 = (1, block.nx - 1) if block.periodic else (0, block.n_cols)
+            rows.append((o + i0, i1 - i0, block.ny + 1, stride, PATCH_MAPPED, n_map))
+            patch = c[:, i0:i1].reshape(-1, 36)
+            map_coef.append(patch.T)
+            n_map += patch.shape[0]
+            if block.periodic:
+                listed[:, [0, -1]] = True
+        j, i = np.nonzero(listed)
+        lst_idx.append(pad + block.node(i, j))
+        lst_nbr.append(_neighbours(block, pad, i, j))
         lst_coef.append(c[listed])
     return BlockStencils(
         n_nodes=model.n_nodes,
         pad=pad,
         npd=npd,
-        blocks=np.array(uni_rows, dtype=np.int64).reshape(-1, 5),
+        blocks=np.array(rows, dtype=np.int64).reshape(-1, 6),
         c_uni=np.array(uni_coef, dtype=float).reshape(-1, 36),
+        c_map=np.ascontiguousarray(np.concatenate(map_coef, axis=1) if map_coef else np.zeros((36, 0))),
         lst_idx=np.concatenate(lst_idx).astype(np.int64),
-        lst_stride=np.concatenate(lst_stride).astype(np.int64),
-        lst_coef=np.ascontiguousarray(np.concatenate(lst_coef), dtype=float),
+        lst_nbr=np.ascontiguousarray(np.concatenate(lst_nbr), dtype=np.int64).reshape(-1, 9),
+        lst_coef=np.ascontiguousarray(np.concatenate(lst_coef), dtype=float).reshape(-1, 36),
     )
 
 
@@ -144,5 +204,5 @@ def apply_stencils(stencils: BlockStencils, w: np.ndarray) -> np.ndarray:
     s = stencils
     wk = s.to_kernel(np.asarray(w, dtype=float))
     f = np.zeros_like(wk)
-    block_forces(wk, f, s.npd, s.blocks, s.c_uni, s.lst_idx, s.lst_stride, s.lst_coef)
+    block_forces(wk, f, s.npd, *s.kernel_args)
     return s.to_global(f)
