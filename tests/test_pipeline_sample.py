@@ -41,7 +41,8 @@ def test_both_formats_hold_the_same_records(root):
 
     a = read_rig_csv(root / SAMPLE / "twin" / "T04_v5mm_s_ra1.6um.csv")
     b = read_rig_csv(root / SAMPLE / "twin_daq" / "T04_v5_ra16.csv", profile="labdaq")
-    for key in ("run_id", "sliding_velocity", "normal_load", "roughness_ra", "sample_rate"):
+    assert a.attrs["run_id"] == b.attrs["run_id"]  # text: equal (pytest.approx takes no strings since pytest 9.2)
+    for key in ("sliding_velocity", "normal_load", "roughness_ra", "sample_rate"):
         assert a.attrs[key] == pytest.approx(b.attrs[key], rel=1e-12)
     np.testing.assert_array_equal(a["time"].values, b["time"].values)
     # Printed resolution: 1e-6 g in g, 1e-4 mV = 1e-6 g at 100 mV/g: each file rounds to half of it.
