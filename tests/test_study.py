@@ -281,3 +281,49 @@ def test_fe_load_sweep_with_a_law_and_its_coulomb_reference(tmp_path):
         assert p["perturbation_gain_db"] > 20, p
     ds = open_study(tmp_path / "out" / "study.nc")
     assert ds.sel(normal_load=5.0)["mode_frequency"].sizes["mode"] == 6
+
+
+def test_observed_order_on_known_convergence():
+    """q = q_inf + C h^p on unevenly spaced meshes: the order and the extrapolation are recovered to the root
+    finder's tolerance; non-monotone values give no order and the finest-step difference as the error."""
+    from fivid.study.convergence import observed_order
+
+    for p in (1.0, 2.0, 3.5):
+        h = [0.005, 0.002, 0.001]
+        r = observed_order(h, [10.0 - 4e3 * x**p for x in h])
+        assert r["order"] == pytest.approx(p, rel=1e-9) and r["extrapolated"] == pytest.approx(10.0, rel=1e-9)
+        assert r["h"] == [0.001, 0.002, 0.005]
+    r = observed_order([1, 2, 4], [1.0, 1.2, 1.1])
+    assert r["order"] is None and r["error"] == pytest.approx(0.2)
+
+
+def test_committed_sample_law_is_the_ground_truth():
+    """configs/laws/sample_truth.nc (written by configs/laws/make_sample_truth.py) is the twin's known law."""
+    sys.path.insert(0, str(ROOT / "sample_data"))
+    from generate import load_truth, truth_law
+
+    from fivid.friction import load_law
+
+    truth = truth_law(load_truth())
+    law = load_law(ROOT / "configs" / "laws" / "sample_truth.nc")
+    assert law.mu0 == truth.mu0 and law.band == truth.band
+    for v, ra in ((0.005, 0.4e-6), (0.02, 1.6e-6)):
+        assert law.amplitude(v, ra) == pytest.approx(truth.amplitude(v, ra), rel=1e-12)
+    np.testing.assert_allclose(law.shape, truth.shape, rtol=1e-12)
+
+
+@pytest.mark.slow
+def test_convergence_study_quick(tmp_path):
+    """configs/studies/convergence.yaml --quick: three meshes x two steps; each mode's frequency falls as the
+    mesh is refined (Q4 is too stiff in bending: convergence from above), an order and an error are reported,
+    and halving the step changes the PSD by well under 1 dB."""
+    summary = run_study(load_study(ROOT / "configs" / "studies" / "convergence.yaml", quick=True), tmp_path / "o",
+                        workers=2, progress=False)
+    assert summary["n_done"] == 6
+    mesh = summary["convergence"]["mesh"]
+    assert len(mesh) == 2  # one per time step
+    for m in mesh[0]["mode_frequency"][:3]:
+        f1, f2, f3 = m["values"]
+        assert f1 < f2 < f3 and m["order"] is not None and m["error"] > 0
+    for s in summary["convergence"]["time_step"]:
+        assert s["lsd_db"] < 1.0

@@ -48,6 +48,8 @@ AXES = {
     "mu": ("1", "kinetic friction coefficient"),
     "mu_static": ("1", "static friction coefficient"),
     "seed": ("1", "random seed"),
+    "mesh": ("1", "mesh refinement factor (divisions x factor)"),
+    "time_step": ("1", "time step as a fraction of the critical step"),
 }
 _TOP = {"fivid-study", "name", "description", "system", "sweep", "cea", "points", "quick"}
 _POINT_TASKS = {"modes", "transient", "psd"}
@@ -161,6 +163,8 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
     points = _points(ctx, data.get("points") or {}, lumped is not None, base)
     if cea is not None and model_path is not None and "normal_load" not in cea:
         raise ctx.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N)")
+    if lumped is not None and ({"mesh", "time_step"} & set(axes)):
+        raise ctx.error("sweep", "mesh and time_step axes refine an FE model, not a lumped one")
     if lumped is not None and "transient" in points and "mu" not in axes:
         raise ctx.error("sweep", "a lumped model's transient takes its friction coefficient from a 'mu' axis")
     return Study(name=str(data.get("name", "study")), description=str(data.get("description", "")),
@@ -245,10 +249,12 @@ def _sweep(ctx, spec):
             if np.any(vals != np.round(vals)) or np.any(vals < 0):
                 raise ctx.error("sweep.seed", "seeds are whole numbers >= 0")
             vals = vals.astype(np.int64)
-        elif name in ("normal_load", "sliding_velocity") and np.any(vals <= 0):
+        elif name in ("normal_load", "sliding_velocity", "mesh") and np.any(vals <= 0):
             raise ctx.error(f"sweep.{name}", f"{name} must be > 0, got {vals.min():g}")
         elif np.any(vals < 0):
             raise ctx.error(f"sweep.{name}", f"{name} must be >= 0, got {vals.min():g}")
+        if name == "time_step" and np.any((vals <= 0) | (vals > 1)):
+            raise ctx.error("sweep.time_step", "a fraction of the critical step: 0 < value <= 1")
         axes[name] = vals
     if combine == "zip" and len({v.size for v in axes.values()}) > 1:
         raise ctx.error("sweep.combine", "zip needs axes of one length: " +

@@ -73,8 +73,8 @@ def study_section(page: Page, ds, summary: dict) -> None:
         page.paragraph("CEA: stable over the analysed μ range." if crit is None else
                        f"CEA: critical μ = {crit['value']:.4g} (mode {crit['mode']}, coalescing with mode "
                        f"{crit['partner_mode']}, {crit['frequency']:.4g} Hz).")
-    axes = [a for a in ("normal_load", "sliding_velocity", "roughness_ra", "mu", "mu_static", "seed")
-            if any(a in p for p in summary["points"])]
+    axes = [a for a in ("normal_load", "sliding_velocity", "roughness_ra", "mu", "mu_static", "seed", "mesh",
+                        "time_step") if any(a in p for p in summary["points"])]
     cols = ["regime", "growth_rate", "cea_growth_rate", "frequency", "onset_time", "level_db", "status"]
     cols = [c for c in cols if any(c in p for p in summary["points"])]
     rows = [[p.get(a) for a in axes] + [p.get(c) for c in cols] for p in summary["points"]]
@@ -82,8 +82,9 @@ def study_section(page: Page, ds, summary: dict) -> None:
     if summary["failed"]:
         page.paragraph("Failed points: " + "; ".join(f"point {f['point']}: {f['error']}" for f in summary["failed"]),
                        cls="fail")
-    if ds.sizes.get("point", 0) and axes:
-        axis = axes[0]
+    varying = [a for a in axes if a in ds.coords and np.unique(ds[a].values).size > 1]
+    if ds.sizes.get("point", 0) and varying:
+        axis = varying[0]
         if "growth_rate" in ds:
             curve = None
             if "cea_mu" in ds.coords and axis == "mu":
@@ -96,6 +97,32 @@ def study_section(page: Page, ds, summary: dict) -> None:
                         "Response level of each point's steady part.", "levels")
     if "cea_mu" in ds.coords:
         page.figure(_cea_figure(ds), "CEA: frequencies and real parts of the eigenvalues against μ.", "CEA")
+    _convergence_tables(page, summary.get("convergence"))
+
+
+def _convergence_tables(page: Page, conv) -> None:
+    if not conv:
+        return
+    page.heading("Convergence", level=3)
+    for entry in conv.get("mesh", []):
+        h = ", ".join(f"{x * 1e3:.3g}" for x in entry["element_size"])
+        page.paragraph(f"Meshes of element size {h} mm at " + ", ".join(f"{k} {v:g}" for k, v in
+                                                                         entry["conditions"].items()) + ".")
+        rows = []
+        for name, items in (("mode", entry.get("mode_frequency", [])), ("level [dB]", [entry.get("level_db")]),
+                            ("dominant frequency [Hz]", [entry.get("response_frequency")])):
+            for it in items:
+                if it is None:
+                    continue
+                label = f"mode {it['mode']} [Hz]" if name == "mode" else name
+                rows.append([label, *(round(v, 6) for v in it["values"]), it["order"], it["extrapolated"],
+                             it["error"]])
+        page.raw(table(["quantity", "finest", "middle", "coarsest", "observed order", "extrapolated",
+                        "error of finest"], rows))
+    if conv.get("time_step"):
+        rows = [[", ".join(f"{k} {v:g}" for k, v in s["conditions"].items()), s["time_step"], s["reference_time_step"],
+                 s["lsd_db"], s["level_diff_db"]] for s in conv["time_step"]]
+        page.raw(table(["conditions", "step (x critical)", "reference step", "PSD LSD [dB]", "level diff [dB]"], rows))
 
 
 def render_study_report(path, study, ds, summary: dict):

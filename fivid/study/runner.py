@@ -138,6 +138,11 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
         ds = _assemble(study, table, files, done, cea)
         write_netcdf(ds, outdir / "study.nc")
         summary = _summary(study, table, ds, done, failed, cea, timing, wall, workers if scheduler is None else None)
+        from fivid.study.convergence import convergence_summary
+
+        conv = convergence_summary(ds, table, done)
+        if conv is not None:
+            summary["convergence"] = conv
         write_json(outdir / "summary.json", summary)
         from fivid.study.report import render_study_report
 

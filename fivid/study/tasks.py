@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["evaluate_point", "REGIMES"]
+__all__ = ["evaluate_point", "refined_model", "REGIMES"]
 
 REGIMES = ("stable", "mode_coupling", "stick_slip")
 
@@ -36,9 +36,8 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
         t, x, units, state = _lumped_transient(system["lumped"], tasks, conditions) if "transient" in tasks \
             else (None, None, None, None)
     else:
-        from fivid.fe import load_model
-
-        model = load_model(system["model_path"])
+        model = refined_model(system["model_path"], conditions.get("mesh", 1.0))
+        data["element_size"] = ((), _element_size(model), {"units": "m", "long_name": "largest element side"})
         if "modes" in tasks:
             from fivid.fe.modal import modal_analysis
 
@@ -112,6 +111,33 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
     return xr.Dataset(data, coords=coords)
 
 
+def refined_model(path, factor: float = 1.0):
+    """The FE model of ``path`` with every body's divisions multiplied by ``factor`` (rounded, at least 1; a full
+    ring keeps at least 3 around); ``factor`` 1 is the model as configured."""
+    from fivid.fe import load_model
+
+    if factor == 1.0:
+        return load_model(path)
+    from fivid.fe.config import read_config
+
+    data = read_config(path)[0]
+    for body in data["bodies"].values():
+        body["divisions"] = [max(3 if "annulus" in body and i == 0 else 1, int(round(float(d) * factor)))
+                             for i, d in enumerate(body["divisions"])]
+    data["name"] = f"{data.get('name', 'model')} (mesh x{factor:g})"
+    return load_model(data)
+
+
+def _element_size(model) -> float:
+    """Largest element side over the model [m] (the h of a convergence study)."""
+    h = 0.0
+    for block in model.blocks:
+        xy = block.element_corners().reshape(-1, 4, 2)
+        sides = np.roll(xy, -1, axis=1) - xy
+        h = max(h, float(np.max(np.hypot(sides[..., 0], sides[..., 1]))))
+    return h
+
+
 def _lumped_transient(spec, tasks, conditions):
     from fivid.study.lumped import HoffmannSystem
 
@@ -134,9 +160,11 @@ def _fe_transient(model, tasks, conditions):
         kw["law"] = load_law(tr["law"])
     elif "mu" in conditions:
         kw["mu"] = float(conditions["mu"])
-    for name in ("sliding_velocity", "normal_load", "roughness_ra"):
+    for name in ("sliding_velocity", "normal_load", "roughness_ra"):  # (mesh, time_step: the model and step)
         if name in conditions:
             kw[name] = float(conditions[name])
+    if "time_step" in conditions:
+        kw["safety"] = float(conditions["time_step"])
     ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"],
                   seed=int(conditions.get("seed", 0)), progress=False, **kw)
     steady = ds["time"].values >= ds.attrs["transient_end"]

@@ -56,7 +56,8 @@ def _run(args) -> int:
                   f"  CEA: critical mu {c['value']:.4g} at {c['frequency']:.4g} Hz")
         for p in summary["points"]:
             cond = ", ".join(f"{k} {v:g}" for k, v in p.items() if k in ("normal_load", "sliding_velocity",
-                                                                        "roughness_ra", "mu", "mu_static", "seed"))
+                                                                        "roughness_ra", "mu", "mu_static", "seed", "mesh",
+                                                                        "time_step"))
             print(f"  {cond}: {p.get('regime', p['status'])}")
     for f in summary["failed"]:
         print(f"  point {f['point']} failed: {f['error']}", file=sys.stderr)
