@@ -127,16 +127,17 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
                         failed[i] = error
                         log.warning("study %s: point %d %s failed: %s", study.name, i, table[i], error)
                     else:
-                        ds.attrs.update({"point": i, "seconds": seconds, "worker_pid": pid,
+                        ds.attrs.update({"Conventions": "CF-1.8", "point": i, "seconds": seconds, "worker_pid": pid,
                                          "study_digest": study.digest,
                                          **{f"condition_{k}": float(v) for k, v in table[i].items()}})
-                        write_netcdf(ds, files[i])
+                        write_netcdf(ds, files[i], encoding=_char_encoding(ds))
                     bar.update(1)
         wall = time.perf_counter() - started
         done = [i for i, f in enumerate(files) if f.exists()]
         cea = _study_cea(study)
         ds = _assemble(study, table, files, done, cea)
-        write_netcdf(ds, outdir / "study.nc")
+        # text variables as char arrays (CF has no variable-length strings), decoded back to str by xarray
+        write_netcdf(ds, outdir / "study.nc", encoding=_char_encoding(ds))
         summary = _summary(study, table, ds, done, failed, cea, timing, wall, workers if scheduler is None else None)
         from fivid.study.convergence import convergence_summary
 
@@ -148,6 +149,11 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
 
         render_study_report(outdir / "report.html", study, ds, summary)
     return summary
+
+
+def _char_encoding(ds) -> dict:
+    """Text variables as char arrays: CF has no variable-length strings (xarray decodes them back to str)."""
+    return {n: {"dtype": "S1"} for n in ds.variables if ds[n].dtype == object or ds[n].dtype.kind == "U"}
 
 
 def _study_cea(study):
@@ -189,7 +195,8 @@ def _assemble(study, table, files, done, cea):
         parts.append(part.assign_coords(point=i))
     if parts:
         ds = xr.concat(parts, dim="point", coords="minimal", compat="override", join="outer",
-                       combine_attrs="drop")
+                       combine_attrs="override")  # keeps the variables' units and long names (the first point's)
+        ds.attrs = {}
         for name in ("regime", "coupling"):  # netCDF gives fixed-width strings back: keep them whole
             if name in ds:
                 ds[name] = ds[name].astype(object)
@@ -199,18 +206,27 @@ def _assemble(study, table, files, done, cea):
         units, long = AXES[name]
         vals = np.array([table[i][name] for i in ds["point"].values.astype(int)])
         ds = ds.assign_coords({name: ("point", vals, {"units": units, "long_name": long})})
-    ds["point"].attrs["long_name"] = "sweep point index"
+    ds["point"].attrs.update(long_name="sweep point index", units="1")
+    for name, long in (("mode", "mode number, by frequency"), ("frequency", "frequency")):
+        if name in ds.coords:
+            ds[name].attrs.setdefault("long_name", long)
+    if "mode" in ds.coords:
+        ds["mode"].attrs.setdefault("units", "1")
     if cea is not None:
         lam = np.asarray(cea["eigenvalues"])
         ds = ds.assign_coords(cea_mu=("cea_mu", cea["mu"], {"units": "1", "long_name": "friction coefficient (CEA)"}),
-                              cea_mode=("cea_mode", np.arange(1, lam.shape[1] + 1)))
-        ds["cea_real_part"] = (("cea_mu", "cea_mode"), lam.real, {"units": "s-1", "long_name": "Re(lambda)"})
-        ds["cea_frequency"] = (("cea_mu", "cea_mode"), np.abs(lam.imag) / (2 * np.pi), {"units": "Hz"})
-        ds["cea_critical_mu"] = (("cea_mode",), np.asarray(cea["critical_mu"], dtype=float), {"units": "1"})
+                              cea_mode=("cea_mode", np.arange(1, lam.shape[1] + 1),
+                                        {"units": "1", "long_name": "CEA mode number, by frequency at the first mu"}))
+        ds["cea_real_part"] = (("cea_mu", "cea_mode"), lam.real,
+                               {"units": "s-1", "long_name": "real part of the eigenvalue (> 0: unstable)"})
+        ds["cea_frequency"] = (("cea_mu", "cea_mode"), np.abs(lam.imag) / (2 * np.pi),
+                               {"units": "Hz", "long_name": "damped frequency of the CEA mode"})
+        ds["cea_critical_mu"] = (("cea_mode",), np.asarray(cea["critical_mu"], dtype=float),
+                                 {"units": "1", "long_name": "friction coefficient at which the mode turns unstable"})
     from fivid import __version__
     from fivid.schema import new_history
 
-    ds.attrs.update({"title": f"fivid study {study.name}", "study": study.name, "description": study.description,
+    ds.attrs.update({"Conventions": "CF-1.8", "title": f"fivid study {study.name}", "study": study.name, "description": study.description,
                      "source": study.source, "quick": int(study.quick), "fivid_version": __version__,
                      "history": new_history(f"study {study.name}: {len(done)}/{len(table)} points")})
     return ds

@@ -45,7 +45,8 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
             ds = modal_analysis(model, tasks["modes"]["n_modes"], include_contact=load is not None and bool(model.contacts),
                                 normal_load=load)
             data["mode_frequency"] = (("mode",), ds["frequency"].values, {"units": "Hz", "long_name": "natural frequency"})
-            coords["mode"] = ("mode", np.arange(1, ds.sizes["mode"] + 1))
+            coords["mode"] = ("mode", np.arange(1, ds.sizes["mode"] + 1), {"units": "1",
+                                                                            "long_name": "mode number, by frequency"})
             if "coupling_bounds" in system:
                 from fivid.study.coupling import WEAK_STRONG_THRESHOLD, coupling_indicator
 
@@ -73,7 +74,8 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
         data.update({
             "regime": ((), np.array(a["regime"], dtype=object), {"long_name": "regime of the transient", "allowed": " ".join(REGIMES)}),
             "growth_rate": ((), a["growth_rate"], {"units": "s-1", "long_name": "envelope growth rate"}),
-            "growth_rate_stderr": ((), a["growth_rate_stderr"], {"units": "s-1"}),
+            "growth_rate_stderr": ((), a["growth_rate_stderr"], {"units": "s-1",
+                                                                 "long_name": "standard error of the growth rate"}),
             "onset_time": ((), a["onset_time"], {"units": "s", "long_name": "end of the linear growth phase"}),
             "response_frequency": ((), a["frequency"], {"units": "Hz",
                                                         "long_name": "dominant frequency of the last quarter"}),
@@ -107,7 +109,7 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
                 f, p = f[sel], p[sel]
             data["psd"] = (("frequency",), p, {"units": f"({units})^2 Hz-1", "long_name": "Welch PSD of the response",
                                                 "nperseg": n, "window": "hann", "noverlap": n // 2})
-            coords["frequency"] = ("frequency", f, {"units": "Hz"})
+            coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
     return xr.Dataset(data, coords=coords)
 
 
