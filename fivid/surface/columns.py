@@ -23,6 +23,7 @@ from fivid.units import conversion
 
 __all__ = ["read_profile_columns"]
 
+_WHITE_CELLS = re.compile(r"[^\s\[\]]+\s*\[[^\[\]]+\]")  # 'x [um]  z [nm]': a cell is 'name [unit]'
 _HEADER_CELL = re.compile(r"\s*(?P<name>[^\[\]]*?)\s*\[(?P<unit>[^\[\]]+)\]\s*")
 
 
@@ -82,7 +83,7 @@ def read_profile_columns(path, *, instrument: str = "unknown"):
     if h is None:
         raise SchemaError("no header line; expected a header such as 'x [um],z [um]'", file=path)
     sep = _delimiter(lines[h])
-    cells = lines[h].split(sep)
+    cells = lines[h].split(sep) if sep is not None else (_WHITE_CELLS.findall(lines[h]) or lines[h].split())
     if len(cells) < 2:
         raise SchemaError(f"header {lines[h].strip()!r} has {len(cells)} column(s); expected two, such as "
                           "'x [um],z [um]'", file=path, line=h + 1)

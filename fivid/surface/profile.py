@@ -52,12 +52,12 @@ def make_profile(x, z, *, attrs: dict | None = None, label: str = "profile"):
         bad = ~np.isfinite(v)
         if bad.any():
             i = int(np.argmax(bad))
-            raise DataQualityError(f"{label}: {name}[{i}] = {v[i]!r} is not finite")
+            raise DataQualityError(f"{label}: {name}[{i}] = {float(v[i])!r} is not finite")
     steps = np.diff(x)
     if not np.all(steps > 0):
         i = int(np.argmax(~(steps > 0))) + 1
         raise DataQualityError(
-            f"{label}: x is not strictly increasing at point {i}: x = {x[i]!r} m after {x[i - 1]!r} m"
+            f"{label}: x is not strictly increasing at point {i}: x = {float(x[i])!r} m after {float(x[i - 1])!r} m"
         )
     base = {"units": "m", "long_name": "surface height"}
     base.update(attrs or {})

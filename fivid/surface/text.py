@@ -111,7 +111,7 @@ def check_profile_rows(x: np.ndarray, line_numbers: np.ndarray, *, path, column:
     if bad.any():
         i = int(np.argmax(bad)) + 1
         raise DataQualityError(
-            f"x is not strictly increasing: {x[i]!r} after {x[i - 1]!r} (line {int(line_numbers[i - 1])}); "
+            f"x is not strictly increasing: {float(x[i])!r} after {float(x[i - 1])!r} (line {int(line_numbers[i - 1])}); "
             "rows must be sorted by x with no repeated position",
             file=path, line=int(line_numbers[i]), column=column,
         )
