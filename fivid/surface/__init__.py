@@ -19,6 +19,8 @@ from fivid.surface.gaussian_filter import gaussian_mean_line, gaussian_weights, 
 from fivid.surface.metrology import PARAMETER_UNITS, Evaluation, evaluate_profile
 from fivid.surface.profile import make_profile, sampling_step
 from fivid.surface.readers import read_profile
+from fivid.surface.statistics import autocorrelation, correlation_length, height_distribution, profile_psd
+from fivid.surface.synthesis import gaussian_random_profile, profile_from_psd
 from fivid.surface.x3p import read_x3p
 
 __all__ = [
@@ -37,4 +39,10 @@ __all__ = [
     "evaluate_profile",
     "Evaluation",
     "PARAMETER_UNITS",
+    "gaussian_random_profile",
+    "profile_from_psd",
+    "height_distribution",
+    "profile_psd",
+    "autocorrelation",
+    "correlation_length",
 ]
