@@ -22,7 +22,7 @@ import sys
 from fivid import __version__
 from fivid.errors import FividError
 
-__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
+__all__ = ["main", "build_parser", "integer_at_least", "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -36,6 +36,22 @@ _EPILOG = """\
 exit status: 0 ok, 2 bad input or configuration, 3 scores below thresholds (fivid run),
 1 unexpected failure, 130 interrupted.
 Run 'fivid COMMAND --help' for a command's options."""
+
+
+def integer_at_least(minimum: int):
+    """An argparse ``type``: an integer >= ``minimum``, refused (exit 2, option and value named) before any work."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or value < minimum:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text!r}")
+        return value
+
+    parse.__name__ = f"integer >= {minimum}"
+    return parse
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -19,7 +19,8 @@ import threading
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
-from fivid.io.data_checks import first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing
+from fivid.io.data_checks import (first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing,
+                                  time_without_resolution)
 from fivid.io.rig_header import RigHead, read_rig_head
 from fivid.io.rig_profile import RigProfile, load_rig_profile
 from fivid.schema import apply_cf_attrs, new_history, registry, validate_run
@@ -215,7 +216,11 @@ def _sample_rate(head: RigHead, lines: _Lines, time: np.ndarray) -> float:
             "only one data row; a run needs at least two samples", file=head.path, line=head.header_line,
         )
     column = _time_spec(head).name
-    for finding in (time_not_increasing(time), sampling_deviation(time, head.profile.sampling_tolerance)):
+    tolerance = head.profile.sampling_tolerance
+    checks = (lambda: time_without_resolution(time, tolerance), lambda: time_not_increasing(time),
+              lambda: sampling_deviation(time, tolerance))  # in order: each assumes the previous passed
+    for check in checks:
+        finding = check()
         if finding is not None:
             raise _fail(head, lines, finding, column=column)
     measured = nominal_sample_rate(time)
