@@ -124,6 +124,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"fivid {args.command}: interrupted", file=sys.stderr)
         return 130
+    except MemoryError as exc:  # a problem too large for this machine: its size is the input to change
+        print(f"fivid {args.command}: error: out of memory ({exc or 'MemoryError'}); make the problem smaller "
+              "(mesh divisions, duration, sample rate, number of runs)", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as exc:
         missing = _missing_optional(exc)
         if missing is not None:
