@@ -27,11 +27,17 @@ class Finding:
         What is wrong (without the location).
     previous : int or None
         A second sample index the message refers to (the sample before, for time steps).
+    severity : {"error", "warning"}
+        An error rejects the run; a warning goes into its ``quality_report`` (:mod:`fivid.io.plausibility`).
+    subject : str or None
+        The variable or metadata key concerned, when the finding does not come with its column.
     """
 
     index: int
     message: str
     previous: int | None = None
+    severity: str = "error"
+    subject: str | None = None
 
 
 def first_non_finite(values: np.ndarray) -> Finding | None:
