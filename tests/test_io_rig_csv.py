@@ -166,6 +166,9 @@ def test_profile_by_name_and_default_rig(tmp_path):
 # ---- round trip: CSV -> Dataset -> netCDF -> Dataset ----------------------------------------------
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False, allow_subnormal=False)
+# forces in the plausible range (fivid.io.plausibility): |F| <= 1e5 N and a normal force that is not reversed
+force = st.floats(min_value=-1e5, max_value=1e5, allow_nan=False, allow_infinity=False, allow_subnormal=False)
+normal = st.floats(min_value=0.0, max_value=1e5, allow_nan=False, allow_infinity=False, allow_subnormal=False)
 
 
 @settings(max_examples=25, deadline=None)
@@ -177,7 +180,7 @@ finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinit
 )
 def test_round_trip_csv_dataset_netcdf(n, sample_rate, t0, data):
     """Values written with repr() are read back bit for bit, and netCDF gives the identical Dataset."""
-    columns = [data.draw(st.lists(finite, min_size=n, max_size=n)) for _ in range(3)]
+    columns = [data.draw(st.lists(values, min_size=n, max_size=n)) for values in (finite, force, normal)]
     time = [t0 + i / sample_rate for i in range(n)]
     assume(all(b > a for a, b in zip(time, time[1:])))  # else steps vanish in float resolution
     rows = [",".join(repr(v) for v in row) for row in zip(time, *columns)]

@@ -113,3 +113,38 @@ def test_output_that_is_a_file_is_a_config_error(folder, tmp_path):
     with pytest.raises(ConfigError, match="is not a folder") as err:
         load_run_config(_config(folder), output=tmp_path / "taken")
     assert err.value.key == "output"
+
+
+# --- issue 18: a band above the simulated Nyquist frequency, and the line of every offending key -----
+
+
+def test_band_above_the_simulated_nyquist_frequency(folder):
+    path = _config(folder, "simulate: {duration: 0.1 s, sample_rate: 25.6 kHz}\n")
+    with pytest.raises(ConfigError) as info:
+        load_run_config(path)
+    err = info.value
+    assert err.file == str(path) and err.key == "analysis.band" and err.line == 5
+    assert "12800 Hz" in err.message and "simulate.sample_rate" in err.message
+
+
+@pytest.mark.parametrize("extra, key, line", [
+    ("thresholds:\n  lsd_db: {max: 4}\n  lsd: {max: 3}\n", "thresholds.lsd", 10),
+    ("modal:\n  n_modes: 0\n", "modal.n_modes", 9),
+    ("identify:\n  tolerance: 2\n", "identify.tolerance", 9),
+    ("simulat: {}\n", "simulat", 8),
+    ("identify:\n  band: [100 Hz, 2 kHz]\n  min_normal_force: 3 m\n", "identify.min_normal_force", 10),
+])
+def test_config_errors_carry_the_line(folder, extra, key, line):
+    path = _config(folder)
+    path.write_text(path.read_text() + extra)  # (_config dedents the whole text: multi-line extras would not parse)
+    with pytest.raises(ConfigError) as info:
+        load_run_config(path)
+    assert info.value.key == key and info.value.line == line
+    assert str(info.value).startswith(f"{path}:{line}: key {key!r}")
+
+
+def test_recipe_errors_carry_the_line(tmp_path):
+    path = _write(tmp_path / "recipe.yaml", "fivid-pipeline: 1\nname: x\nstages:\n  - ingest\n  - identfy\n")
+    with pytest.raises(ConfigError) as info:
+        load_recipe(path)
+    assert info.value.key == "stages[1]" and info.value.line == 5

@@ -22,7 +22,7 @@ import sys
 from fivid import __version__
 from fivid.errors import FividError
 
-__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
+__all__ = ["main", "build_parser", "integer_at_least", "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -36,6 +36,22 @@ _EPILOG = """\
 exit status: 0 ok, 2 bad input or configuration, 3 scores below thresholds (fivid run),
 1 unexpected failure, 130 interrupted.
 Run 'fivid COMMAND --help' for a command's options."""
+
+
+def integer_at_least(minimum: int):
+    """An argparse ``type``: an integer >= ``minimum``, refused (exit 2, option and value named) before any work."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or value < minimum:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text!r}")
+        return value
+
+    parse.__name__ = f"integer >= {minimum}"
+    return parse
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -108,6 +124,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"fivid {args.command}: interrupted", file=sys.stderr)
         return 130
+    except MemoryError as exc:  # a problem too large for this machine: its size is the input to change
+        print(f"fivid {args.command}: error: out of memory ({exc or 'MemoryError'}); make the problem smaller "
+              "(mesh divisions, duration, sample rate, number of runs)", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as exc:
         missing = _missing_optional(exc)
         if missing is not None:

@@ -117,25 +117,45 @@ def law_dataset(law, *, mu0_ci=None, confidence: float = 0.95, attrs: dict | Non
     return ds
 
 
-def law_from_dataset(ds, *, source: str = ""):
-    """The law object described by a law-file Dataset (see the module docstring)."""
+def _what_it_is(ds) -> str:
+    """What a Dataset that is no law file looks like it is, for the error message."""
+    if "run_id" in ds.attrs and "time" in ds.dims:
+        return (f"a RunDataset (run {str(ds.attrs['run_id'])!r}: time series as written by 'fivid ingest' or "
+                "'fivid simulate')")
+    names = ", ".join(list(map(str, ds.data_vars))[:6]) or "none"
+    return f"a netCDF file with variables {names} and no law attributes"
+
+
+def law_from_dataset(ds, *, source: str = "", file=None):
+    """The law object described by a law-file Dataset (see the module docstring).
+
+    Errors are :class:`~fivid.errors.SchemaError` located at ``file`` when given, else prefixed by
+    ``source``.
+    """
     where = source or "law dataset"
+
+    def error(text: str) -> SchemaError:
+        return SchemaError(text, file=file) if file is not None else SchemaError(f"{where}: {text}")
+
     kind = ds.attrs.get("law")
     version = ds.attrs.get("law_file_version")
+    if version is None:
+        raise error(f"not a fivid friction-law file: it has no 'law_file_version' attribute and is "
+                    f"{_what_it_is(ds)}; give the law file written by 'fivid identify ... -o LAW.nc'")
     if version != LAW_FILE_VERSION:
-        raise SchemaError(f"{where}: law_file_version {version!r}; this fivid reads version {LAW_FILE_VERSION}")
+        raise error(f"law_file_version {version!r}; this fivid reads version {LAW_FILE_VERSION}")
     if "mu0" not in ds:
-        raise SchemaError(f"{where}: variable 'mu0' is missing")
+        raise error("variable 'mu0' is missing")
     mu0 = float(ds["mu0"].values)
     injection = ds.attrs.get("injection", "uniform")
     if kind == "coulomb":
         return CoulombLaw(mu0, injection=injection)
     if kind != "perturbed_coulomb":
-        raise SchemaError(f"{where}: attribute law = {kind!r}; expected 'coulomb' or 'perturbed_coulomb'")
+        raise error(f"attribute law = {kind!r}; expected 'coulomb' or 'perturbed_coulomb'")
     missing = [v for v in ("shape", "amplitude_coefficient", "amplitude_stderr", "amplitude_covariance") if v not in ds]
     missing += [a for a in ("amplitude_form", "band_lower", "band_upper") if a not in ds.attrs]
     if missing:
-        raise SchemaError(f"{where}: missing {', '.join(missing)} (not a fivid law file?)")
+        raise error(f"missing {', '.join(missing)} (not a fivid law file?)")
     terms = tuple(t for t in str(ds.attrs.get("amplitude_terms", "")).split(",") if t)
     model = AmplitudeModel(
         form=str(ds.attrs["amplitude_form"]),
@@ -181,7 +201,7 @@ def load_law(path: str | os.PathLike):
     path = Path(path)
     ds = read_run(path, validate=False)  # the same opening and error messages as a run file
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    return law_from_dataset(ds, source=f"{path.name} sha256:{digest}")
+    return law_from_dataset(ds, source=f"{path.name} sha256:{digest}", file=path)
 
 
 def write_law(law_or_dataset, path: str | os.PathLike, *, overwrite: bool = False) -> Path:

@@ -96,7 +96,7 @@ class FrictionIdentification:
         for f in self.form_fits:
             if f.fitted:
                 r2 = f.diagnostics.get("r_squared")
-                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights[f.form]:.3f}  "
+                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights.get(f.form, float('nan')):.3f}  "
                              f"R2 {float('nan') if r2 is None else r2:.3f}")
             else:
                 lines.append(f"  {f.form:22s} not fitted: {f.reason}")
@@ -190,16 +190,31 @@ def _attr(v):
 
 
 def load_runs(runs) -> list:
-    """RunDatasets from a sequence of Datasets or netCDF paths (paths are read with :func:`fivid.io.read_run`)."""
+    """RunDatasets from a sequence of Datasets or netCDF paths (paths are read with :func:`fivid.io.read_run`).
+
+    Raises
+    ------
+    ConfigError
+        Two items are the same run (same ``run_id``), naming both.
+    """
     from fivid.io import read_run
     from fivid.schema import validate_run
 
-    out = []
+    out, where = [], {}
     for item in runs:
         if isinstance(item, (str, os.PathLike)):
-            out.append(read_run(item))
+            ds, name = read_run(item), str(item)
         else:
-            out.append(validate_run(item))
+            ds = validate_run(item)
+            name = f"the dataset from {ds.attrs['source']}" if ds.attrs.get("source") else "a dataset"
+        run_id = str(ds.attrs.get("run_id"))
+        if run_id in where:
+            first = where[run_id]
+            given = f"twice ({name})" if first == name else f"twice: {first} and {name}"
+            raise ConfigError(f"run_id {run_id!r} is given {given}; give each run once (a run counted twice would "
+                              "weigh double in mu0 and in the amplitude-law fit)", key="runs")
+        where[run_id] = name
+        out.append(ds)
     return out
 
 

@@ -11,7 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Finding", "first_non_finite", "time_not_increasing", "sampling_deviation", "nominal_sample_rate"]
+__all__ = ["Finding", "first_non_finite", "time_without_resolution", "time_not_increasing", "sampling_deviation",
+           "nominal_sample_rate"]
 
 
 @dataclass(frozen=True)
@@ -26,11 +27,17 @@ class Finding:
         What is wrong (without the location).
     previous : int or None
         A second sample index the message refers to (the sample before, for time steps).
+    severity : {"error", "warning"}
+        An error rejects the run; a warning goes into its ``quality_report`` (:mod:`fivid.io.plausibility`).
+    subject : str or None
+        The variable or metadata key concerned, when the finding does not come with its column.
     """
 
     index: int
     message: str
     previous: int | None = None
+    severity: str = "error"
+    subject: str | None = None
 
 
 def first_non_finite(values: np.ndarray) -> Finding | None:
@@ -41,6 +48,49 @@ def first_non_finite(values: np.ndarray) -> Finding | None:
     i = int(np.argmin(finite))
     n = int(values.size - np.count_nonzero(finite))
     return Finding(i, f"value {float(values[i])!r} is not a finite number ({n} non-finite value(s) in this column)")
+
+
+def time_without_resolution(time: np.ndarray, tolerance: float) -> Finding | None:
+    """A time column that cannot give a sample rate: all values equal, or stamps too coarse for the rate.
+
+    Stamps written with too few decimals for the rate (``'%.4f'`` at 51.2 kHz: a resolution of 100 µs
+    for a 19.5 µs step) repeat: several consecutive samples carry the same time. That is told apart
+    from a duplicated row by the smallest non-zero step (the resolution the times were written with)
+    being longer than the nominal step ``(t[-1] - t[0]) / (n - 1)`` by more than half. The decimals
+    asked for are those whose rounding error stays within ``tolerance`` of a step:
+    ``ceil(-log10(tolerance * dt))`` (7 at 51.2 kHz and 1 %).
+
+    Parameters
+    ----------
+    time : ndarray
+        Times [s], at least 2.
+    tolerance : float
+        The profile's ``checks.sampling_tolerance`` [-].
+    """
+    if time.size < 2:
+        return None
+    if time[-1] == time[0] and np.ptp(time) == 0:
+        return Finding(0, f"all {time.size} time values are {float(time[0]):.9g} s: the time column holds no time "
+                          "(a constant column mapped to time?); map the sample time to the time column")
+    steps = np.diff(time)
+    repeated = steps == 0
+    positive = steps[steps > 0]
+    if not repeated.any() or positive.size == 0:
+        return None
+    resolution = float(positive.min())
+    dt = float((time[-1] - time[0]) / (time.size - 1))
+    if not 0 < dt < resolution / 1.5:
+        return None  # isolated duplicates: time_not_increasing names them
+    i = int(np.argmax(repeated)) + 1
+    decimals = int(np.ceil(-np.log10(tolerance * dt)))
+    return Finding(
+        i,
+        f"time stamps repeat ({int(np.count_nonzero(repeated))} of {steps.size} steps are zero): the times are "
+        f"written with resolution {resolution:.3g} s, coarser than the sampling step {dt:.4g} s "
+        f"({1 / dt:.6g} Hz from the first and last time); write the time with at least {decimals} decimals "
+        f"(e.g. '%.{decimals}f') or export the sample index",
+        previous=i - 1,
+    )
 
 
 def time_not_increasing(time: np.ndarray) -> Finding | None:

@@ -19,7 +19,9 @@ import threading
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
-from fivid.io.data_checks import first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing
+from fivid.io.data_checks import (first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing,
+                                  time_without_resolution)
+from fivid.io.plausibility import plausibility_findings, quality_report
 from fivid.io.rig_header import RigHead, read_rig_head
 from fivid.io.rig_profile import RigProfile, load_rig_profile
 from fivid.schema import apply_cf_attrs, new_history, registry, validate_run
@@ -215,7 +217,11 @@ def _sample_rate(head: RigHead, lines: _Lines, time: np.ndarray) -> float:
             "only one data row; a run needs at least two samples", file=head.path, line=head.header_line,
         )
     column = _time_spec(head).name
-    for finding in (time_not_increasing(time), sampling_deviation(time, head.profile.sampling_tolerance)):
+    tolerance = head.profile.sampling_tolerance
+    checks = (lambda: time_without_resolution(time, tolerance), lambda: time_not_increasing(time),
+              lambda: sampling_deviation(time, tolerance))  # in order: each assumes the previous passed
+    for check in checks:
+        finding = check()
         if finding is not None:
             raise _fail(head, lines, finding, column=column)
     measured = nominal_sample_rate(time)
@@ -223,12 +229,33 @@ def _sample_rate(head: RigHead, lines: _Lines, time: np.ndarray) -> float:
     if stated is None:
         return measured
     if abs(stated - measured) > head.profile.sampling_tolerance * measured:
+        hint = ""
+        for factor in (1e-3, 1e3, 1e-6, 1e6):
+            if abs(measured / (stated * factor) - 1) <= head.profile.sampling_tolerance:
+                hint = (f"; the ratio is {factor:g}: the time column's unit {_time_spec(head).units!r} looks wrong by "
+                        "that factor (times in ms under a header in s give 0.001); correct the unit in the header")
         raise DataQualityError(
             f"the stated sample rate {stated:.9g} Hz ({head.attr_origin['sample_rate']}) does not match the time "
-            f"column, which gives {measured:.9g} Hz; tolerance {100 * head.profile.sampling_tolerance:.3g} %",
+            f"column, which gives {measured:.9g} Hz; tolerance {100 * head.profile.sampling_tolerance:.3g} %{hint}",
             file=head.path, key="sample_rate",
         )
     return float(stated)
+
+
+def _check_plausibility(head: RigHead, lines: _Lines, sample_rate: float, arrays: dict) -> str:
+    """Raise the first plausibility error (file, line, column or key); log the warnings; return the report."""
+    findings = plausibility_findings({**head.attrs, "sample_rate": sample_rate},
+                                     {name: values for name, (values, _) in arrays.items()})
+    for finding in findings:
+        if finding.severity == "error" and finding.subject in arrays:
+            column = ", ".join(spec.name for spec in arrays[finding.subject][1])
+            raise _fail(head, lines, finding, column=column)
+        if finding.severity == "error":
+            origin = head.attr_origin.get(finding.subject, "")
+            line = int(origin.split()[1]) if origin.startswith("line ") else None
+            raise DataQualityError(finding.message, file=head.path, line=line, key=finding.subject)
+        log.warning("%s: %s: %s", head.path, finding.subject, finding.message)
+    return quality_report(findings)
 
 
 def _history(head: RigHead, digest: str) -> str:
@@ -349,9 +376,11 @@ def read_rig_csv(path, profile=None):
             arrays[variable] = (values, [spec for _, spec in members])
         time = arrays.pop("time")[0]
         sample_rate = _sample_rate(head, lines, time)
+        report = _check_plausibility(head, lines, sample_rate, arrays)
     digest = sha.hexdigest()
     attrs = dict(head.attrs)
     attrs["sample_rate"] = sample_rate
+    attrs["quality_report"] = report
     attrs["source"] = f"{head.path.name} sha256:{digest}"
     attrs["history"] = _history(head, digest)
     data_vars, sensor_names = {}, None

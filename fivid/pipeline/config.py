@@ -37,6 +37,7 @@ __all__ = [
     "load_recipe",
     "load_run_config",
     "read_yaml",
+    "line_of_key",
 ]
 
 # Each stage kind and the stage kinds that must run before it (their outputs are its inputs).
@@ -139,8 +140,35 @@ def read_yaml(path: str | os.PathLike, what: str) -> tuple[dict, str]:
     return obj, hashlib.sha256(data).hexdigest()
 
 
+def line_of_key(path, key: str) -> int | None:
+    """The 1-based line of config ``key`` (``simulate.duration``) in the YAML file ``path``.
+
+    A key that is not in the file (a required one left out) gives the line of its closest parent;
+    None when there is none or the file cannot be read. Called only when reporting an error.
+    """
+    import re
+
+    import yaml
+
+    from fivid.fe.config import _compose_lines  # the model config's key -> line map, reused
+
+    lines: dict = {}
+    try:
+        _compose_lines(yaml.compose(Path(path).read_text(encoding="utf-8")), "", lines)
+    except (OSError, yaml.YAMLError, UnicodeDecodeError, AttributeError):  # AttributeError: an empty file
+        return None
+    while key:
+        if key in lines:
+            return lines[key]
+        key = re.sub(r"(\[\d+\]|\.?[^.\[]*)$", "", key, count=1)
+    return None
+
+
 class _Checker:
-    """Collects every problem of one file, each with its key path, and raises them together."""
+    """Collects every problem of one file, each with its key path, and raises them together.
+
+    The error carries the line of the (first) offending key, looked up in the YAML file's nodes.
+    """
 
     def __init__(self, file):
         self.file = file
@@ -191,8 +219,12 @@ class _Checker:
         key, msg = self.problems[0]
         more = ""
         if len(self.problems) > 1:
-            more = f" (and {len(self.problems) - 1} more: " + "; ".join(f"{k}: {m}" for k, m in self.problems[1:]) + ")"
-        raise ConfigError(msg + more, file=self.file, key=key)
+            def at(k):
+                line = line_of_key(self.file, k)
+                return k if line is None else f"{k} (line {line})"
+
+            more = f" (and {len(self.problems) - 1} more: " + "; ".join(f"{at(k)}: {m}" for k, m in self.problems[1:]) + ")"
+        raise ConfigError(msg + more, file=self.file, key=key, line=line_of_key(self.file, key))
 
 
 def load_recipe(path: str | os.PathLike) -> tuple[str, tuple[str, ...], str, dict]:
@@ -361,6 +393,10 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
     else:
         chk.add("simulate.seeds", f"must be a count in [1, 1000] or a list of distinct non-negative integers, got {seeds_raw!r}")
         seeds = (0,)
+    if sample_rate and band[1] > sample_rate / 2:
+        chk.add("analysis.band", f"upper edge {band[1]:g} Hz is above {sample_rate / 2:g} Hz, the Nyquist frequency of "
+                f"simulate.sample_rate = {sim.get('sample_rate', '51.2 kHz')!r}: the simulated PSD stops there; lower "
+                "the band's upper edge or raise simulate.sample_rate")
     if duration is not None and nperseg and sample_rate and (duration - (settle or 0.0)) * sample_rate < nperseg:
         chk.add("simulate.duration", f"{sim.get('duration')!r} less analysis.settle at {sample_rate:g} Hz gives "
                 f"fewer samples than analysis.nperseg = {nperseg}; lengthen it or lower nperseg")
@@ -383,6 +419,40 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
         identify=identify,
         n_modes=n_modes, duration=duration, sample_rate=sample_rate, seeds=seeds, thresholds=tuple(thresholds),
     )
+
+
+def _check_bands_against_inputs(cfg: RunConfig, stages) -> None:
+    """Refuse an identify or analysis band above the Nyquist frequency of an input file's stated sample rate.
+
+    Only the files' heads are read (:func:`fivid.io.read_rig_head`); a file whose head is bad, or that
+    states no sample rate, is left to the ingest stage to report.
+    """
+    from fivid.io import read_rig_head
+    from fivid.io.rig_csv import as_rig_profile
+
+    profile = as_rig_profile(cfg.rig_profile)
+    rates = {}
+    for path in cfg.input_files:
+        try:
+            rate = read_rig_head(path, profile).attrs.get("sample_rate")
+        except FividError:
+            continue
+        if rate:
+            rates[path] = float(rate)
+    if not rates:
+        return
+    slowest = min(rates, key=rates.get)
+    nyquist = rates[slowest] / 2
+    bands = [("analysis.band", cfg.band)] if "score" in stages else []
+    if "identify" in stages and "band" in cfg.identify:
+        bands.append(("identify.band", cfg.identify["band"]))
+    for key, (_, hi) in bands:
+        if hi > nyquist:
+            n = sum(r / 2 < hi for r in rates.values())
+            raise ConfigError(
+                f"upper edge {hi:g} Hz is above {nyquist:g} Hz, the Nyquist frequency of input file {slowest.name} "
+                f"(sample_rate {rates[slowest]:g} Hz; {n} of {len(rates)} input file(s) are too slow); lower the "
+                "band's upper edge", file=cfg.path, key=key, line=line_of_key(cfg.path, key))
 
 
 def load_plan(recipe: str | os.PathLike, config: str | os.PathLike | None = None, *,
@@ -410,6 +480,8 @@ def load_plan(recipe: str | os.PathLike, config: str | os.PathLike | None = None
     cfg = load_run_config(config, output=output)
     if "ingest" in stages and not cfg.input_files:
         raise ConfigError("no input files", file=config, key="inputs.folder")
+    if "ingest" in stages:
+        _check_bands_against_inputs(cfg, stages)
     if cfg.rig_profile is not None and "ingest" in stages:
         try:
             from fivid.io import load_rig_profile

@@ -182,6 +182,10 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
     summary : dict
         The content of ``summary.json`` (empty for a dry run).
     """
+    if scheduler is not None:  # before any work: a bad address used to fail after three stages
+        from fivid.pipeline.sweep import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     out = plan.config.output
     ctx = Context(plan=plan, out=out, cache=TaskCache(out), workers=workers, scheduler=scheduler, force=force,
                   dry_run=dry_run, progress=progress)

@@ -19,9 +19,67 @@ import logging
 import os
 import time
 
-__all__ = ["dask_client", "simulate_condition", "run_simulations", "map_tasks"]
+__all__ = ["dask_client", "check_scheduler_address", "simulate_condition", "run_simulations", "map_tasks",
+           "SCHEDULER_SCHEMES"]
+
+#: address schemes of dask.distributed's comm backends that reach a scheduler over the network
+SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
 
 log = logging.getLogger("fivid")
+
+
+def check_scheduler_address(address: str, *, timeout: float = 3.0) -> str:
+    """Check a dask scheduler address before any work: its form, then that something listens there.
+
+    Parameters
+    ----------
+    address : str
+        ``tcp://HOST:PORT`` (or ``tls``, ``ws``, ``wss``, ``ucx``), as ``dask scheduler`` prints it.
+    timeout : float
+        Seconds to wait for a TCP connection [s]: a scheduler on a reachable host answers within
+        milliseconds, and 3 s covers a slow network without making a typo cost long.
+
+    Returns
+    -------
+    str
+        ``address`` unchanged.
+
+    Raises
+    ------
+    ConfigError
+        The address is malformed (naming what is wrong and the expected form) or nothing accepts a
+        connection there (naming the host, port and the reason).
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    from fivid.errors import ConfigError
+
+    form = "tcp://HOST:PORT, e.g. tcp://10.0.0.5:8786 as 'dask scheduler' prints it"
+    text = str(address).strip()
+    parts = urlsplit(text) if "://" in text else None
+    if parts is None:
+        raise ConfigError(f"{text!r} is not a dask scheduler address; expected {form} (leave --scheduler out "
+                          "for a local cluster)", key="--scheduler")
+    if parts.scheme not in SCHEDULER_SCHEMES:
+        raise ConfigError(f"{text!r}: scheme {parts.scheme!r} is not a dask scheme ({', '.join(SCHEDULER_SCHEMES)}); "
+                          f"expected {form}", key="--scheduler")
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if not parts.hostname or port is None or parts.path not in ("", "/"):
+        raise ConfigError(f"{text!r} needs a host and a port number; expected {form}", key="--scheduler")
+    if parts.scheme == "ucx":  # not a TCP socket: left to distributed
+        return address
+    try:
+        socket.create_connection((parts.hostname, port), timeout=timeout).close()
+    except OSError as exc:
+        reason = "timed out" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc))
+        raise ConfigError(f"no dask scheduler answers at {text} ({parts.hostname} port {port}: {reason} within "
+                          f"{timeout:g} s); start one with 'dask scheduler' and workers with 'dask worker {text}', "
+                          "or leave --scheduler out for a local cluster", key="--scheduler") from None
+    return address
 
 
 @contextlib.contextmanager

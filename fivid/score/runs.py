@@ -32,7 +32,7 @@ from fivid.score.uncertainty import (
 from fivid.signal.levels import bin_weights, third_octave_weights
 from fivid.signal.resample import resample_to
 from fivid.signal.sampling import run_label, sample_rate_of
-from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, segment_window
+from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, check_nperseg, segment_window
 from fivid.signal.steady import steady_sliding_window
 from fivid.signal.welch import welch_psd
 
@@ -151,6 +151,7 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     """
     from scipy.stats import norm
 
+    nperseg = check_nperseg(nperseg)
     lm, ls = _label(measured, "measured"), _label(simulated, "simulated")
     if steady:
         measured, simulated = _crop_steady(measured, lm), _crop_steady(simulated, ls)

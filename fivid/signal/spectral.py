@@ -25,6 +25,7 @@ from fivid.signal.fft import SegmentTransform
 
 __all__ = [
     "DETRENDS",
+    "check_nperseg",
     "segment_window",
     "segment_count",
     "SpectralSettings",
@@ -66,6 +67,13 @@ def segment_count(n: int, nperseg: int, noverlap: int) -> int:
     return (n - noverlap) // (nperseg - noverlap)
 
 
+def check_nperseg(nperseg) -> int:
+    """``nperseg`` as an int; :class:`~fivid.errors.ConfigError` unless it is an integer >= 2 [samples]."""
+    if isinstance(nperseg, bool) or int(nperseg) != nperseg or nperseg < 2:
+        raise ConfigError(f"nperseg must be an integer >= 2, got {nperseg!r}", key="nperseg")
+    return int(nperseg)
+
+
 @dataclass(frozen=True)
 class SpectralSettings:
     """Welch settings, all explicit.
@@ -99,8 +107,7 @@ class SpectralSettings:
     def __post_init__(self):
         if not (np.isfinite(self.fs) and self.fs > 0):
             raise ConfigError(f"sampling rate must be a positive number of Hz, got {self.fs!r}", key="fs")
-        if int(self.nperseg) != self.nperseg or self.nperseg < 2:
-            raise ConfigError(f"nperseg must be an integer >= 2, got {self.nperseg!r}", key="nperseg")
+        check_nperseg(self.nperseg)
         if int(self.noverlap) != self.noverlap or not 0 <= self.noverlap < self.nperseg:
             raise ConfigError(
                 f"noverlap must be an integer in [0, nperseg) = [0, {self.nperseg}), got {self.noverlap!r}",

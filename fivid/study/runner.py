@@ -100,6 +100,10 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
     from fivid.pipeline.lock import OutputLock
     from fivid.storage import write_json, write_netcdf
 
+    if scheduler is not None:  # before any work or output
+        from fivid.pipeline.sweep import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     outdir = Path(outdir)
     started = time.perf_counter()
     with OutputLock(outdir):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fivid.cli import integer_at_least
+
 __all__ = ["register"]
 
 _DESCRIPTION = """\
@@ -26,7 +28,7 @@ def register(subparsers) -> None:
                    help="valid band [Hz] (default 20 Hz to min(2 kHz, 0.4 fs): where the force chain is trustworthy)")
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
     p.add_argument("--report", metavar="REPORT.json", help="also write the JSON report to this file")
-    p.add_argument("--nperseg", type=int, help="Welch segment length [samples] (default per run: bins <= mains/4, e.g. 12.5 Hz at 50 Hz, so that "
+    p.add_argument("--nperseg", type=integer_at_least(2), help="Welch segment length [samples] (default per run: bins <= mains/4, e.g. 12.5 Hz at 50 Hz, so that "
                    "mains-line removal takes only the lines, with >= 7 segments; see docs/identification.md)")
     p.add_argument("--tolerance", type=float, default=0.05,
                    help="relative velocity tolerance of the steady-sliding window (default 0.05)")
@@ -102,24 +104,23 @@ def _run(args) -> int:
         report["damping"] = damping.to_json()
     if args.inverse:
         report["inverse"] = _inverse(args, result, model, datasets)
+    text = dumps_json(report)
+    if args.json:  # everything printed is built before anything is written: no output of a failed command
+        printed = [text]
+    else:
+        printed = [result.summary()] + ([damping.summary()] if damping is not None else [])
+        printed += [f"inverse route, run {inv['run_id']}: amplitude forward {inv['forward_amplitude']:.4g}, inverse "
+                    f"{inv['inverse_amplitude']:.4g} (scale {inv['scale']:.3g}; {inv['reason']})"
+                    for inv in report.get("inverse", [])]
+        printed.append(f"wrote {args.output}")
     result.write(args.output, overwrite=args.overwrite)
     log.info("wrote %s", args.output)
     if damping is not None:
         write_text(args.damping, damping.to_yaml(), overwrite=args.overwrite)
         log.info("wrote %s", args.damping)
-    text = dumps_json(report)
     if args.report:
         write_text(args.report, text + "\n", overwrite=args.overwrite)
-    if args.json:
-        print(text)
-    else:
-        print(result.summary())
-        if damping is not None:
-            print(damping.summary())
-        for inv in report.get("inverse", []):
-            print(f"inverse route, run {inv['run_id']}: amplitude forward {inv['forward_amplitude']:.4g}, inverse "
-                  f"{inv['inverse_amplitude']:.4g} (scale {inv['scale']:.3g}; {inv['reason']})")
-        print(f"wrote {args.output}")
+    print("\n".join(printed))
     return 0
 
 

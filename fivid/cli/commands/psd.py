@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from fivid.cli import integer_at_least
+
 __all__ = ["register", "run"]
 
 _DESCRIPTION = """\
@@ -26,7 +28,7 @@ def register(subparsers) -> None:
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("run_path", metavar="RUN.nc", help="a RunDataset netCDF file (fivid ingest / simulate)")
     parser.add_argument("--variable", default="acceleration", help="variable to analyse (default: acceleration)")
-    parser.add_argument("--nperseg", type=int, default=8192, metavar="N",
+    parser.add_argument("--nperseg", type=integer_at_least(2), default=8192, metavar="N",
                         help="segment length [samples] (default 8192); resolution = sample rate / N")
     parser.add_argument("--noverlap", type=int, default=None, metavar="N",
                         help="segment overlap [samples] (default N/2)")

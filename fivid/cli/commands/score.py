@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from fivid.cli import integer_at_least
+
 __all__ = ["register", "run"]
 
 _DESCRIPTION = """\
@@ -32,7 +34,7 @@ def register(subparsers) -> None:
     parser.add_argument("--variable", default="acceleration", help="variable to compare (default: acceleration)")
     parser.add_argument("--band", nargs=2, type=float, default=None, metavar=("F_LO", "F_HI"),
                         help="frequency band [Hz] (default: 4 PSD bins to 80%% of the lower Nyquist frequency)")
-    parser.add_argument("--nperseg", type=int, default=8192, metavar="N", help="Welch segment length (default 8192)")
+    parser.add_argument("--nperseg", type=integer_at_least(2), default=8192, metavar="N", help="Welch segment length (default 8192)")
     parser.add_argument("--sensor", default=None, help="sensor name when the variable has several")
     parser.add_argument("--steady", action="store_true", help="score only each run's steady-sliding window")
     parser.add_argument("--confidence", type=float, default=0.95,

@@ -36,6 +36,8 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", metavar="SIM.nc", required=True, help="output RunDataset (netCDF)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
+    p.add_argument("--dry-run", action="store_true",
+                   help="check the settings, print the solver steps and the memory estimate; simulate nothing")
     p.set_defaults(func=run)
 
 
@@ -44,8 +46,8 @@ def run(args) -> int:
     import numpy as np
 
     from fivid.errors import FividError
-    from fivid.fe import load_model
     from fivid.io import write_run
+    from fivid.pipeline.resources import check_simulation_memory, simulation_memory
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
     from fivid.units import parse_quantity
@@ -58,7 +60,8 @@ def run(args) -> int:
         except FividError as exc:
             raise type(exc)(f"{option}: {exc.message}") from None
 
-    check_writable(args.output, overwrite=args.overwrite)
+    if not args.dry_run:
+        check_writable(args.output, overwrite=args.overwrite)
     law = None
     if args.law:
         try:
@@ -66,7 +69,14 @@ def run(args) -> int:
         except ImportError:
             raise FividError("--law needs fivid.friction (friction laws), which this installation lacks") from None
         law = load_law(args.law)
-    model = load_model(args.model)
+    model = _load_model(args.model)
+    duration, sample_rate = q(args.duration, "s", "--duration"), q(args.sample_rate, "Hz", "--sample-rate")
+    time_step = q(args.time_step, "s", "--time-step")
+    size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
+    check_simulation_memory(size)  # before any allocation: a year of records fails here, not in the kernel
+    if args.dry_run:
+        print(f"{model.describe()}: {size.describe()}")
+        return 0
     ds = simulate(
         model,
         law=law,
@@ -74,10 +84,10 @@ def run(args) -> int:
         sliding_velocity=q(args.velocity, "m s-1", "--velocity"),
         normal_load=q(args.load, "N", "--load"),
         roughness_ra=q(args.roughness, "m", "--roughness"),
-        duration=q(args.duration, "s", "--duration"),
-        sample_rate=q(args.sample_rate, "Hz", "--sample-rate"),
+        duration=duration,
+        sample_rate=sample_rate,
         seed=args.seed,
-        time_step=q(args.time_step, "s", "--time-step"),
+        time_step=time_step,
         run_id=args.run_id,
     )
     from fivid.schema import append_history
@@ -104,6 +114,21 @@ def run(args) -> int:
               f"{summary['mean_normal_force_n']:.4g} N, friction force {summary['mean_friction_force_n']:.4g} N")
         print(f"written {args.output} ({summary['samples']} samples)", file=sys.stderr)
     return 0
+
+
+def _load_model(path):
+    """The model of ``path``; a mesh too large for this machine is a ConfigError naming the file."""
+    from fivid.errors import ConfigError
+    from fivid.fe import load_model
+    from fivid.pipeline.resources import available_memory, format_bytes
+
+    try:
+        return load_model(path)
+    except MemoryError as exc:
+        free = available_memory()
+        have = "" if free is None else f"; {format_bytes(free[0])} available ({free[1]})"
+        raise ConfigError(f"not enough memory to build the mesh ({exc}){have}; lower the bodies' divisions",
+                          file=path) from None
 
 
 # option -> attribute of the parsed arguments, in the order of the help (for the history line)

@@ -1,0 +1,139 @@
+"""Plausibility of ingested rig data (issue 18 B): errors where the data cannot be right, warnings in the
+dataset's quality report otherwise; each names the file, the variable or key, the value and the range."""
+
+import logging
+
+import numpy as np
+import pytest
+from ingest_helpers import GOOD_META, N_META_LINES, data_line, rig_rows, with_field, write_rig
+
+from fivid.errors import DataQualityError
+from fivid.io import read_rig_csv
+from fivid.io.plausibility import CLIP_RUN, MAX_FORCE
+
+FN, FT, ACC = 3, 2, 1  # field indices of normal_force, friction_force, acceleration in rig_rows()
+
+
+def _rows(n=400, **fields):
+    rows = rig_rows(n)
+    for index, fn in fields.items():
+        rows = [with_field(r, {"fn": FN, "ft": FT, "acc": ACC}[index], fn(i, r)) for i, r in enumerate(rows)]
+    return rows
+
+
+def _reject(tmp_path, **kw) -> DataQualityError:
+    path = write_rig(tmp_path / "run.csv", **kw)
+    with pytest.raises(DataQualityError) as info:
+        read_rig_csv(path)
+    assert info.value.file == str(path)
+    return info.value
+
+
+def _report(tmp_path, caplog, **kw) -> str:
+    path = write_rig(tmp_path / "run.csv", **kw)
+    with caplog.at_level(logging.WARNING, logger="fivid"):
+        ds = read_rig_csv(path)
+    return ds.attrs["quality_report"]
+
+
+def test_plausible_rows_pass(tmp_path, caplog):
+    report = _report(tmp_path, caplog)
+    assert report.startswith("plausibility") and "passed" in report
+    assert not caplog.records
+
+
+@pytest.mark.parametrize("name", ["R001_v10_ra08.csv"])
+def test_shipped_sample_is_plausible(root, name, caplog):
+    with caplog.at_level(logging.WARNING, logger="fivid"):
+        ds = read_rig_csv(root / "sample_data" / name)
+    assert "passed" in ds.attrs["quality_report"] and not caplog.records
+
+
+def test_shipped_twin_is_plausible(root, caplog):
+    with caplog.at_level(logging.WARNING, logger="fivid"):
+        for path in sorted((root / "sample_data" / "twin").glob("*.csv")):
+            assert "passed" in read_rig_csv(path).attrs["quality_report"]
+    assert not caplog.records
+
+
+def test_absurd_force_is_an_error(tmp_path):
+    rows = _rows(ft=lambda i, r: "1e30" if i == 7 else r.split(",")[FT])
+    err = _reject(tmp_path, rows=rows)
+    assert err.column == "friction_force" and err.line == data_line(7)
+    assert "1e+30 N" in err.message and f"{MAX_FORCE:g} N" in err.message
+
+
+def test_absurd_acceleration_is_an_error(tmp_path):
+    rows = _rows(acc=lambda i, r: "2e5" if i == 3 else r.split(",")[ACC])  # 2e5 g = 2e6 m s-2
+    err = _reject(tmp_path, rows=rows)
+    assert err.column == "acceleration" and "m s-2" in err.message
+
+
+@pytest.mark.parametrize("ra", ["0 um", "-0.8 um"])
+def test_roughness_not_positive_is_an_error(tmp_path, ra):
+    err = _reject(tmp_path, meta={**GOOD_META, "roughness_ra": ra})
+    assert err.key == "roughness_ra" and err.line == 1 + list(GOOD_META).index("roughness_ra") + 1
+    assert "> 0" in err.message
+
+
+def test_negative_normal_load_header_is_an_error(tmp_path):
+    err = _reject(tmp_path, meta={**GOOD_META, "normal_load": "-5 N"})
+    assert err.key == "normal_load" and "-5 N" in err.message
+
+
+def test_reversed_normal_force_sign_is_an_error(tmp_path):
+    rows = _rows(fn=lambda i, r: "-" + r.split(",")[FN])
+    err = _reject(tmp_path, rows=rows)
+    assert err.column == "normal_force" and "sign" in err.message and "+5 N" in err.message
+
+
+def test_load_mismatch_is_a_warning(tmp_path, caplog):
+    report = _report(tmp_path, caplog, meta={**GOOD_META, "normal_load": "50 N"})
+    assert "warning: normal_force:" in report and "50 N" in report and "20%" in report
+    assert any("normal_force" in r.getMessage() for r in caplog.records)
+
+
+def test_friction_coefficient_outside_range_is_a_warning(tmp_path, caplog):
+    rows = _rows(ft=lambda i, r: f"{15.0 + 0.01 * (i % 3):.4f}")  # mu = 3
+    report = _report(tmp_path, caplog, rows=rows)
+    assert "warning: friction_force:" in report and "[0, 2]" in report and "Ft/Fn = 2.9" in report
+
+
+def test_clipped_acceleration_is_a_warning(tmp_path, caplog):
+    top = "0.5000"
+    rows = _rows(acc=lambda i, r: top if 100 <= i < 100 + CLIP_RUN + 2 else r.split(",")[ACC])
+    report = _report(tmp_path, caplog, rows=rows)
+    assert "warning: acceleration:" in report and "clipped" in report and "maximum" in report
+
+
+def test_single_peak_is_not_clipping(tmp_path, caplog):
+    rows = _rows(acc=lambda i, r: "0.5000" if i == 100 else r.split(",")[ACC])
+    assert "passed" in _report(tmp_path, caplog, rows=rows)
+
+
+def test_velocity_mismatch_is_a_warning(tmp_path, caplog):
+    header = "time [s],acceleration [g],friction_force [N],normal_force [N],position [mm],velocity [mm/s]"
+    rows = [r + ",1.0" for r in rig_rows(100)]  # 1 mm/s measured, 10 mm/s in the header
+    report = _report(tmp_path, caplog, rows=rows, header=header)
+    assert "warning: velocity:" in report and "-90 %" in report
+
+
+def test_low_sample_rate_is_a_warning(tmp_path, caplog):
+    rows = [with_field(r, 0, f"{i * 1e-3 * 51.2:.9f}") for i, r in enumerate(rig_rows(100))]  # ms under 's'
+    report = _report(tmp_path, caplog, rows=rows)
+    assert "warning: sample_rate:" in report and "ms" in report
+
+
+def test_time_in_ms_labelled_s_against_the_stated_rate(tmp_path):
+    rows = [with_field(r, 0, f"{1e3 * i / 51200:.9f}") for i, r in enumerate(rig_rows(100))]
+    err = _reject(tmp_path, rows=rows, extra_meta=["# sample_rate: 51.2 kHz"])
+    assert err.key == "sample_rate" and "ratio is 0.001" in err.message
+
+
+def test_report_survives_netcdf(tmp_path):
+    from fivid.io import read_run, write_run
+
+    ds = read_rig_csv(write_rig(tmp_path / "run.csv"))
+    back = read_run(write_run(ds, tmp_path / "run.nc"))
+    assert back.attrs["quality_report"] == ds.attrs["quality_report"]
+    assert N_META_LINES and np.isfinite(back["normal_force"].values).all()
