@@ -370,6 +370,7 @@ def cea_to_json(ds) -> dict:
         "damping": bool(ds.attrs["damping"]),
         "normal_load_n": float(ds.attrs["normal_load"]),
         "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist(),
+        "contact": __import__("json").loads(ds.attrs.get("contact_summary", "[]")),
         "model": ds.attrs["model"],
         "model_source": ds.attrs["model_source"],
     }

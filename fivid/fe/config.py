@@ -445,6 +445,166 @@ def _point_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[int, dict
     return int(block.node_offset + k), m
 
 
+def _point(ctx, value, key) -> np.ndarray:
+    return np.array([_quantity(ctx, v, f"{key}[{j}]", "m") for j, v in enumerate(_list(ctx, value, key, 2))])
+
+
+def _contact(ctx, spec, key, blocks):
+    """One ``contacts`` item: slave edge against a master edge or a rigid surface, with its laws."""
+    from fivid.contact import TangentialLaw
+
+    m = _mapping(ctx, spec, key, {"name": "required", "slave": "required", "master": "optional",
+                                  "rigid": "optional", "mu": "required", "mu_static": "optional",
+                                  "stribeck_velocity": "optional", "viscous": "optional",
+                                  "normal": "optional", "normal_stiffness": "optional"})
+    sb, snodes, _ = _edge_ref(ctx, blocks, m["slave"], f"{key}.slave", {})
+    if ("master" in m) == ("rigid" in m):
+        raise ctx.error(key, "give either 'master' (an edge of another body) or 'rigid' (a rigid line or circle)")
+    rigid = None
+    mb = None
+    if "master" in m:
+        mb, mnodes, _ = _edge_ref(ctx, blocks, m["master"], f"{key}.master", {})
+        if sb is mb:
+            raise ctx.error(f"{key}.master", "slave and master must be edges of different bodies")
+        if mnodes.size < 2:
+            raise ctx.error(f"{key}.master", "the master edge needs at least 2 nodes (one segment)")
+    else:
+        rigid = _rigid_surface(ctx, m["rigid"], f"{key}.rigid")
+        mnodes = np.zeros(0, dtype=np.int64)
+    mu = _quantity(ctx, m["mu"], f"{key}.mu", "dimensionless", nonnegative=True)
+    mu_s = _quantity(ctx, m.get("mu_static", mu), f"{key}.mu_static", "dimensionless", nonnegative=True)
+    if mu_s < mu:
+        raise ctx.error(f"{key}.mu_static", f"the static coefficient ({mu_s:g}) must be >= the kinetic mu ({mu:g})")
+    friction = TangentialLaw(
+        mu_static_excess=mu_s - mu,
+        stribeck_velocity=_quantity(ctx, m.get("stribeck_velocity", 0.0), f"{key}.stribeck_velocity", "m s-1",
+                                    nonnegative=True),
+        viscous=_quantity(ctx, m.get("viscous", 0.0), f"{key}.viscous", "s m-1", nonnegative=True))
+    if friction.stribeck_velocity > 0 and friction.mu_static_excess == 0:
+        raise ctx.error(f"{key}.stribeck_velocity", "a Stribeck curve needs mu_static > mu (it decays from mu_static "
+                                                    "to mu)")
+    if "normal_stiffness" in m:
+        kn = _quantity(ctx, m["normal_stiffness"], f"{key}.normal_stiffness", "N m-3", positive=True)
+    else:  # 10 x the slave body's own normal stiffness per unit area E/D (D: its depth normal to the edge):
+        # stiff against the body, and independent of the mesh (an element-size penalty is not)
+        edge = m["slave"]["edge"]
+        c = sb.corners
+        if edge in ("bottom", "top"):
+            depth = np.hypot(*(c[3] - c[0]))
+        elif edge in ("left", "right"):
+            depth = np.hypot(*(c[1] - c[0]))
+        else:  # annulus: the wall
+            depth = float(np.ptp(np.hypot(*(sb.coords.reshape(-1, 2) - sb.coords.reshape(-1, 2).mean(0)).T)))
+        kn = 10.0 * sb.material.E / float(depth)
+    law = _normal_law(ctx, m.get("normal"), f"{key}.normal", sb, mb)
+    return fm.ContactPair(_name(ctx, m["name"], f"{key}.name"), sb.name, snodes, mb.name if mb else "", mnodes, mu,
+                          kn, law=law, friction=friction, rigid=rigid)
+
+
+def _normal_law(ctx, spec, key, slave_block, master_block):
+    """``normal: {law: rigid | linear | power | greenwood-williamson, ...}`` -> NormalLaw."""
+    from fivid.contact import GreenwoodWilliamson, NormalLaw, composite_modulus
+    from fivid.errors import ConfigError
+
+    if spec is None:
+        return NormalLaw()
+    if isinstance(spec, str):
+        spec = {"law": spec}
+    m = _mapping(ctx, spec, key, {"law": "required", "stiffness": "optional", "coefficient": "optional",
+                                  "exponent": "optional", "sigma": "optional", "asperity_radius": "optional",
+                                  "asperity_density": "optional", "e_star": "optional", "pressure_range": "optional",
+                                  "max_pressure": "optional", "fit": "optional"})
+    kind = _choice(ctx, m["law"], f"{key}.law", ("rigid", "linear", "power", "greenwood-williamson"))
+    need = {"rigid": (), "linear": ("stiffness",), "power": ("coefficient", "exponent"),
+            "greenwood-williamson": ("sigma", "asperity_radius", "asperity_density")}[kind]
+    for k in need:
+        if k not in m:
+            raise ctx.error(f"{key}.{k}", f"the {kind} law needs '{k}' (see docs/model-config.md, contacts)")
+    extra = set(m) - {"law", *need, *({"e_star", "pressure_range", "max_pressure", "fit"}
+                                      if kind == "greenwood-williamson" else ())}
+    if extra:
+        raise ctx.error(f"{key}.{sorted(extra)[0]}", f"not a parameter of the {kind} law; it takes "
+                                                     f"{', '.join(need) or 'no parameters'}")
+    try:
+        if kind == "rigid":
+            return NormalLaw()
+        if kind == "linear":
+            return NormalLaw("linear", _quantity(ctx, m["stiffness"], f"{key}.stiffness", "N m-3", positive=True))
+        if kind == "power":
+            n = _quantity(ctx, m["exponent"], f"{key}.exponent", "dimensionless", positive=True)
+            c = _quantity(ctx, m["coefficient"], f"{key}.coefficient", f"Pa / m**{n!r}", positive=True)
+            return NormalLaw("power", c, n, "given")
+        mats = [slave_block.material] + ([master_block.material] if master_block is not None else [])
+        e_star = (_quantity(ctx, m["e_star"], f"{key}.e_star", "Pa", positive=True) if "e_star" in m
+                  else composite_modulus(*mats))
+        gw = GreenwoodWilliamson(
+            sigma=_quantity(ctx, m["sigma"], f"{key}.sigma", "m", positive=True),
+            radius=_quantity(ctx, m["asperity_radius"], f"{key}.asperity_radius", "m", positive=True),
+            density=_quantity(ctx, m["asperity_density"], f"{key}.asperity_density", "m-2", positive=True),
+            e_star=e_star)
+        fit = _choice(ctx, m.get("fit", "none"), f"{key}.fit", ("none", "power"))
+        if fit == "none":
+            if "pressure_range" in m:
+                raise ctx.error(f"{key}.pressure_range", "pressure_range is the range of 'fit: power'; the exact "
+                                                         "(tabulated) law takes max_pressure")
+            p_max = _quantity(ctx, m.get("max_pressure", 1e8), f"{key}.max_pressure", "Pa", positive=True)
+            return gw.table_law(p_max)
+        if "max_pressure" in m:
+            raise ctx.error(f"{key}.max_pressure", "max_pressure bounds the exact (tabulated) law; 'fit: power' "
+                                                   "takes pressure_range")
+        rng = (1e3, 1e6)
+        if "pressure_range" in m:
+            rng = tuple(_quantity(ctx, v, f"{key}.pressure_range[{j}]", "Pa", positive=True)
+                        for j, v in enumerate(_list(ctx, m["pressure_range"], f"{key}.pressure_range", 2)))
+        return gw.power_fit(rng)
+    except ConfigError as exc:
+        if getattr(exc, "key", None):
+            raise
+        raise ctx.error(key, str(exc)) from None
+
+
+def _rigid_surface(ctx, spec, key):
+    """``rigid: {line: {point, normal} | circle: {center, radius, side}, velocity | speed, start, ramp_time}``."""
+    from fivid.contact import RigidSurface
+
+    m = _mapping(ctx, spec, key, {"line": "optional", "circle": "optional", "velocity": "optional",
+                                  "speed": "optional", "start": "optional", "ramp_time": "optional"})
+    if ("line" in m) == ("circle" in m):
+        raise ctx.error(key, "give either 'line: {point, normal}' or 'circle: {center, radius, side}'")
+    start = _quantity(ctx, m.get("start", 0.0), f"{key}.start", "s", nonnegative=True)
+    ramp = _quantity(ctx, m.get("ramp_time", 0.0), f"{key}.ramp_time", "s", nonnegative=True)
+    if "line" in m:
+        if "speed" in m:
+            raise ctx.error(f"{key}.speed", "a rigid line moves with 'velocity: [vx, vy]' (along itself); 'speed' "
+                                            "is a circle's rotation (e.g. 10 rpm)")
+        q = _mapping(ctx, m["line"], f"{key}.line", {"point": "required", "normal": "required"})
+        point = _point(ctx, q["point"], f"{key}.line.point")
+        normal = np.array([_quantity(ctx, v, f"{key}.line.normal[{j}]", "dimensionless")
+                           for j, v in enumerate(_list(ctx, q["normal"], f"{key}.line.normal", 2))])
+        norm = float(np.hypot(*normal))
+        if norm == 0.0:
+            raise ctx.error(f"{key}.line.normal", "the normal is the zero vector")
+        normal = normal / norm
+        vel = np.zeros(2)
+        if "velocity" in m:
+            vel = np.array([_quantity(ctx, v, f"{key}.velocity[{j}]", "m s-1")
+                            for j, v in enumerate(_list(ctx, m["velocity"], f"{key}.velocity", 2))])
+            if abs(vel @ normal) > 1e-9 * max(float(np.hypot(*vel)), 1e-300):
+                raise ctx.error(f"{key}.velocity", f"a rigid line can only slide along itself: velocity "
+                                                   f"{vel.tolist()} m/s has a component along its normal "
+                                                   f"{normal.tolist()}")
+        return RigidSurface("line", point, normal=normal, velocity=vel, start=start, ramp_time=ramp)
+    if "velocity" in m:
+        raise ctx.error(f"{key}.velocity", "a rigid circle turns with 'speed' (e.g. 10 rpm or 1.05 rad/s, "
+                                           "counter-clockwise positive)")
+    q = _mapping(ctx, m["circle"], f"{key}.circle", {"center": "required", "radius": "required", "side": "optional"})
+    side = _choice(ctx, q.get("side", "outside"), f"{key}.circle.side", ("outside", "inside"))
+    omega = _quantity(ctx, m.get("speed", 0.0), f"{key}.speed", "rad s-1")
+    return RigidSurface("circle", _point(ctx, q["center"], f"{key}.circle.center"),
+                        radius=_quantity(ctx, q["radius"], f"{key}.circle.radius", "m", positive=True), side=side,
+                        angular_velocity=omega, start=start, ramp_time=ramp)
+
+
 def _items(ctx, data, section) -> list:
     value = data.get(section, []) or []
     return _list(ctx, value, section)
@@ -508,27 +668,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                               _quantity(ctx, m["stiffness"], f"{key}.stiffness", "N m-1", nonnegative=True),
                               _quantity(ctx, m.get("damping", 0.0), f"{key}.damping", "N s m-1", nonnegative=True)))
 
-    contacts = []
-    for i, spec in enumerate(_items(ctx, data, "contacts")):
-        key = f"contacts[{i}]"
-        m = _mapping(ctx, spec, key, {"name": "required", "slave": "required", "master": "required",
-                                      "mu": "required", "normal_stiffness": "optional"})
-        sb, snodes, _ = _edge_ref(ctx, blocks, m["slave"], f"{key}.slave", {})
-        mb, mnodes, _ = _edge_ref(ctx, blocks, m["master"], f"{key}.master", {})
-        if sb is mb:
-            raise ctx.error(f"{key}.master", "slave and master must be edges of different bodies")
-        if mnodes.size < 2:
-            raise ctx.error(f"{key}.master", "the master edge needs at least 2 nodes (one segment)")
-        mu = _quantity(ctx, m["mu"], f"{key}.mu", "dimensionless", nonnegative=True)
-        if "normal_stiffness" in m:
-            kn = _quantity(ctx, m["normal_stiffness"], f"{key}.normal_stiffness", "N m-3", positive=True)
-        else:  # 10 x the slave body's own normal stiffness per unit area E/D (D: its depth normal to the edge):
-            # stiff against the body, and independent of the mesh (an element-size penalty is not)
-            edge = m["slave"]["edge"]
-            c = sb.corners
-            depth = np.hypot(*(c[3] - c[0])) if edge in ("bottom", "top") else np.hypot(*(c[1] - c[0]))
-            kn = 10.0 * sb.material.E / float(depth)
-        contacts.append(fm.ContactPair(_name(ctx, m["name"], f"{key}.name"), sb.name, snodes, mb.name, mnodes, mu, kn))
+    contacts = [_contact(ctx, spec, f"contacts[{i}]", blocks) for i, spec in enumerate(_items(ctx, data, "contacts"))]
 
     sensors = []
     for i, spec in enumerate(_items(ctx, data, "sensors")):
@@ -570,14 +710,15 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     for i, spec in enumerate(_items(ctx, data, "loads")):
         key = f"loads[{i}]"
         block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "pressure": "required",
-                                                               "ramp_time": "optional"})
+                                                               "ramp_time": "optional", "start": "optional"})
         if nodes.size < 2:
             raise ctx.error(key, "a pressure load needs at least 2 nodes of the edge (one segment)")
         loads.append(fm.PressureLoad(_name(ctx, m["name"], f"{key}.name"), block.name,
                                      block.edge_segments(m["edge"], nodes),
                                      _quantity(ctx, m["pressure"], f"{key}.pressure", "Pa"),
                                      _quantity(ctx, m.get("ramp_time", 0.0), f"{key}.ramp_time", "s",
-                                               nonnegative=True)))
+                                               nonnegative=True),
+                                     _quantity(ctx, m.get("start", 0.0), f"{key}.start", "s", nonnegative=True)))
 
     alpha, beta, cutoff = _damping(ctx, data.get("damping"))
     for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),

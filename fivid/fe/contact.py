@@ -27,7 +27,8 @@ import numpy as np
 
 from fivid.errors import FividError
 
-__all__ = ["ContactLinearisation", "linearise_contact", "linearise_preloaded_contact", "sliding_directions"]
+__all__ = ["ContactLinearisation", "linearise_contact", "linearise_preloaded_contact", "sliding_directions",
+           "slave_areas", "node_stiffness"]
 
 
 @dataclass(frozen=True)
@@ -77,15 +78,36 @@ def _tributary_lengths(xy: np.ndarray) -> np.ndarray:
     return w
 
 
-def _project(xs: np.ndarray, a: np.ndarray, b: np.ndarray):
-    """Parameter along segments a->b, normal distance, tangent and outward normal (tangent turned clockwise)."""
-    L = np.hypot(*(b - a).T)
-    t = (b - a) / L[:, None]
-    n = np.stack([t[:, 1], -t[:, 0]], axis=1)
-    d = xs - a
-    xi = np.einsum("ij,ij->i", d, t) / L
-    gap = np.einsum("ij,ij->i", d, n)
-    return xi, gap, t, n
+def slave_areas(model, pair) -> np.ndarray:
+    """Tributary area of each slave node of ``pair`` [m2]: half the distance to its edge neighbours x thickness.
+
+    A slave range that is a whole closed ring edge (first and last node adjacent through the seam) closes
+    the chain.
+    """
+    xy = model.coords[np.asarray(pair.slave_nodes)]
+    w = _tributary_lengths(xy)
+    if len(xy) > 2:
+        closing = float(np.hypot(*(xy[0] - xy[-1])))
+        step = float(np.median(np.hypot(*np.diff(xy, axis=0).T)))
+        if closing < 1.5 * step:  # closed chain (ring seam)
+            w[0] += closing / 2.0
+            w[-1] += closing / 2.0
+    return w * model.block(pair.slave_block).thickness
+
+
+def node_stiffness(model, geo, penetration=None) -> np.ndarray:
+    """Normal stiffness of each slave node [N m-1] for the linearised contact: the compliant law's tangent
+    ``A p'(d)`` at the node's penetration ``d`` [m] (``penetration``, e.g. of the static preload), or for the rigid
+    law the pair's modal penalty ``normal_stiffness x A``."""
+    k = np.zeros(geo.slave_node.size)
+    d = np.zeros_like(k) if penetration is None else np.asarray(penetration, dtype=float)
+    for p, pair in enumerate(model.contacts):
+        sel = geo.slave_pair == p
+        if pair.law.is_penalty:
+            k[sel] = geo.area[sel] * pair.law.tangent(d[sel])
+        else:
+            k[sel] = geo.area[sel] * pair.normal_stiffness
+    return k
 
 
 def sliding_directions(model, velocities: dict[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
@@ -104,11 +126,14 @@ def sliding_directions(model, velocities: dict[str, np.ndarray] | None = None) -
 
 
 def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
-                      closed: np.ndarray | None = None) -> ContactLinearisation:
+                      closed: np.ndarray | None = None, penetration: np.ndarray | None = None
+                      ) -> ContactLinearisation:
     """Linearise the contact pairs of ``model`` about a sliding state, one row per closed slave node.
 
     The geometry (projection, normals) is that of the reference configuration, like the static contact solve
-    of :mod:`fivid.fe.static` whose closed set it takes (the preload displacements are microns).
+    of :mod:`fivid.fe.static` whose closed set it takes (the preload displacements are microns); the operators
+    are :meth:`fivid.fe.static.ContactGeometry.operators`, the node stiffnesses :func:`node_stiffness`. A rigid
+    master's moving surface sets the sliding direction of its slaves.
 
     Parameters
     ----------
@@ -119,60 +144,41 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
         Which slave nodes (all pairs, in order) are in contact, e.g. ``preload_state(model, load).active``
         (:func:`fivid.fe.static.preload_state`); open nodes get no row. Default: every slave node (a bonded
         interface: the operators of the whole slave range, not a physical state of a preloaded rig).
+    penetration : ndarray, shape (n_slave,), optional
+        Penetration of each slave node [m] where the compliant laws' tangent is taken (the preload's).
 
     Raises
     ------
     FividError
         A slave node does not project onto its master edge, or the bodies do not slide relative to each other.
     """
-    import scipy.sparse as sp
+    from fivid.fe.static import contact_geometry
 
-    vel = sliding_directions(model, velocities)
-    rows, cols, vals_n, vals_t = [], [], [], []
-    stiffness, direction, pair, slave = [], [], [], []
-    n_slave = sum(len(c.slave_nodes) for c in model.contacts)
+    geo = contact_geometry(model)
+    n_slave = geo.slave_node.size
     closed = np.ones(n_slave, dtype=bool) if closed is None else np.asarray(closed, dtype=bool)
     if closed.shape != (n_slave,):
         raise ValueError(f"closed must have one flag per slave node ({n_slave}), got shape {closed.shape}")
-    r = 0
-    i_slave = -1
-    for ip, c in enumerate(model.contacts):
-        xs_all = model.coords[c.slave_nodes]
-        xm = model.coords[c.master_nodes]
-        a, b = xm[:-1], xm[1:]
-        area = _tributary_lengths(xs_all) * model.block(c.slave_block).thickness
-        v_rel = vel[c.master_block] - vel[c.slave_block]
-        for s, xs, A in zip(c.slave_nodes, xs_all, area):
-            i_slave += 1
-            if not closed[i_slave]:
-                continue
-            xi, gap, t, n = _project(xs[None, :], a, b)
-            tol = 1e-9
-            on = (xi >= -tol) & (xi <= 1 + tol)
-            if not on.any():
-                raise FividError(f"contact {c.name!r}: slave node {int(s)} at {xs.tolist()} m does not project onto "
-                                 f"master edge of body {c.master_block!r}; shorten the slave range")
-            k = int(np.flatnonzero(on)[np.argmin(np.abs(gap[on]))])
-            x = float(np.clip(xi[k], 0.0, 1.0))
-            d = float(np.sign(v_rel @ t[k]))
-            nodes = [int(s), int(c.master_nodes[k]), int(c.master_nodes[k + 1])]
-            weights = [1.0, -(1.0 - x), -x]
-            for node, w in zip(nodes, weights):
-                for comp in (0, 1):
-                    rows.append(r)
-                    cols.append(2 * node + comp)
-                    vals_n.append(w * n[k, comp])
-                    vals_t.append(w * t[k, comp])
-            stiffness.append(c.normal_stiffness * A)
-            direction.append(d)
-            pair.append(ip)
-            slave.append(i_slave)
-            r += 1
-    shape = (r, model.n_dofs)
-    G_n = sp.csr_matrix((vals_n, (rows, cols)), shape=shape)
-    G_t = sp.csr_matrix((vals_t, (rows, cols)), shape=shape)
-    return ContactLinearisation(G_n, G_t, np.asarray(stiffness), np.asarray(direction), np.asarray(pair, dtype=int),
-                                np.asarray(slave, dtype=int))
+    off = closed & ~geo.usable
+    if off.any():
+        k = int(np.flatnonzero(off)[0])
+        c = model.contacts[geo.slave_pair[k]]
+        s = int(geo.slave_node[k])
+        raise FividError(f"contact {c.name!r}: slave node {s} at {model.coords[s].tolist()} m does not project onto "
+                         f"master edge of body {c.master_block!r}; shorten the slave range")
+    vel = sliding_directions(model, velocities)
+    tangent = np.stack([-geo.normal[:, 1], geo.normal[:, 0]], axis=1)
+    direction = np.zeros(n_slave)
+    for p, c in enumerate(model.contacts):
+        sel = geo.slave_pair == p
+        v_master = vel[c.master_block] if c.rigid is None else 0.0
+        v_rel = v_master - vel[c.slave_block]
+        direction[sel] = np.sign(tangent[sel] @ v_rel + geo.surface_velocity[sel])
+    G_n, G_t = geo.operators(model.n_dofs)
+    rows = np.flatnonzero(closed)
+    stiffness = node_stiffness(model, geo, penetration)
+    return ContactLinearisation(G_n[rows], G_t[rows], stiffness[rows], direction[rows], geo.slave_pair[rows],
+                                rows.astype(int))
 
 
 def linearise_preloaded_contact(model, normal_load: float | None, *, velocities: dict[str, np.ndarray] | None = None,
@@ -208,8 +214,9 @@ def linearise_preloaded_contact(model, normal_load: float | None, *, velocities:
     from fivid.errors import ConfigError
     from fivid.fe.static import preload_state
 
-    if normal_load is None:
+    if normal_load is None and not model.loads:
         raise ConfigError("linearising the contact needs the normal load: only the slave nodes closed under it "
                           "carry contact springs (give normal_load [N], e.g. --load '5 N')", key="normal_load")
     state = preload_state(model, normal_load, mu=mu)
-    return linearise_contact(model, velocities=velocities, closed=state.active), state
+    return linearise_contact(model, velocities=velocities, closed=state.active,
+                             penetration=state.penetration), state

@@ -146,7 +146,8 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
         preload solve, :mod:`fivid.fe.static`; tangentially free: the sliding contact's Coulomb force is a
         constant follower force, no stiffness). DESIGN §4: linearise about the sliding equilibrium.
     normal_load : float, optional
-        Transducer normal force [N] of the preload; required with ``include_contact`` on a model with contacts.
+        Transducer normal force [N] of the preload; required with ``include_contact`` on a model with contacts,
+        unless the model's pressure loads press the contact (then None: the state under those loads).
     sigma : float, optional
         Shift [s-2] of the shift-invert solver (default: small negative).
 
@@ -210,12 +211,15 @@ def _contact_state_attrs(model, state) -> dict:
     """Attributes recording the preloaded contact state a linearisation is about."""
     from fivid.fe.static import contact_geometry
 
+    import json
+
     nodes = contact_geometry(model).slave_node[state.active]
     return {
         "normal_load": float(state.normal_load),
         "preload_displacement": float(state.displacement),
         "closed_slave_nodes": np.asarray(nodes, dtype=np.int64),
         "closed_normal_force": np.asarray(state.normal_force[state.active], dtype=float),
+        "contact_summary": json.dumps(state.summary(model)),
     }
 
 
@@ -228,7 +232,9 @@ def write_modes(ds, path: str | PathLike, *, overwrite: bool = False):
 
 
 def modes_to_json(ds) -> dict:
-    """The JSON summary of a modal analysis: ``{"frequencies_hz": [...], ...}``."""
+    """The JSON summary of a modal analysis: ``{"frequencies_hz": [...], ...}`` (with the preloaded contact:
+    its load, closed nodes and per pair the contact length, pressures and normal stiffness)."""
+    import json
     return {
         "frequencies_hz": [float(f) for f in ds["frequency"].values],
         "n_modes": int(ds.sizes["mode"]),
@@ -237,7 +243,8 @@ def modes_to_json(ds) -> dict:
         "mass_matrix": ds.attrs["mass_matrix"],
         "include_contact": bool(ds.attrs["include_contact"]),
         **({"normal_load_n": float(ds.attrs["normal_load"]),
-            "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist()}
+            "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist(),
+            "contact": json.loads(ds.attrs.get("contact_summary", "[]"))}
            if "normal_load" in ds.attrs else {}),
         "model": ds.attrs["model"],
         "model_source": ds.attrs["model_source"],

@@ -329,8 +329,16 @@ class ContactPair:
     mu : float
         Nominal (mean) friction coefficient μ0 [-].
     normal_stiffness : float
-        Penalty stiffness per unit contact area [N m-3] used by the linearised (CEA/modal) contact;
-        the explicit solver enforces contact with Lagrange multipliers and ignores it.
+        Penalty stiffness per unit contact area [N m-3] of the rigid law's linearised (CEA/modal) contact;
+        the explicit solver enforces the rigid law with Lagrange multipliers and ignores it. The compliant
+        laws use their own tangent instead.
+    law : fivid.contact.NormalLaw
+        Normal contact law (default rigid).
+    friction : fivid.contact.TangentialLaw
+        Static excess, Stribeck curve and viscous term over the kinetic ``mu`` (default: plain Coulomb).
+    rigid : fivid.contact.RigidSurface or None
+        A rigid master surface instead of a body's edge (then ``master_block`` is ``""`` and ``master_nodes``
+        is empty).
     """
 
     name: str
@@ -340,6 +348,17 @@ class ContactPair:
     master_nodes: np.ndarray
     mu: float
     normal_stiffness: float
+    law: object = None
+    friction: object = None
+    rigid: object = None
+
+    def __post_init__(self):
+        from fivid.contact import RIGID, TangentialLaw
+
+        if self.law is None:
+            object.__setattr__(self, "law", RIGID)
+        if self.friction is None:
+            object.__setattr__(self, "friction", TangentialLaw())
 
 
 @dataclass(frozen=True, eq=False)
@@ -361,6 +380,8 @@ class PressureLoad:
         Final pressure [Pa] (may be negative: suction).
     ramp_time : float
         Duration of the smooth ramp ``r(s) = s - sin(2 pi s)/(2 pi)`` from 0 to ``pressure`` [s].
+    start : float
+        Time the ramp starts [s] (0 by default; the static preload applies every load at full value).
     """
 
     name: str
@@ -368,6 +389,7 @@ class PressureLoad:
     segments: np.ndarray
     pressure: float
     ramp_time: float = 0.0
+    start: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)

@@ -32,18 +32,23 @@ __all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displaceme
 
 @dataclass(frozen=True)
 class ContactGeometry:
-    """Slave nodes of all pairs with their master segment in the reference configuration.
+    """Slave nodes of all pairs with their master segment (or rigid surface) in the reference configuration.
 
     Attributes
     ----------
     slave_node, slave_pair, segment : ndarray of int, shape (n_slave,)
-        Global slave node, pair index and master segment index (``-1``: no segment under the node).
+        Global slave node, pair index and master segment index (``-1``: no segment under the node, or a
+        rigid master).
     xi : ndarray, shape (n_slave,)
         Position on the segment, 0 at its first node, 1 at its second.
     normal : ndarray, shape (n_slave, 2)
-        Outward unit normal of the master segment.
+        Outward unit normal of the master (segment or rigid surface); the tangent is ``t = (-n_y, n_x)``.
     gap : ndarray, shape (n_slave,)
-        Initial normal gap [m] (negative: penetration).
+        Initial normal gap [m] (negative: penetration; inf: no master under the node).
+    area : ndarray, shape (n_slave,)
+        Tributary area of each slave node [m2] (half the distance to its edge neighbours x thickness).
+    surface_velocity : ndarray, shape (n_slave,)
+        Velocity of a rigid master's surface along ``t`` at full speed [m s-1] (0 for a body's edge).
     """
 
     slave_node: np.ndarray
@@ -52,13 +57,54 @@ class ContactGeometry:
     xi: np.ndarray
     normal: np.ndarray
     gap: np.ndarray
+    area: np.ndarray | None = None
+    surface_velocity: np.ndarray | None = None
+
+    @property
+    def usable(self) -> np.ndarray:
+        """Slave nodes with a master under them."""
+        return np.isfinite(self.gap)
+
+    def operators(self, n_dofs: int):
+        """Sparse gap and slip operators ``(G_n, G_t)``, shape (n_slave, n_dofs): ``g = g0 + G_n u`` and the
+        tangential relative displacement ``G_t u`` along ``t = (-n_y, n_x)`` (rows of unusable nodes are 0)."""
+        import scipy.sparse as sp
+
+        rows, cols, vn, vt = [], [], [], []
+        for k in np.flatnonzero(self.usable):
+            nvec = self.normal[k]
+            tvec = np.array([-nvec[1], nvec[0]])
+            terms = [(self.slave_node[k], 1.0)]
+            if self.segment[k] >= 0:
+                terms += [(self.master_nodes_of[k][0], -(1.0 - self.xi[k])), (self.master_nodes_of[k][1], -self.xi[k])]
+            for node, w in terms:
+                for c in range(2):
+                    rows.append(k), cols.append(2 * node + c), vn.append(w * nvec[c]), vt.append(w * tvec[c])
+        shape = (self.gap.size, n_dofs)
+        return sp.csr_matrix((vn, (rows, cols)), shape=shape), sp.csr_matrix((vt, (rows, cols)), shape=shape)
+
+    master_nodes_of: np.ndarray | None = None
 
 
 def contact_geometry(model, u=None) -> ContactGeometry:
-    """Project every slave node onto its master edge (in ``coords + u``; ``u`` global, optional)."""
+    """Project every slave node onto its master edge or rigid surface (in ``coords + u``; ``u`` global, optional)."""
+    from fivid.fe.contact import slave_areas
+
     x = model.coords if u is None else model.coords + np.asarray(u).reshape(-1, 2)
-    nodes, pairs, segs, xis, normals, gaps = [], [], [], [], [], []
+    nodes, pairs, segs, xis, normals, gaps, ends, vts = [], [], [], [], [], [], [], []
     for p, pair in enumerate(model.contacts):
+        if pair.rigid is not None:
+            s = np.asarray(pair.slave_nodes)
+            g, n, _, vt = pair.rigid.geometry(x[s], reference=model.coords[s])
+            nodes += list(s)
+            pairs += [p] * s.size
+            segs += [-1] * s.size
+            xis += [0.0] * s.size
+            normals += [tuple(r) for r in n]
+            gaps += list(g)
+            ends += [(-1, -1)] * s.size
+            vts += list(vt)
+            continue
         m = np.asarray(pair.master_nodes)
         a, b = x[m[:-1]], x[m[1:]]
         e = b - a
@@ -68,8 +114,10 @@ def contact_geometry(model, u=None) -> ContactGeometry:
             inside = np.flatnonzero((xi >= -1e-12) & (xi <= 1.0 + 1e-12))
             nodes.append(s)
             pairs.append(p)
+            vts.append(0.0)
             if inside.size == 0:
                 segs.append(-1), xis.append(0.0), normals.append((0.0, 0.0)), gaps.append(np.inf)
+                ends.append((-1, -1))
                 continue
             t = e[inside] / np.sqrt(L2[inside])[:, None]
             n = np.stack([t[:, 1], -t[:, 0]], axis=1)  # tangent turned clockwise: outward
@@ -77,6 +125,8 @@ def contact_geometry(model, u=None) -> ContactGeometry:
             k = int(np.argmin(np.abs(g)))
             segs.append(int(inside[k])), xis.append(float(np.clip(xi[inside[k]], 0.0, 1.0)))
             normals.append(tuple(n[k])), gaps.append(float(g[k]))
+            ends.append((int(m[inside[k]]), int(m[inside[k] + 1])))
+    area = np.concatenate([slave_areas(model, c) for c in model.contacts]) if model.contacts else np.zeros(0)
     return ContactGeometry(
         slave_node=np.array(nodes, dtype=np.int64),
         slave_pair=np.array(pairs, dtype=np.int64),
@@ -84,6 +134,9 @@ def contact_geometry(model, u=None) -> ContactGeometry:
         xi=np.array(xis, dtype=float),
         normal=np.array(normals, dtype=float).reshape(-1, 2),
         gap=np.array(gaps, dtype=float),
+        area=area,
+        surface_velocity=np.array(vts, dtype=float),
+        master_nodes_of=np.array(ends, dtype=np.int64).reshape(-1, 2),
     )
 
 
@@ -94,19 +147,24 @@ class Preload:
     Attributes
     ----------
     displacement : float
-        Signed clamp displacement along the load motion's component [m].
+        Signed clamp displacement along the load motion's component [m] (0 without a load motion).
     normal_load : float
-        Transducer normal force it gives in the static solve [N].
+        Transducer normal force it gives in the static solve [N] (without a transducer: the sum of the
+        contact normal forces).
     active : ndarray of bool
         Slave nodes in contact.
     u : ndarray
         Static displacement [m], global dofs.
     iterations : int
-        Active-set iterations.
+        Active-set (and Newton, for the compliant laws) iterations.
     normal_force : ndarray, shape (n_slave,)
-        Normal contact force of each slave node (Lagrange multiplier, >= 0; 0 at open nodes) [N].
+        Normal contact force of each slave node (>= 0; 0 at open nodes) [N].
     tangential_force : ndarray, shape (n_slave,)
         Tangential contact force along ``t = (-n_y, n_x)`` of each slave node [N].
+    penetration : ndarray, shape (n_slave,)
+        Penetration of each slave node under a compliant law [m] (0 for the rigid law and open nodes).
+    geometry : ContactGeometry
+        The projection the solve used (areas, normals).
     """
 
     displacement: float
@@ -116,21 +174,77 @@ class Preload:
     iterations: int
     normal_force: np.ndarray | None = None
     tangential_force: np.ndarray | None = None
+    penetration: np.ndarray | None = None
+    geometry: ContactGeometry | None = None
+
+    @property
+    def pressure(self) -> np.ndarray:
+        """Contact pressure of each slave node [Pa]: normal force over tributary area."""
+        return self.normal_force / self.geometry.area
+
+    def summary(self, model) -> list[dict]:
+        """Per pair: resultant normal force [N], contact length [m], peak and mean pressure [Pa], normal
+        stiffness [N m-1] (the tangent of a compliant law summed over the closed nodes; for the rigid law the
+        modal penalty ``normal_stiffness x area``), closed nodes."""
+        from fivid.fe.contact import node_stiffness
+
+        out = []
+        geo = self.geometry
+        k_node = node_stiffness(model, geo, self.penetration)
+        for p, pair in enumerate(model.contacts):
+            sel = (geo.slave_pair == p) & self.active
+            thick = model.block(pair.slave_block).thickness
+            length = float(geo.area[sel].sum() / thick)
+            pres = self.pressure[sel]
+            out.append({
+                "contact": pair.name,
+                "normal_law": pair.law.describe(),
+                "normal_force_n": float(self.normal_force[sel].sum()),
+                "contact_length_m": length,
+                "peak_pressure_pa": float(pres.max()) if pres.size else 0.0,
+                "mean_pressure_pa": float(self.normal_force[sel].sum() / (length * thick)) if length else 0.0,
+                "normal_stiffness_n_per_m": float(k_node[sel].sum()),
+                "closed_nodes": int(sel.sum()),
+            })
+        return out
 
 
-def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarray, load_dofs: np.ndarray,
-                         direction: float, mu: np.ndarray | None = None, max_iterations: int = 50) -> Preload:
+def _floating_dofs(model) -> np.ndarray:
+    """Dofs of the bodies with no clamped or driven dof: held only by contact (and springs)."""
+    fixed = np.zeros(model.n_dofs, dtype=bool)
+    fixed[np.asarray(model.fixed_dofs, dtype=np.int64)] = True
+    out = []
+    for b in model.blocks:
+        nodes = b.node_offset + np.arange(b.n_nodes)
+        dofs = np.concatenate([2 * nodes, 2 * nodes + 1])
+        if not fixed[dofs].any():
+            out.append(dofs)
+    return np.concatenate(out) if out else np.zeros(0, dtype=np.int64)
+
+
+def preload_displacement(model, normal_load: float | None, *, normal_weights: np.ndarray | None,
+                         load_dofs: np.ndarray, direction: float, mu: np.ndarray | None = None,
+                         max_iterations: int = 100) -> Preload:
     """Clamp displacement giving the transducer normal force ``normal_load`` [N] (see the module docstring).
 
     The model's pressure loads (:func:`fivid.fe.loads.external_load_vector`, full value) act throughout: they
     are part of the zero-clamp-displacement solution, and the transducer reads ``K u - F`` at its dofs.
+    ``normal_load`` None: the clamp stays where it is (a model pressed by its loads alone).
+
+    Compliant normal laws (linear, power) enter as springs linearised at each node's current penetration
+    (Newton: ``f = A (p(d0) + p'(d0) (d - d0))``), starting from the rigid solution's penetrations
+    ``p^-1(lam / A)``; the active set and the penetrations are iterated together until both repeat (relative
+    change of the penetrations <= 1e-10). A body held by nothing but contact gets a stiffness of 1e-10 x its
+    mean diagonal on its dofs in the factorisation, so that its free sliding/rotation does not make the system
+    singular; iterative refinement against the unregularised system then removes that stiffness's load share
+    (each pass shrinks it by eps / (lambda + eps) on a mode of stiffness lambda).
 
     Parameters
     ----------
     model : Model
-    normal_load : float
-        Target normal force [N], > 0.
-    normal_weights : ndarray (n_dofs,)
+    normal_load : float or None
+        Target normal force [N], > 0; None: no clamp displacement.
+    normal_weights : ndarray (n_dofs,) or None
         Weights of the dof reactions summed into the transducer's normal force.
     load_dofs : ndarray of int
         Dofs moved by the loading clamp.
@@ -146,87 +260,131 @@ def preload_displacement(model, normal_load: float, *, normal_weights: np.ndarra
     from fivid.fe.loads import external_load_vector
 
     geo = contact_geometry(model)
-    usable = geo.segment >= 0
+    usable = geo.usable
     if not usable.any():
         raise ConfigError("no slave node lies over its master edge: the preload cannot press the contact")
     n = model.n_dofs
+    ns = geo.gap.size
     K = stiffness_matrix(model, include_springs=True).tocsr()
     fixed = np.asarray(model.fixed_dofs)
     free = model.free_dofs
+    floating = _floating_dofs(model)
+    reg = np.zeros(n)  # regularisation of floating bodies, removed again by iterative refinement
+    if floating.size:
+        reg[floating] = 1e-10 * float(K.diagonal()[floating].mean())
     e = np.zeros(n)
     e[load_dofs] = direction
-    # constraint rows: gap_k = g0_k + n . (u_s - (1-xi) u_a - xi u_b); slip_k = t . (same), t = (-n_y, n_x)
-    rows, cols, vals = [], [], []
-    trows, tvals = [], []
-    for k in np.flatnonzero(usable):
-        pair = model.contacts[geo.slave_pair[k]]
-        a = pair.master_nodes[geo.segment[k]]
-        b = pair.master_nodes[geo.segment[k] + 1]
-        nvec = geo.normal[k]
-        tvec = np.array([-nvec[1], nvec[0]])
-        for node, w in ((geo.slave_node[k], 1.0), (a, -(1.0 - geo.xi[k])), (b, -geo.xi[k])):
-            for c in range(2):
-                rows.append(k), cols.append(2 * node + c), vals.append(w * nvec[c])
-                trows.append(k), tvals.append(w * tvec[c])
-    G = sp.csr_matrix((vals, (rows, cols)), shape=(geo.gap.size, n))
-    Gt = sp.csr_matrix((tvals, (trows, cols)), shape=(geo.gap.size, n))
-    mu = np.zeros(geo.gap.size) if mu is None else np.asarray(mu, dtype=float)
+    G, Gt = geo.operators(n)
+    law_of = [model.contacts[p].law for p in geo.slave_pair]
+    pen = np.array([law.is_penalty for law in law_of], dtype=bool)
+    mu = np.zeros(ns) if mu is None else np.asarray(mu, dtype=float)
     g0 = np.where(usable, geo.gap, np.inf)
-    active = usable & (g0 <= 1e-9 * np.ptp(model.coords))
+    scale = max(float(np.ptp(model.coords)), 1e-12)
+    active = usable & (g0 <= 1e-9 * scale)
     if not active.any():
         active = usable & (g0 == g0[usable].min())
     tied = active & (mu > 0)
-    slip = np.zeros(geo.gap.size)  # sign of the tangential force of nodes slipping on the cone (0: not slipping)
-    Kff = K[free][:, free]
-    Kfc_e = (K[:, fixed] @ e[fixed])[free]
+    slip = np.zeros(ns)  # sign of the tangential force of nodes slipping on the cone (0: not slipping)
+    d0 = None  # penetrations of the compliant nodes (None: first pass treats them as rigid)
     f_ext = external_load_vector(model)  # pressure loads at full value, part of the zero-clamp solution ua
+    Kfc_e = (K[:, fixed] @ e[fixed])[free]
+    nf = free.size
+    with_clamp = normal_load is not None
     for it in range(1, max_iterations + 1):
-        idx = np.flatnonzero(active)
+        lag = active & ~pen if d0 is not None else active  # Lagrange rows: rigid nodes (all, in the first pass)
+        spring = active & pen if d0 is not None else np.zeros(ns, dtype=bool)
+        idx = np.flatnonzero(lag)
         tdx = np.flatnonzero(tied)
+        sdx = np.flatnonzero(spring)
+        # compliant nodes: f = k_t d + r, d = -(g0 + G u); force on the dofs (G + s mu Gt)^T f
+        k_t = np.zeros(ns)
+        r = np.zeros(ns)
+        if sdx.size:
+            dl = np.maximum(d0[sdx], 1e-3 * max(float(d0[sdx].max()), 1e-15))
+            pv = np.array([law_of[k].pressure(dl[j]) for j, k in enumerate(sdx)]).ravel()
+            dp = np.array([law_of[k].tangent(dl[j]) for j, k in enumerate(sdx)]).ravel()
+            k_t[sdx] = geo.area[sdx] * dp
+            r[sdx] = geo.area[sdx] * (pv - dp * dl)
+        Dsp = (G[sdx] + sp.diags(slip[sdx] * mu[sdx]) @ Gt[sdx]).tocsr()
+        Kc = (Dsp.T @ sp.diags(k_t[sdx]) @ G[sdx]).tocsr()
+        f_c = Dsp.T @ (r[sdx] - k_t[sdx] * g0[sdx])
+        Kt = (K + Kc).tocsr() if Kc.nnz else K
+        Kff = Kt[free][:, free]
         C = sp.vstack([G[idx], Gt[tdx]]).tocsr()
         Cf = C[:, free]
         # force directions: a slipping node pushes along n + s mu t (lam_t = s mu lam_n), a tied one along n and t
         D = sp.vstack([G[idx] + sp.diags(slip[idx] * mu[idx]) @ Gt[idx], Gt[tdx]]).tocsr()[:, free]
         A = sp.bmat([[Kff, -D.T], [Cf, None]], format="csc")
-        lu = splu(A)
-        nf = free.size
+        reg_f = reg[free]
+        lu = splu((A + sp.diags(np.concatenate([reg_f, np.zeros(A.shape[0] - nf)]))).tocsc()) if reg.any() else \
+            splu(A)
         rhs = np.zeros((A.shape[0], 2))
         rhs[nf:nf + idx.size, 0] = -g0[idx]
-        rhs[:nf, 0] = f_ext[free]
-        rhs[:nf, 1] = -Kfc_e
+        rhs[:nf, 0] = (f_ext + f_c)[free]
+        rhs[:nf, 1] = -(Kt[:, fixed] @ e[fixed])[free] if Kc.nnz else -Kfc_e  # clamp's pull on the free dofs
         rhs[nf:, 1] = -(C @ e)
         sol = lu.solve(rhs)
+        if reg.any():  # iterative refinement against the unregularised system: the shift's error shrinks by
+            for _ in range(4):  # eps / (lambda + eps) per pass on every mode the contact restrains
+                sol += lu.solve(rhs - A @ sol)
         ua = np.zeros(n)
         ub = e.copy()
         ua[free] = sol[:nf, 0]
         ub[free] = sol[:nf, 1]
-        Fa = float(normal_weights @ (K @ ua - f_ext))
-        Fb = float(normal_weights @ (K @ ub))
-        if not Fb > 0.0:
-            raise ConfigError(
-                f"moving the loading clamp by {direction:+.0f} along its component does not press the contact "
-                f"(dF/d(delta) = {Fb:.3g} N/m); check the load motion's sign and the reaction's normal component"
-            )
-        delta = (normal_load - Fa) / Fb
+        lam_a, lam_b = sol[nf:, 0], sol[nf:, 1]
+        if with_clamp:
+            Fa = float(normal_weights @ (Kt @ ua - f_ext))
+            Fb = float(normal_weights @ (Kt @ ub))
+            if not Fb > 0.0:
+                raise ConfigError(
+                    f"moving the loading clamp by {direction:+.0f} along its component does not press the contact "
+                    f"(dF/d(delta) = {Fb:.3g} N/m); check the load motion's sign and the reaction's normal component"
+                )
+            delta = (normal_load - Fa) / Fb
+        else:
+            delta = 0.0
         u = ua + delta * ub
-        lam = sol[nf:, 0] + delta * sol[nf:, 1]
-        lam_n = np.zeros(geo.gap.size)
-        lam_t = np.zeros(geo.gap.size)
+        lam = lam_a + delta * lam_b
+        gap = np.where(usable, g0 + G @ u, np.inf)
+        lam_n = np.zeros(ns)
+        lam_t = np.zeros(ns)
         lam_n[idx] = lam[:idx.size]
         lam_t[tdx] = lam[idx.size:]
+        lam_n[sdx] = k_t[sdx] * (-gap[sdx]) + r[sdx]
         lam_t[idx] += slip[idx] * mu[idx] * lam_n[idx]
-        gap = np.where(usable, g0 + G @ u, np.inf)
+        lam_t[sdx] += slip[sdx] * mu[sdx] * lam_n[sdx]
         tol = 1e-9 * max(abs(delta), float(np.abs(g0[usable]).max()), 1e-12)
         new = active.copy()
+        if d0 is None and pen.any():
+            # first pass done (all rigid): start the compliant nodes from the penetration their force needs
+            d_new = np.zeros(ns)
+            for k in np.flatnonzero(pen & active):
+                d_new[k] = float(law_of[k].penetration(lam_n[k] / geo.area[k]))
+            new[idx[lam_n[idx] < 0.0]] = False
+            d_new[~new] = 0.0
+            active, tied, slip, d0 = new, tied & new, slip * new, d_new
+            continue
         new[idx[lam_n[idx] < 0.0]] = False
-        new[usable & ~active & (gap < -tol)] = True
+        new[usable & ~active & ~pen & (gap < -tol)] = True
+        d_new = np.zeros(ns)
+        if d0 is not None and pen.any():
+            d_new[pen & usable] = np.maximum(-gap[pen & usable], 0.0)
+            new[pen & usable] = d_new[pen & usable] > 0.0
         outside = tied & (np.abs(lam_t) > mu * lam_n * (1 + 1e-12))
         new_slip = np.where(outside, np.sign(lam_t), slip) * new
         new_tied = (tied & new & ~outside) | (new & ~active & (mu > 0))
-        if np.array_equal(new, active) and np.array_equal(new_tied, tied) and np.array_equal(new_slip, slip):
-            return Preload(displacement=float(delta), normal_load=float(normal_load), active=active, u=u,
-                           iterations=it, normal_force=lam_n, tangential_force=lam_t)
+        converged = np.array_equal(new, active) and np.array_equal(new_tied, tied) and np.array_equal(new_slip, slip)
+        if d0 is not None and pen.any():
+            dm = float(d_new.max()) if d_new.size else 0.0
+            converged = converged and (float(np.abs(d_new - d0).max()) <= 1e-10 * dm if dm > 0 else True)
+        if converged:
+            total = normal_load if with_clamp else float(lam_n[new].sum())
+            return Preload(displacement=float(delta), normal_load=float(total), active=active, u=u,
+                           iterations=it, normal_force=np.where(active, lam_n, 0.0), tangential_force=lam_t,
+                           penetration=np.where(active & pen, d_new, 0.0), geometry=geo)
         active, tied, slip = new, new_tied, new_slip
+        if d0 is not None:
+            d0 = d_new
         if not active.any():
             raise ConfigError("the preload active set emptied: the clamp pulls the bodies apart")
     raise ConfigError(f"the preload contact solve did not settle in {max_iterations} active-set iterations")
@@ -240,16 +398,18 @@ def slave_friction(model, mu=None) -> np.ndarray:
     return np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)])
 
 
-def preload_state(model, normal_load: float, *, mu=None) -> Preload:
+def preload_state(model, normal_load: float | None, *, mu=None) -> Preload:
     """The static contact state under the transducer normal force ``normal_load`` [N], clamp lowered monotonically.
 
     The model's motion with role "load" is the clamp (its amplitude's sign gives the pressing direction), its
     first reaction the transducer (the normal component's reaction, signed like the clamp, is the normal force).
+    ``normal_load`` None: the state under the model's pressure loads alone (the clamp, if any, stays at 0), e.g.
+    a ring pressed on a cylinder; its ``normal_load`` is then the sum of the contact normal forces.
 
     Parameters
     ----------
     model : Model
-    normal_load : float
+    normal_load : float or None
         Target normal force [N], > 0.
     mu : float or ndarray (n_slave,), optional
         Friction coefficient during the preload (scalar: every pair; default: each pair's ``mu``).
@@ -259,17 +419,25 @@ def preload_state(model, normal_load: float, *, mu=None) -> Preload:
     ConfigError
         No load motion or no reaction, a non-positive load, or a contact that the clamp does not press.
     """
+    mu_slave = mu if (mu is not None and np.ndim(mu) == 1) else slave_friction(model, mu)
+    if normal_load is None:
+        if not model.loads:
+            raise ConfigError("the contact state needs a normal load (e.g. --load '5 N') or pressure loads in the "
+                              "model ('loads:') that press the contact")
+        return preload_displacement(model, None, normal_weights=None, load_dofs=np.zeros(0, dtype=np.int64),
+                                    direction=1.0, mu=mu_slave)
     if not (np.isfinite(normal_load) and normal_load > 0):
         raise ConfigError(f"normal_load must be a positive force [N], got {normal_load!r}")
     load = model.motion("load")
     if load is None:
-        raise ConfigError("normal_load was given but the model has no motion with role 'load' to set it")
+        raise ConfigError("normal_load was given but the model has no motion with role 'load' to set it"
+                          + (" (this model is pressed by its pressure loads: leave the load out)" if model.loads
+                             else ""))
     if not model.reactions:
         raise ConfigError("normal_load was given but the model has no reaction (force transducer) to measure it")
     direction = 1.0 if load.amplitude >= 0 else -1.0
     r = model.reactions[0]
     weights = np.zeros(model.n_dofs)
     weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
-    mu_slave = mu if (mu is not None and np.ndim(mu) == 1) else slave_friction(model, mu)
     return preload_displacement(model, float(normal_load), normal_weights=weights, load_dofs=load.dofs,
                                 direction=direction, mu=mu_slave)

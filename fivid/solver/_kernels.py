@@ -30,6 +30,16 @@ import math
 import numpy as np
 from numba import njit, uint64
 
+from fivid.contact._kernels import (
+    LAW_RIGID,
+    MASTER_EDGE,
+    friction_coefficient,
+    normal_energy,
+    normal_pressure,
+    rigid_geometry,
+    surface_ramp,
+)
+
 __all__ = [
     "ramp",
     "constrained_velocity",
@@ -49,7 +59,8 @@ GS_SWEEPS = 5  # total Gauss-Seidel sweeps
 GS_MAX = 6  # largest number of sweeps in one step
 GS_CAPPED = 7  # steps that reached the sweep limit
 W_LOAD = 8  # work of the applied (pressure) loads
-N_ACC = 9
+W_DRIVE = 9  # work of the rigid masters' surface motion on the slaves (rotation / belt drive)
+N_ACC = 10
 
 # output record columns (rec array, one row per output interval)
 R_FT = 0  # reaction, tangential sum, interval average [N]
@@ -62,7 +73,9 @@ R_WEXT = 6
 R_WCN = 7
 R_WCT = 8
 R_WLOAD = 9
-N_REC = 10
+R_WDRIVE = 10  # work of the moving rigid surfaces [J]
+R_EPEN = 11  # energy stored in the compliant contact laws at the interval end [J]
+N_REC = 12
 
 # status codes
 OK = 0
@@ -332,9 +345,12 @@ def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
 
 
 @njit(cache=True)
-def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg):
-    """x-indices of slave ``k`` and of the two nodes of its current master segment."""
+def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par):
+    """x-indices of slave ``k`` and of the two nodes of its current master segment (a rigid master has none:
+    the slave itself is returned for both, with shape values 0, so the master terms vanish)."""
     p = slave_pair[k]
+    if pair_par[p, 6] != MASTER_EDGE:
+        return slave_node[k], slave_node[k], slave_node[k]
     return slave_node[k], master_nodes[master_ptr[p] + seg[k]], master_nodes[master_ptr[p] + seg[k] + 1]
 
 
@@ -358,37 +374,91 @@ def _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, fx, fy):
 
 
 @njit(cache=True)
-def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
-                  seg, geo, lam, cstate, mu, max_iter, tol):
+def _normal_update(kind, c, nexp, tab, area, g, ln, wn):
+    """New normal multiplier [N] of a slave at gap ``g`` [m] carrying ``ln``: rigid, the multiplier that closes
+    the gap; compliant laws, one Newton step on ``ln = A p(-g)`` with the gap's response ``wn`` [m N-1] to the
+    multiplier (implicit in the contact force: the penalty spring does not lower the stable step)."""
+    if kind == LAW_RIGID:
+        ln_new = ln - g / wn if wn > 0.0 else ln
+    else:
+        p, dp = normal_pressure(kind, c, nexp, -g, tab)
+        ln_new = ln + (area * p - ln) / (1.0 + area * dp * wn)
+    if ln_new < 0.0:
+        ln_new = 0.0
+    return ln_new
+
+
+@njit(cache=True)
+def _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt):
+    """New tangential multiplier [N] and state (1 stick, 2 slip) from the relative tangential increment ``st``
+    [m] over the step: stick if the multiplier that cancels it stays within ``mu_s ln``, else slip with the
+    kinetic curve ``mu(v)`` at the slip rate ``v`` that force leaves at the end of the step."""
+    lt_stick = lt - st / wt if wt > 0.0 else lt
+    cap = (mu_k + par_p[3]) * ln_new
+    if -cap <= lt_stick <= cap:
+        return lt_stick, 1
+    sgn = 1.0 if lt_stick > 0.0 else -1.0
+    mu = mu_k
+    if par_p[4] > 0.0 or par_p[5] != 0.0:
+        # the slip rate the sliding force leaves at the end of the step, v = (st + wt (lt_new - lt)) / dt, and
+        # mu(v): a fixed point contracting by dt lam_n |mu'| / m_node per pass (~1e-2)
+        for _ in range(4):
+            v_slip = (st + wt * (sgn * mu * ln_new - lt)) / dt
+            mu = friction_coefficient(mu_k, par_p[3], par_p[4], par_p[5], v_slip)
+    return sgn * mu * ln_new, 2
+
+
+@njit(cache=True)
+def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
+                  pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol):
     """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
 
-    On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that no active slave
-    node penetrates its master segment and the tangential multiplier obeys Coulomb's law
-    ``|lam_t| <= mu lam_n`` (stick: zero relative tangential increment over the step). Normal and
+    On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that every active slave
+    node obeys its pair's normal law (rigid: no penetration of its master; linear/power: the multiplier equals
+    ``A p(d)`` at the corrected penetration ``d``, ``A`` its tributary area ``s_area``) and the tangential
+    multiplier obeys Coulomb's law with static and kinetic coefficients (stick: zero relative tangential
+    increment over the step while ``|lam_t| <= mu_s lam_n``; slip: ``|lam_t| = mu(v) lam_n``). Normal and
     tangential multipliers of all slave nodes are iterated together by projected Gauss-Seidel until the
-    largest correction of a sweep moves no node pair by more than ``tol`` [m].
+    largest correction of a sweep moves no node pair by more than ``tol`` [m]. ``mu[k]`` is the kinetic
+    coefficient of slave ``k`` now (``mu0 + mu_p(t)``); ``pair_par`` the pairs' law rows and ``law_tab`` their
+    tables (:mod:`fivid.contact._kernels`); a rigid master (line, circle) moves its surface at the ramped speed at
+    ``t_new`` [s], the end of the step.
 
     Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
     force on slave ``k`` along ``n`` and ``t``, on entry the previous step's values (warm start: applied first,
-    then projected and iterated, so the converged result does not depend on it beyond the tolerance) (the master nodes get ``-N_j`` times it); ``cstate[k]`` 0 open,
-    1 stick, 2 slip; ``geo[k] = (N0, N1, nx, ny, tx, ty, inside)``. Returns the number of sweeps.
+    then projected and iterated, so the converged result does not depend on it beyond the tolerance) (the master
+    nodes get ``-N_j`` times it); ``cstate[k]`` 0 open, 1 stick, 2 slip; ``geo[k] = (N0, N1, nx, ny, tx, ty,
+    inside, penetration, surface velocity along t)``. Returns the number of sweeps.
     """
     ns = slave_node.shape[0]
     dt2 = dt * dt
     for k in range(ns):
         p = slave_pair[k]
-        m0 = master_ptr[p]
-        nseg = master_ptr[p + 1] - m0 - 1
-        s, xi, nx, ny, tx, ty, inside = _locate(X, u, npd, slave_node[k], master_nodes, m0, nseg, seg[k],
-                                                pair_sign[p])
-        seg[k] = s
-        geo[k, 0] = 1.0 - xi
-        geo[k, 1] = xi
+        mk = int(pair_par[p, 6])
+        if mk == MASTER_EDGE:
+            m0 = master_ptr[p]
+            nseg = master_ptr[p + 1] - m0 - 1
+            s, xi, nx, ny, tx, ty, inside = _locate(X, u, npd, slave_node[k], master_nodes, m0, nseg, seg[k],
+                                                    pair_sign[p])
+            seg[k] = s
+            geo[k, 0] = 1.0 - xi
+            geo[k, 1] = xi
+            geo[k, 8] = 0.0
+        else:
+            sn = slave_node[k]
+            g, nx, ny, tx, ty, vt = rigid_geometry(mk, pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
+                                                   pair_par[p, 10], pair_par[p, 11], pair_par[p, 12], X[sn],
+                                                   X[sn + npd], X[sn] + u[sn], X[sn + npd] + u[sn + npd])
+            inside = math.isfinite(g)
+            geo[k, 0] = 0.0
+            geo[k, 1] = 0.0
+            geo[k, 8] = vt * surface_ramp(t_new, pair_par[p, 13], pair_par[p, 14])
         geo[k, 2] = nx
         geo[k, 3] = ny
         geo[k, 4] = tx
         geo[k, 5] = ty
         geo[k, 6] = 1.0 if inside else 0.0
+        geo[k, 7] = 0.0
     # warm start: apply the previous step's multipliers (re-projected by the first sweep); in steady sliding
     # they change little per step, so the projected Gauss-Seidel needs a few sweeps instead of tens
     for k in range(ns):
@@ -399,7 +469,7 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
             lam[k, 1] = 0.0
             cstate[k] = 0
             continue
-        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
         n0 = geo[k, 0]
         n1 = geo[k, 1]
         _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
@@ -411,7 +481,8 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
         for k in range(ns):
             if geo[k, 6] == 0.0:
                 continue
-            sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
+            p = slave_pair[k]
+            sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
             n0 = geo[k, 0]
             n1 = geo[k, 1]
             nx = geo[k, 2]
@@ -422,31 +493,28 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
             wx = minv_c[sn] + n0 * n0 * minv_c[a] + n1 * n1 * minv_c[b]
             wy = minv_c[sn + npd] + n0 * n0 * minv_c[a + npd] + n1 * n1 * minv_c[b + npd]
             # normal: gap in the current (predicted + corrected) configuration
-            gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
-            gy = (X[sn + npd] + u[sn + npd] - n0 * (X[a + npd] + u[a + npd])
-                  - n1 * (X[b + npd] + u[b + npd]))
-            g = gx * nx + gy * ny
+            if pair_par[p, 6] == MASTER_EDGE:
+                gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
+                gy = (X[sn + npd] + u[sn + npd] - n0 * (X[a + npd] + u[a + npd])
+                      - n1 * (X[b + npd] + u[b + npd]))
+                g = gx * nx + gy * ny
+            else:
+                g = rigid_geometry(int(pair_par[p, 6]), pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
+                                   pair_par[p, 10], 0.0, 0.0, X[sn], X[sn + npd], X[sn] + u[sn],
+                                   X[sn + npd] + u[sn + npd])[0]
             wn = dt2 * (nx * nx * wx + ny * ny * wy)
             ln = lam[k, 0]
-            ln_new = ln - g / wn if wn > 0.0 else ln
-            if ln_new < 0.0:
-                ln_new = 0.0
+            ln_new = _normal_update(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], law_tab[p], s_area[k], g,
+                                    ln, wn)
             dn = ln_new - ln
-            # tangential: relative tangential increment over the step, including the normal correction
+            # tangential: relative tangential increment over the step (the master's surface velocity removed),
+            # including the normal correction
             rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx
             ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy
-            st = dt * (rx * tx + ry * ty)
+            st = dt * (rx * tx + ry * ty - geo[k, 8])
             wt = dt2 * (tx * tx * wx + ty * ty * wy)
             lt = lam[k, 1]
-            lt_new = lt - st / wt if wt > 0.0 else lt
-            cap = mu[k] * ln_new
-            state = 1
-            if lt_new > cap:
-                lt_new = cap
-                state = 2
-            elif lt_new < -cap:
-                lt_new = -cap
-                state = 2
+            lt_new, state = _tangential_update(lt, st, wt, ln_new, mu[k], pair_par[p], dt)
             if ln_new == 0.0:
                 state = 0
             dtn = lt_new - lt
@@ -454,6 +522,7 @@ def contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, 
             lam[k, 0] = ln_new
             lam[k, 1] = lt_new
             cstate[k] = state
+            geo[k, 7] = -(g + dn * wn) if pair_par[p, 0] != LAW_RIGID else 0.0
             # convergence measured as the displacement the last increments moved the node pair by: the
             # positions carry round-off eps |x| ~ 1e-17 m, i.e. multiplier noise eps |x| / (dt^2 w), so a
             # relative multiplier tolerance can be unreachable at small dt
@@ -501,8 +570,8 @@ def run_steps(
     spr_dof, spr_kc,
     con_dof, con_grp, grp_par, grp_v, con_react,
     ld_dof, ld_force, ld_grp, ld_par, ld_scale, ld_vold,
-    X, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, minv_c, seg, geo, lam, cstate,
-    gs_max_iter, gs_tol, mu_tab, mu_rate, mu_now, vold_c, cnode_slot, cnodes,
+    X, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, pair_par, law_tab, s_area, minv_c, seg, geo,
+    lam, cstate, gs_max_iter, gs_tol, mu_tab, mu_rate, mu_now, vold_c, cnode_slot, cnodes,
     sens_node, sens_dir,
     u, v, w, vf, f, scratch, acc, react_acc,
     rec, rec_sens, rec_contact, runaway_factor, diag,
@@ -514,7 +583,8 @@ def run_steps(
     ``v* = v + dt (-M^-1 f - alpha v)``, ``u* = u + dt v*``; imposed motions on the constrained dofs (their
     reactions ``m a + f + alpha m v`` summed for the force transducer); contact correction
     (:func:`contact_solve`, constraints at ``t + dt``); energy increments with mid-step velocities, so that
-    ``KE - KE0 = W_ext + W_load + W_cn + W_ct - W_int - D_alpha`` holds to round-off (``W_load``: work of the
+    ``KE - KE0 = W_ext + W_load + W_drive + W_cn + W_ct - W_int - D_alpha`` holds to round-off (``W_drive``: work
+    of the moving rigid masters' surfaces; ``W_load``: work of the
     pressure loads ``ld_*``, applied as ``f -= r(t) F`` before the predictor; ``ld_scale``, ``ld_vold`` are scratch).
 
     Layout: dof vectors have length ``2*npd`` (x part, y part); nodes are given by x-index; springs and
@@ -587,6 +657,7 @@ def run_steps(
             # ---- contact
             wcn = 0.0
             wct = 0.0
+            wdr = 0.0
             if ns > 0:
                 if n_mu == 1:
                     for k in range(ns):
@@ -601,8 +672,9 @@ def run_steps(
                     nd = cnodes[q]
                     vold_c[q, 2] = v[nd]
                     vold_c[q, 3] = v[nd + npd]
-                sweeps = contact_solve(X, u, v, npd, dt, minv_c, slave_node, slave_pair, master_ptr, master_nodes,
-                                       pair_sign, seg, geo, lam, cstate, mu_now, gs_max_iter, gs_tol)
+                sweeps = contact_solve(X, u, v, npd, dt, t + dt, minv_c, slave_node, slave_pair, master_ptr,
+                                       master_nodes, pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate,
+                                       mu_now, gs_max_iter, gs_tol)
                 acc[GS_SWEEPS] += sweeps
                 acc[GS_MAX] = max(acc[GS_MAX], sweeps)
                 if sweeps >= gs_max_iter:
@@ -620,7 +692,7 @@ def run_steps(
                     if cstate[k] == 0:
                         rec_contact[r, p, 4] += 1.0
                         continue
-                    sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg)
+                    sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
                     n0 = geo[k, 0]
                     n1 = geo[k, 1]
                     qs = cnode_slot[sn]
@@ -630,7 +702,10 @@ def run_steps(
                     ry = 0.5 * ((vold_c[qs, 1] + v[sn + npd]) - n0 * (vold_c[qa, 1] + v[a + npd])
                                 - n1 * (vold_c[qb, 1] + v[b + npd]))
                     wcn += lam[k, 0] * (rx * geo[k, 2] + ry * geo[k, 3])
-                    wct += lam[k, 1] * (rx * geo[k, 4] + ry * geo[k, 5])
+                    # a rigid master's surface moves at geo[k, 8] along t: the friction dissipates on the
+                    # relative slip and the drive does the rest of the work on the slave
+                    wct += lam[k, 1] * (rx * geo[k, 4] + ry * geo[k, 5] - geo[k, 8])
+                    wdr += lam[k, 1] * geo[k, 8]
                     rec_contact[r, p, 0] += lam[k, 0]
                     rec_contact[r, p, 1] += lam[k, 1]
                     rec_contact[r, p, 1 + cstate[k]] += 1.0
@@ -656,6 +731,7 @@ def run_steps(
             acc[W_EXT] += dt * wext
             acc[W_CN] += dt * wcn
             acc[W_CT] += dt * wct
+            acc[W_DRIVE] += dt * wdr
         # ---- end of an output interval: record
         step_end = step0 + (r + 1) * n_sub
         rec[r, R_FT] = react_acc[0] / n_sub
@@ -676,6 +752,14 @@ def run_steps(
         rec[r, R_WCN] = acc[W_CN]
         rec[r, R_WCT] = acc[W_CT]
         rec[r, R_WLOAD] = acc[W_LOAD]
+        rec[r, R_WDRIVE] = acc[W_DRIVE]
+        epen = 0.0
+        for k in range(ns):
+            p = slave_pair[k]
+            if pair_par[p, 0] != LAW_RIGID and cstate[k] != 0:
+                epen += s_area[k] * normal_energy(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], geo[k, 7],
+                                                  law_tab[p])
+        rec[r, R_EPEN] = epen
         for s in range(sens_node.shape[0]):
             nd = sens_node[s]
             rec_sens[r, s, 0] = v[nd] * sens_dir[s, 0] + v[nd + npd] * sens_dir[s, 1]

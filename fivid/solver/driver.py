@@ -241,5 +241,8 @@ def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time
         if base is None:
             raise ConfigError("sliding_velocity was given but the model has no motion with role 'base'")
         base_velocity = base_dir * sliding_velocity
-    pressure_ramp = max((float(ld.ramp_time) for ld in model.loads), default=0.0)
+    # the pressure loads' and rigid surfaces' ramps are part of the transient too
+    pressure_ramp = max([float(ld.start + ld.ramp_time) for ld in model.loads]
+                        + [float(c.rigid.start + c.rigid.ramp_time) for c in model.contacts if c.rigid is not None],
+                        default=0.0)
     return Schedule(load_disp, load_ramp, base_start, base_velocity, base_ramp, pressure_ramp), signs, preload

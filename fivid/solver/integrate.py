@@ -69,7 +69,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     react_acc = np.zeros(2)
     ns = ka.slave_node.size
     n_pairs = ka.master_ptr.size - 1
-    geo = np.zeros((ns, 7))
+    geo = np.zeros((ns, 9))
     lam = np.zeros((ns, 2))
     cstate = np.zeros(ns, dtype=np.int64)
     mu_now = np.zeros(ns)
@@ -87,6 +87,10 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     seg_len = np.inf
     for p in range(ka.master_ptr.size - 1):
         nodes = ka.master_nodes[ka.master_ptr[p]:ka.master_ptr[p + 1]]
+        if nodes.size < 2:  # a rigid master: the slave edge's spacing
+            nodes = ka.slave_node[ka.slave_pair == p]
+            if nodes.size < 2:
+                continue
         seg_len = min(seg_len, float(np.hypot(np.diff(ka.X[nodes]), np.diff(ka.X[nodes + st.npd])).min()))
     seg_len = seg_len if np.isfinite(seg_len) else 1.0
     gs_tol = settings.gs_tolerance * seg_len
@@ -102,7 +106,8 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
                 ka.spr_dof, ka.spr_kc,
                 ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
                 ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
-                ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.minv_c,
+                ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.pair_par,
+                ka.law_tab, ka.s_area, ka.minv_c,
                 seg, geo, lam, cstate,
                 settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
                 ka.cnode_slot, ka.cnodes,

@@ -59,10 +59,12 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     strain = e[:, K.R_U]
     damping = e[:, K.R_DA] + (e[:, K.R_WINT] - strain)
     friction = -e[:, K.R_WCT]
-    impact = -e[:, K.R_WCN]
+    contact_energy = e[:, K.R_EPEN]
+    impact = -e[:, K.R_WCN] - contact_energy
     wext = e[:, K.R_WEXT]
     wload = e[:, K.R_WLOAD]
-    closure = wext + wload - (ke - raw.ke0 + strain + damping + friction + impact)
+    wdrive = e[:, K.R_WDRIVE]
+    closure = wext + wload + wdrive - (ke - raw.ke0 + strain + contact_energy + damping + friction + impact)
     data = {
         "friction_force": (("time",), ft),
         "normal_force": (("time",), fn),
@@ -70,6 +72,8 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "strain_energy": (("time",), strain),
         "external_work": (("time",), wext),
         "load_work": (("time",), wload),
+        "drive_work": (("time",), wdrive),
+        "contact_energy": (("time",), contact_energy),
         "damping_dissipation": (("time",), damping),
         "friction_dissipation": (("time",), friction),
         "impact_dissipation": (("time",), impact),
@@ -102,10 +106,13 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         ds["sensor_displacement"].attrs.update(
             units="m", long_name="displacement at the sensors along their direction (diagnostic)",
             description="value at the end of the first oversampled interval of each output period")
-    ds["impact_dissipation"].attrs["description"] = "minus the work of the normal contact multipliers"
+    ds["impact_dissipation"].attrs["description"] = ("minus the work of the normal contact forces, less the energy "
+                                                     "stored in the compliant contact laws (contact_energy)")
+    ds["drive_work"].attrs["description"] = "work of the moving rigid contact surfaces (belt, rotating cylinder)"
+    ds["contact_energy"].attrs["description"] = "energy stored in the compliant normal contact laws, sum of A int p dd"
     ds["energy_balance_error"].attrs["description"] = (
-        "external_work + load_work - (kinetic - kinetic(0) + strain + damping + friction + impact); round-off for a "
-        "correct run")
+        "external_work + load_work + drive_work - (kinetic - kinetic(0) + strain + contact_energy + damping + "
+        "friction + impact); round-off for a correct run")
     if len(sensors) == 1:
         ds["acceleration"].attrs["sensor"] = sensors[0]
     mu_desc = fric.description
@@ -137,7 +144,12 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "rayleigh_beta": float(model.rayleigh_beta),
         "damping_scheme": scheme_name(model.rayleigh_beta, model.damping_cutoff),
         "damping_cutoff": float(model.damping_cutoff),
-        "contact_method": "node-to-segment, forward-increment Lagrange multipliers, Coulomb stick/slip, Gauss-Seidel",
+        "contact_method": "node-to-segment (or node-to-rigid-surface), forward-increment multipliers (rigid law: "
+                          "Lagrange; compliant laws: the penalty force at the end-of-step penetration), Coulomb "
+                          "stick/slip with static/kinetic coefficients, Gauss-Seidel",
+        "contact_laws": "; ".join(f"{c.name}: normal {c.law.describe()}; friction {c.friction.describe(c.mu)}"
+                                  + (f"; master {c.rigid.describe()}" if c.rigid is not None else "")
+                                  for c in model.contacts),
         "contact_gs_tolerance": settings.gs_tolerance,
         "contact_gs_mean_sweeps": float(raw.acc[K.GS_SWEEPS] / max(raw.steps, 1)),
         "contact_gs_max_sweeps": int(raw.acc[K.GS_MAX]),

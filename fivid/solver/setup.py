@@ -40,7 +40,7 @@ class Schedule:
     base_ramp : float
         Ramp time of the base velocity [s].
     pressure_ramp : float
-        Longest ramp of the pressure loads (they start at t = 0) [s].
+        Latest end of the ramps of the pressure loads and of the rigid surfaces' motion [s].
     """
 
     load_displacement: float | None
@@ -86,6 +86,9 @@ class KernelArrays:
     ld_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
     ld_grp: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     ld_par: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    pair_par: np.ndarray = field(default_factory=lambda: np.zeros((0, 15)))
+    s_area: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    law_tab: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))
     extras: dict = field(default_factory=dict)
 
 
@@ -163,12 +166,23 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     cnodes_g = np.unique(np.concatenate([slave_global, _idx(master)])) if slave_nodes else _idx([])
     cnode_slot = np.full(st.npd, -1, dtype=np.int64)
     cnode_slot[st.node_index(cnodes_g)] = np.arange(cnodes_g.size)
-    # initial segment of each slave: the nearest master segment midpoint
+    # initial segment of each slave: the nearest master segment midpoint (a rigid master has none)
     seg = np.zeros(slave_global.size, dtype=np.int64)
     for k, (s, p) in enumerate(zip(slave_global, slave_pair)):
         m = _idx(master[ptr[p]:ptr[p + 1]])
+        if m.size < 2:
+            continue
         mid = 0.5 * (model.coords[m[:-1]] + model.coords[m[1:]])
         seg[k] = int(np.argmin(np.linalg.norm(mid - model.coords[s], axis=1)))
+    from fivid.contact import kernel_row, kernel_tables
+    from fivid.fe.contact import slave_areas
+
+    from fivid.contact._kernels import NPAR
+
+    pair_par = np.array([kernel_row(c.law, c.friction, c.rigid) for c in model.contacts]).reshape(
+        len(model.contacts), NPAR)
+    s_area = np.concatenate([slave_areas(model, c) for c in model.contacts]) if model.contacts else np.zeros(0)
+    law_tab = kernel_tables([c.law for c in model.contacts])
     # ---- pressure loads: the non-zero nodal forces of each load, ramped from t = 0
     ld_dof, ld_force, ld_grp = [], [], []
     for g, load in enumerate(model.loads):
@@ -177,7 +191,7 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
         ld_dof.append(st.dof_index(nz))
         ld_force.append(fl[nz])
         ld_grp.append(np.full(nz.size, g))
-    ld_par = np.array([[0.0, float(ld.ramp_time)] for ld in model.loads]).reshape(-1, 2)
+    ld_par = np.array([[float(ld.start), float(ld.ramp_time)] for ld in model.loads]).reshape(-1, 2)
     # ---- sensors
     sens_node = _idx([st.node_index(s.node) for s in model.sensors])
     sens_dir = np.array([np.asarray(s.direction, float) for s in model.sensors]).reshape(-1, 2)
@@ -194,4 +208,6 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
         ld_dof=_idx(np.concatenate(ld_dof) if ld_dof else []),
         ld_force=np.ascontiguousarray(np.concatenate(ld_force) if ld_force else np.zeros(0)),
         ld_grp=_idx(np.concatenate(ld_grp) if ld_grp else []), ld_par=np.ascontiguousarray(ld_par),
+        pair_par=np.ascontiguousarray(pair_par, dtype=float), s_area=np.ascontiguousarray(s_area, dtype=float),
+        law_tab=np.ascontiguousarray(law_tab, dtype=float),
     )

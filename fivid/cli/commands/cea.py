@@ -1,4 +1,4 @@
-"""``fivid cea MODEL.yaml --load Q --mu START STOP STEPS [--json]``: complex eigenvalue analysis against friction."""
+"""``fivid cea MODEL.yaml [--load Q] --mu START STOP STEPS [--json]``: complex eigenvalue analysis against friction."""
 
 from __future__ import annotations
 
@@ -20,8 +20,9 @@ def register(subparsers) -> None:
     help_ = "complex eigenvalue analysis: mode-coupling instability against the friction coefficient"
     p = subparsers.add_parser("cea", help=help_, description=_DESCRIPTION)
     p.add_argument("model", metavar="MODEL.yaml", help="model config with a contact pair and a base motion")
-    p.add_argument("--load", required=True, metavar="Q",
-                   help="normal load with unit, e.g. '5 N' (the preload the contact is linearised about)")
+    p.add_argument("--load", metavar="Q",
+                   help="normal load with unit, e.g. '5 N' (the preload the contact is linearised about); leave it "
+                        "out for a model pressed by its own pressure loads (e.g. configs/models/ring.yaml)")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")
     p.add_argument("-n", "--n-modes", type=int, default=20, metavar="N", help="modes reported (default 20)")
@@ -66,8 +67,11 @@ def run(args) -> int:
     from fivid.cli.commands.modes import _positive_load
     from fivid.units import parse_quantity
 
-    load = _positive_load(args.load, parse_quantity)
+    load = None if args.load is None else _positive_load(args.load, parse_quantity)
     model = load_model(args.model)
+    if load is None and not model.loads:
+        raise ConfigError("--load Q is needed (e.g. --load '5 N'): the contact is linearised about the nodes closed "
+                          "under that normal load (only a model pressed by its own pressure loads can go without)")
     from tqdm import tqdm
 
     # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
@@ -81,7 +85,8 @@ def run(args) -> int:
         print(dumps_json(result))
         return 0
     print(f"{model.describe()}; modal basis {result['n_basis']}; mu {mu[0]:g}..{mu[-1]:g} ({mu.size} steps); "
-          f"contact closed under {load:g} N at slave node(s) {result['closed_slave_nodes']}")
+          f"contact closed under {f'{load:g} N' if load is not None else 'the pressure loads'} at "
+          f"{len(result['closed_slave_nodes'])} slave node(s)")
     print(" mode  f(mu0) [Hz]  f(mu1) [Hz]  max Re [s-1]  critical mu  partner")
     for m in result["modes"]:
         crit = "-" if m["critical_mu"] is None else f"{m['critical_mu']:.4f}"

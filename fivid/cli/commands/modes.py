@@ -1,4 +1,5 @@
-"""``fivid modes MODEL.yaml [-n N] [--load Q] [--json] [-o MODES.nc]``: natural frequencies and mode shapes of a model."""
+"""``fivid modes MODEL.yaml [-n N] [--load Q | --contact] [--json] [-o MODES.nc]``: natural frequencies and mode
+shapes of a model."""
 
 from __future__ import annotations
 
@@ -27,7 +28,9 @@ def register(subparsers) -> None:
     p.add_argument("--load", metavar="Q",
                    help="normal load with unit, e.g. '5 N': couple the bodies by normal penalty springs at the slave "
                         "nodes closed under it (static preload solve; no friction)")
-    p.add_argument("--contact", action="store_true", help="same as --load (which it needs): kept for clarity")
+    p.add_argument("--contact", action="store_true",
+                   help="couple the bodies at the contact: with --load, under that normal load; without, under the "
+                        "model's pressure loads (e.g. a ring squeezed on a shaft)")
     p.add_argument("--damping-curve", metavar="PNG",
                    help="plot the modal damping ratio vs frequency of the model's damping scheme (classic or "
                         "band-limited Rayleigh, docs/model-config.md) with the modes marked, to this PNG file")
@@ -49,12 +52,13 @@ def run(args) -> int:
         check_writable(args.damping_curve, overwrite=True)
     from fivid.units import parse_quantity
 
-    if args.contact and args.load is None:
-        raise ConfigError("--contact needs --load Q (e.g. --load '5 N'): the contact is linearised about the "
-                          "nodes closed under that normal load")
     load = None if args.load is None else _positive_load(args.load, parse_quantity)
     model = load_model(args.model)
-    ds = modal_analysis(model, args.n_modes, mass=args.mass, include_contact=load is not None, normal_load=load)
+    if args.contact and load is None and not model.loads:
+        raise ConfigError("--contact needs --load Q (e.g. --load '5 N'): the contact is linearised about the "
+                          "nodes closed under that normal load (or pressure loads in the model that press it)")
+    include = load is not None or bool(args.contact)
+    ds = modal_analysis(model, args.n_modes, mass=args.mass, include_contact=include, normal_load=load)
     if args.output:
         write_modes(ds, args.output, overwrite=args.overwrite)
     summary = modes_to_json(ds)
@@ -68,12 +72,17 @@ def run(args) -> int:
         print(dumps_json(summary))
     else:
         print(f"{model.describe()}; {ds.attrs['n_free_dofs']} free dofs; {args.mass} mass")
-        if load is not None:
-            print(f"contact closed under {load:g} N at slave node(s) {summary['closed_slave_nodes']}")
+        if "contact" in summary:
+            what = f"{load:g} N" if load is not None else "the model's pressure loads"
+            print(f"contact closed under {what} at {len(summary['closed_slave_nodes'])} slave node(s)")
+            for c in summary["contact"]:
+                print(f"  {c['contact']}: {c['normal_law']}; normal force {c['normal_force_n']:.4g} N over "
+                      f"{1e3 * c['contact_length_m']:.4g} mm, mean/peak pressure {c['mean_pressure_pa']:.4g}/"
+                      f"{c['peak_pressure_pa']:.4g} Pa, normal stiffness {c['normal_stiffness_n_per_m']:.4g} N/m")
         print(f"damping: {summary['damping_scheme']}")
         print(" mode   frequency [Hz]   damping ratio")
         for i, (f, z) in enumerate(zip(summary["frequencies_hz"], summary["damping_ratios"]), 1):
-            print(f"{i:5d}   {f:14.2f}   {z:13.5f}")
+            print(f"{i:5d}   {f:14.2f}   " + (f"{z:13.5f}" if z is not None else f"{'-':>13}"))  # rigid: 0 Hz
         if args.output:
             print(f"mode shapes written to {args.output}", file=sys.stderr)
     return 0
