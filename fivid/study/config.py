@@ -125,10 +125,14 @@ def _jsonable(x):
     raise TypeError(type(x))
 
 
-def _merge(base: dict, over: Mapping) -> dict:
+def _merge(base: dict, over: Mapping, path: str = "") -> dict:
+    """``over`` merged into ``base`` key by key; a sweep axis is replaced whole (values vs start/stop/num)."""
     out = copy.deepcopy(base)
     for k, v in over.items():
-        out[k] = _merge(out[k], v) if isinstance(v, Mapping) and isinstance(out.get(k), Mapping) else copy.deepcopy(v)
+        if isinstance(v, Mapping) and isinstance(out.get(k), Mapping) and path != "sweep":
+            out[k] = _merge(out[k], v, k if not path else f"{path}.{k}")
+        else:
+            out[k] = copy.deepcopy(v)
     return out
 
 
@@ -161,8 +165,9 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
         if np.any(np.diff(cea["mu"]) <= 0) or np.any(cea["mu"] < 0):
             raise ctx.error("cea.mu", "the CEA's mu must be >= 0 and increasing")
     points = _points(ctx, data.get("points") or {}, lumped is not None, base)
-    if cea is not None and model_path is not None and "normal_load" not in cea:
-        raise ctx.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N)")
+    if cea is not None and model_path is not None and "normal_load" not in cea and not _pressed_by_loads(model_path):
+        raise ctx.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N), "
+                               "unless the model's pressure loads press the contact")
     if lumped is not None and ({"mesh", "time_step"} & set(axes)):
         raise ctx.error("sweep", "mesh and time_step axes refine an FE model, not a lumped one")
     if lumped is not None and "transient" in points and "mu" not in axes:
@@ -170,6 +175,14 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
     return Study(name=str(data.get("name", "study")), description=str(data.get("description", "")),
                  model_path=model_path, lumped=lumped, axes=axes, combine=combine, cea=cea, points=points,
                  source=origin, config=data, quick=quick)
+
+
+def _pressed_by_loads(model_path) -> bool:
+    """True when the model config has pressure loads (its contact state under them needs no clamp load)."""
+    import yaml
+
+    with open(model_path, encoding="utf-8") as fh:
+        return bool((yaml.safe_load(fh) or {}).get("loads"))
 
 
 def _mapping(ctx, value, key, allowed) -> dict:

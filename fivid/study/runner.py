@@ -51,14 +51,18 @@ def _system(study) -> dict:
         return {"lumped": study.lumped}
     out = {"model_path": str(study.model_path)}
     if "modes" in study.points:
-        from fivid.fe import load_model
+        from fivid.study.tasks import refined_model
 
-        model = load_model(study.model_path)
-        if model.contacts:
-            from fivid.study.coupling import coupling_bounds
+        bounds = {}
+        for factor in np.unique(study.axes.get("mesh", [1.0])):  # per mesh of the sweep
+            model = refined_model(study.model_path, float(factor))
+            if model.contacts:
+                from fivid.study.coupling import coupling_bounds
 
-            f0, fi = coupling_bounds(model, study.points["modes"]["n_modes"])
-            out["coupling_bounds"] = (f0.tolist(), fi.tolist())
+                f0, fi = coupling_bounds(model, study.points["modes"]["n_modes"])
+                bounds[repr(float(factor))] = (f0.tolist(), fi.tolist())
+        if bounds:
+            out["coupling_bounds"] = bounds
     return out
 
 
@@ -176,8 +180,12 @@ def _study_cea(study):
         from fivid.fe import load_model
         from fivid.fe.cea import complex_eigenvalue_analysis
 
+        from fivid.study.tasks import refined_model
+
         load = study.cea.get("normal_load")
-        ds = complex_eigenvalue_analysis(load_model(study.model_path), mu, normal_load=load)
+        meshes = np.unique(study.axes.get("mesh", [1.0]))  # one mesh swept: the CEA on it too
+        model = refined_model(study.model_path, float(meshes[0])) if meshes.size == 1 else load_model(study.model_path)
+        ds = complex_eigenvalue_analysis(model, mu, normal_load=load)
         lam = ds["real_part"].transpose("mu", "mode").values + 2j * np.pi * ds["frequency"].transpose("mu", "mode").values
         p = ds["partner"].values  # mode numbers (1-based), -1 for none
         res = {"eigenvalues": lam, "critical_mu": ds["critical_mu"].values, "partner": np.where(p > 0, p - 1, -1)}
