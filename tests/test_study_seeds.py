@@ -88,3 +88,19 @@ def test_ring_study_quick(tmp_path, capsys):
     assert by_mu[0.3]["growth_rate"] > 0 and by_mu[0.3]["onset_time"] > 0
     assert s["critical_mu"]["value"] < 0.3
     assert by_mu[0.01]["growth_rate"] == pytest.approx(by_mu[0.01]["cea_growth_rate"], rel=0.15)
+
+
+def test_transition_load_per_roughness():
+    """With roughness swept too, summary.json gives the transition per roughness (a rougher surface is more
+    compliant: it couples the beams at a higher load), besides the first group's."""
+    from fivid.study.runner import _transitions
+
+    pts = [{"normal_load": f, "roughness_ra": ra, "coupling_indicator": k}
+           for ra, ks in ((0.4e-6, (0.3, 0.6, 0.8)), (1.6e-6, (0.1, 0.3, 0.9)))
+           for f, k in zip((1.0, 10.0, 100.0), ks)]
+    out = _transitions(pts)
+    assert out["transition_load"]["bracket"] == [1.0, 10.0]
+    assert out["transition_load"]["value"] == pytest.approx(10 ** (2 / 3))
+    smooth, rough = out["transition_loads"]
+    assert smooth["roughness_ra"] == 0.4e-6 and smooth["value"] == pytest.approx(10 ** (2 / 3))
+    assert rough["roughness_ra"] == 1.6e-6 and rough["value"] == pytest.approx(10 ** (4 / 3))

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.errors import ConfigError
+
 __all__ = [
     "GAUSS_POINTS_2X2",
     "shape_functions_q4",
@@ -266,7 +268,7 @@ def damping_matrix(model, *, mass: str = "lumped", stiffness=None):
     import scipy.sparse as sp
 
     if mass not in ("lumped", "consistent"):
-        raise ValueError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
+        raise ConfigError(f"mass must be 'lumped' or 'consistent', got {mass!r}", key="mass")
     M = sp.diags(lumped_mass(model)) if mass == "lumped" else consistent_mass(model)
     K = stiffness_matrix(model) if stiffness is None else stiffness
     C = model.rayleigh_alpha * M + model.rayleigh_beta * K
@@ -303,5 +305,5 @@ def rayleigh_from_damping_ratios(f1: float, zeta1: float, f2: float, zeta2: floa
     from fivid.fe.damping import fit_rayleigh
 
     if not (float(f1) > 0 and float(f2) > 0) or float(f1) == float(f2):
-        raise ValueError(f"need two distinct positive frequencies, got {f1} and {f2} Hz")
+        raise ConfigError(f"need two distinct positive frequencies, got {f1} and {f2} Hz", key="damping.ratios")
     return fit_rayleigh(f1, zeta1, f2, zeta2)

@@ -23,6 +23,8 @@ import logging
 
 import numpy as np
 
+from fivid.errors import ConfigError
+
 __all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "complex_eigenvalue_analysis",
            "cea_to_json"]
 
@@ -178,7 +180,7 @@ def complex_eigenvalue_sweep(projection: ModalProjection, mu, *, n_report: int |
 
     mu = np.asarray(mu, dtype=float)
     if mu.ndim != 1 or mu.size < 1 or np.any(np.diff(mu) <= 0):
-        raise ValueError(f"mu must be a non-empty increasing 1-D array, got {mu!r}")
+        raise ConfigError(f"mu must be a non-empty increasing 1-D array, got {mu!r}", key="mu")
     m = projection.n
     lam = np.zeros((mu.size, m), dtype=complex)
     vecs = []
@@ -275,18 +277,17 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     import scipy.sparse as sp
     import xarray as xr
 
-    from fivid.errors import FividError
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
     from fivid.fe.contact import linearise_preloaded_contact
     from fivid.fe.modal import _contact_state_attrs, constrained_matrices
     from fivid.schema import apply_cf_attrs, new_history
 
     if not model.contacts:
-        raise FividError("CEA needs a contact pair: the model config has no 'contacts'")
+        raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
     contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)
     if not np.any(contact.direction):
-        raise FividError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
-                         "motion with role 'base' to the config)")
+        raise ConfigError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
+                          "motion with role 'base' to the config)", key="motions")
     K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact)
     Kf = contact.friction_stiffness_matrix()[free][:, free]
     if damping:
@@ -295,7 +296,7 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         C = sp.csr_matrix(K.shape)
     n_basis = max(3 * n_modes, 40) if n_basis is None else int(n_basis)
     if n_basis < n_modes:
-        raise ValueError(f"n_basis ({n_basis}) must be >= n_modes ({n_modes})")
+        raise ConfigError(f"n_basis ({n_basis}) must be >= n_modes ({n_modes})", key="n_basis")
     loads = sp.hstack([contact.G_n, contact.G_t]).T.tocsr()[free] if augment else None
     proj = project_on_modes(K, M, C, Kf, n_basis, static_loads=loads)
     from threadpoolctl import threadpool_limits

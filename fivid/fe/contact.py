@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fivid.errors import FividError
+from fivid.errors import ConfigError
 
 __all__ = ["ContactLinearisation", "linearise_contact", "linearise_preloaded_contact", "sliding_directions",
            "slave_areas", "node_stiffness"]
@@ -149,7 +149,7 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
 
     Raises
     ------
-    FividError
+    ConfigError
         A slave node does not project onto its master edge, or the bodies do not slide relative to each other.
     """
     from fivid.fe.static import contact_geometry
@@ -164,8 +164,9 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
         k = int(np.flatnonzero(off)[0])
         c = model.contacts[geo.slave_pair[k]]
         s = int(geo.slave_node[k])
-        raise FividError(f"contact {c.name!r}: slave node {s} at {model.coords[s].tolist()} m does not project onto "
-                         f"master edge of body {c.master_block!r}; shorten the slave range")
+        raise ConfigError(f"contact {c.name!r}: slave node {s} at {model.coords[s].tolist()} m does not project onto "
+                          f"master edge of body {c.master_block!r}; shorten the slave range",
+                          key=f"contacts.{c.name}.slave")
     vel = sliding_directions(model, velocities)
     tangent = np.stack([-geo.normal[:, 1], geo.normal[:, 0]], axis=1)
     direction = np.zeros(n_slave)

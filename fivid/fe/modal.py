@@ -14,6 +14,8 @@ from os import PathLike
 
 import numpy as np
 
+from fivid.errors import ConfigError
+
 __all__ = ["constrained_matrices", "lowest_modes", "modal_analysis", "write_modes", "modes_to_json"]
 
 log = logging.getLogger("fivid")
@@ -62,7 +64,7 @@ def constrained_matrices(model, *, mass: str = "consistent", include_contact: bo
     elif mass == "lumped":
         M = sp.diags(lumped_mass(model))
     else:
-        raise ValueError(f"mass must be 'consistent' or 'lumped', got {mass!r}")
+        raise ConfigError(f"mass must be 'consistent' or 'lumped', got {mass!r}", key="mass")
     free = model.free_dofs
     return sp.csr_matrix(K)[free][:, free], sp.csr_matrix(M)[free][:, free], free
 
@@ -99,7 +101,8 @@ def lowest_modes(K, M, n_modes: int, *, sigma: float | None = None):
     n = K.shape[0]
     k = int(min(n_modes, n))
     if k < 1:
-        raise ValueError(f"n_modes must be >= 1 and the model must have free dofs, got n_modes={n_modes}, {n} dofs")
+        raise ConfigError(f"n_modes must be >= 1 and the model must have free dofs, got n_modes={n_modes}, {n} dofs",
+                          key="n_modes")
     # ARPACK's vector operations and the dense solver on these sizes are faster on one BLAS thread than on a
     # threaded BLAS competing for the cores (measured 5x on a loaded 2-core machine).
     with threadpool_limits(limits=1, user_api="blas"):

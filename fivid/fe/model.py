@@ -43,6 +43,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from fivid.errors import ConfigError
+
 __all__ = [
     "EDGES",
     "Material",
@@ -98,7 +100,7 @@ class Material:
         if plane == "strain":
             c = E / ((1.0 + nu) * (1.0 - 2.0 * nu))
             return c * np.array([[1.0 - nu, nu, 0.0], [nu, 1.0 - nu, 0.0], [0.0, 0.0, (1.0 - 2.0 * nu) / 2.0]])
-        raise ValueError(f"plane must be 'stress' or 'strain', got {plane!r}")
+        raise ConfigError(f"plane must be 'stress' or 'strain', got {plane!r}", key="plane")
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,7 +180,8 @@ class Block:
 
     def _edge(self, edge: str) -> str:
         if edge not in self.edge_names:
-            raise ValueError(f"edge must be one of {self.edge_names} for body {self.name!r}, got {edge!r}")
+            raise ConfigError(f"edge must be one of {self.edge_names} for body {self.name!r}, got {edge!r}",
+                              key=f"bodies.{self.name}.edge")
         return ANNULUS_EDGES.get(edge, edge)
 
     def edge_nodes(self, edge: str) -> np.ndarray:

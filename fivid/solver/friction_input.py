@@ -75,7 +75,11 @@ def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, *, law=No
             values = np.full((1, ns), float(mu))
             desc = f"Coulomb, constant mu = {float(mu):g} (all contact pairs)"
         else:
-            values = np.array([[model.contacts[p].mu for p in slave_pair]], dtype=float).reshape(1, ns)
+            from fivid.fe.static import slave_friction  # one per-node mu builder (preload and solver)
+
+            values = slave_friction(model)[None, :]
+            if values.shape != (1, ns):
+                raise ValueError(f"slave_pair ({ns} nodes) does not match the model's slave nodes ({values.size})")
             desc = "Coulomb, mu of each contact pair from the model: " + ", ".join(
                 f"{c.name} {c.mu:g}" for c in model.contacts)
         return FrictionTable(values, 1.0, desc, "", "constant")

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from fivid.errors import FividError
+from fivid.study.config import AXES
 
 __all__ = ["run_study", "open_study", "point_key"]
 
@@ -305,9 +306,7 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
                                   "cea_mu_range": [float(cea["mu"][0]), float(cea["mu"][-1])]}
         else:
             out["critical_mu"] = None
-    transition = _transition_load(points)
-    if transition is not None:
-        out["transition_load"] = transition
+    out.update(_transitions(points))
     from fivid.study.fits import power_law_fit
 
     fit = power_law_fit(points, "rms")
@@ -322,12 +321,31 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
     return out
 
 
+def _transitions(points) -> dict:
+    """``transition_load`` (the first group's, see :func:`_transition_load`) and, when other conditions vary,
+    ``transition_loads``: one per combination of them (the contact's compliance follows roughness, say)."""
+    transition = _transition_load(points)
+    if transition is None:
+        return {}
+    out = {"transition_load": transition}
+    others = sorted({k for p in points for k in p if k in AXES and k not in ("normal_load", "seed")
+                     and len({q.get(k) for q in points}) > 1})
+    if others:
+        groups = {}
+        for p in points:
+            groups.setdefault(tuple(p.get(k) for k in others), []).append(p)
+        out["transition_loads"] = [{**dict(zip(others, key)), **(_transition_load(grp) or {})}
+                                   for key, grp in groups.items()]
+    return out
+
+
 def _transition_load(points) -> dict | None:
     """Where the coupling indicator first crosses the weak/strong threshold along the normal load.
 
     ``{"value" [N], "bracket": [lo, hi] [N], "threshold"}``: kappa interpolated linearly in log load between the two
-    swept loads that bracket the crossing (other axes: the first point of each load, in sweep order). None
-    without a load sweep or an indicator; ``value`` null when kappa stays on one side over the swept loads.
+    swept loads that bracket the crossing (other axes: the first point of each load, in sweep order; the summary's
+    ``transition_loads`` repeats this per combination of the other swept conditions). None without a load sweep
+    or an indicator; ``value`` null when kappa stays on one side over the swept loads.
     """
     from fivid.study.coupling import WEAK_STRONG_THRESHOLD
 
