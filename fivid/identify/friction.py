@@ -25,7 +25,7 @@ from fivid.identify.amplitude_fit import (COOKS_RULE, SELECTION_RULE, FormFit, a
                                           choose_form, fit_amplitude_forms, influential_runs)
 from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis, RunSettings,
                                   analyse_run)
-from fivid.identify.shape import SpectralShape, identify_shape
+from fivid.identify.shape import SpectralShape, identify_shape, shape_dependence
 
 __all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
 
@@ -489,8 +489,14 @@ def identify_friction_law(
         if shape.rolloff is None:
             raise FividError(f"shape_method 'rolloff': {shape.rolloff_params.get('reason', 'the fit failed')}")
         law_shape = shape.rolloff
+    shape_test, condition_shapes = shape_dependence(used, band, injection=injection, reference_velocity=v_ref,
+                                                    smoothing_octaves=smoothing_octaves, frequency=shape.frequency)
+    if shape_test["depends"]:
+        messages.append(f"the spectral shape depends on {', '.join(shape_test['variables'])} (p = "
+                        f"{shape_test['p_value']:.3g} < {shape_test['alpha']:g}): the law holds one shape per "
+                        f"condition ({condition_shapes[0].shape[0]}) and interpolates between them")
     law = PerturbedCoulombLaw(mu0, shape.frequency, law_shape, model, band, injection=injection,
-                              reference_velocity=v_ref)
+                              reference_velocity=v_ref, condition_shapes=condition_shapes)
     points = np.array([[r.sliding_velocity, r.roughness_ra, r.normal_load] for r in used])
     domain = ConditionDomain(points) if np.all(np.isfinite(points) & (points > 0)) else None
     if domain is None:
@@ -506,5 +512,5 @@ def identify_friction_law(
     return FrictionIdentification(
         law=law, mu0=mu0, mu0_ci=mu0_ci, band=band, runs=analyses, shape=shape, shape_method=shape_method,
         form_fits=fits, chosen=chosen, why=why, law_across_runs=law_across_runs, messages=messages,
-        settings=recorded, domain=domain,
+        settings=recorded, domain=domain, shape_test=shape_test,
     )
