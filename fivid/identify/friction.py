@@ -207,6 +207,8 @@ class FrictionIdentification:
                                         {"units": "1"})
         ds["run_mains_removal"] = ("run", np.array([r.mains_removal for r in self.runs], dtype=object))
         ds["run_reason"] = ("run", np.array([r.reason for r in self.runs], dtype=object))
+        ds["run_glitches_replaced"] = ("run", np.array([r.glitches_replaced for r in self.runs], dtype=np.int32),
+                                       {"units": "1", "long_name": "force samples replaced as DAQ glitches"})
         influence = self.influence()
         ds["run_cooks_distance"] = ("run", np.array([influence.get(r.run_id, (np.nan, False))[0] for r in self.runs]),
                                     {"units": "1", "long_name": "Cook's distance in the chosen amplitude fit"})
@@ -448,6 +450,9 @@ def identify_friction_law(
     messages = [f"run {r.run_id} excluded: {r.reason}" for r in analyses if not r.used]
     messages += [f"run {r.run_id}: mains-line removal {r.mains_removal}" for r in used
                  if r.mains_removal.startswith("not done")]
+    messages += [f"run {r.run_id}: {r.glitches_replaced} force sample(s) replaced as DAQ glitches (spikes or "
+                 "dropouts, fivid.identify.glitches; see docs/identification.md)" for r in analyses
+                 if r.glitches_replaced]
     mu0, mu0_ci = _mu0_interval(used, confidence)
     hint = _tare_hint(datasets, analyses) if tare is None else None
     if hint:
