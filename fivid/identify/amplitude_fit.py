@@ -60,7 +60,8 @@ __all__ = ["FormFit", "fit_amplitude_forms", "choose_form", "akaike_weights", "d
 SELECTION_RULE = (
     "minimum AICc on the amplitude scale (fits on ln A: log-likelihood plus the Jacobian -sum ln A); "
     "among forms within dAICc < 2 of the minimum, the one with the smallest leave-one-condition-out "
-    "cross-validation error (RMS of ln(A_pred/A))"
+    "cross-validation error (RMS of ln(A_pred/A)); cross-validation overrules when that choice predicts the "
+    "left-out conditions more than 2x worse than the best-predicting form"
 )
 COOKS_RULE = "Cook's distance D_i > 4/n (statsmodels OLSInfluence on the whitened fit): influential, kept"
 
@@ -482,6 +483,11 @@ def cross_validation_error(form, velocity, roughness, load, amplitude, stderr, w
     return float(np.sqrt(np.mean(err**2))), ""
 
 
+#: cross-validation overrules the information criterion when its choice predicts left-out conditions this many
+#: times worse (RMS log error) than the best-predicting form
+CV_OVERRULE = 2.0
+
+
 def _criterion(fits):
     """The fitted forms and the criterion compared: AICc, or AIC where no form has an AICc."""
     ok = [f for f in fits if f.fitted and np.isfinite(f.aic)]
@@ -502,6 +508,17 @@ def choose_form(fits: list[FormFit]) -> tuple[FormFit | None, str]:
     chosen = min(close, key=lambda f: (np.nan_to_num(f.cv_error, nan=np.inf), f.n_params, score[f.form]))
     others = ", ".join(f"{f.form} {score[f.form] - score[best.form]:+.2f}"
                        for f in sorted(ok, key=lambda f: score[f.form]) if f is not chosen)
+    with_cv = [f for f in ok if np.isfinite(f.cv_error)]
+    cv_best = min(with_cv, key=lambda f: (f.cv_error, f.n_params)) if with_cv else None
+    if cv_best is not None and not chosen.cv_error <= CV_OVERRULE * cv_best.cv_error:
+        # a handful of runs: AICc's small-sample penalty can favour a form that predicts the left-out conditions
+        # far worse (the 6-run sample: constant, CV 0.51, vs the power law's 0.045); prediction is the law's job
+        why = (f"{cv_best.form} predicts left-out conditions best (cross-validation error {cv_best.cv_error:.3g}); "
+               f"the lowest-{name} form {chosen.form} does {chosen.cv_error:.3g}, more than {CV_OVERRULE:g}x worse, "
+               f"so cross-validation overrules {name} (few runs: its small-sample penalty dominates)")
+        others = ", ".join(f"{f.form} {score[f.form] - score[best.form]:+.2f}"
+                           for f in sorted(ok, key=lambda f: score[f.form]) if f is not cv_best)
+        return cv_best, why + (f"; d{name}: {others}" if others else "")
     if chosen is best:
         why = f"{chosen.form} has the lowest {name} ({score[chosen.form]:.2f})"
         if len(close) > 1:
