@@ -19,7 +19,8 @@ import xarray as xr
 from fivid.friction import AmplitudeModel, PerturbedCoulombLaw, synthesise_perturbation
 from fivid.schema import apply_cf_attrs, new_history, validate_run
 
-__all__ = ["true_law", "edge_law", "synthetic_run", "run_grid", "band_fraction", "band_amplitude", "FS", "ANALYSIS_BAND", "MU0"]
+__all__ = ["true_law", "edge_law", "twin_law", "synthetic_run", "run_grid", "band_fraction", "band_amplitude", "FS",
+           "ANALYSIS_BAND", "MU0", "TWIN_MU0"]
 
 FS = 25600.0  # [Hz]
 ANALYSIS_BAND = (100.0, 5000.0)  # [Hz], multiples of the Welch resolution 12.5 Hz (nperseg 2048)
@@ -54,6 +55,19 @@ def true_law(form="linear_velocity", injection="uniform") -> PerturbedCoulombLaw
                                reference_velocity=0.01 if injection == "convected" else None)
 
 
+TWIN_MU0 = 0.32
+
+
+def twin_law(injection="uniform") -> PerturbedCoulombLaw:
+    """The 8-run twin's known law (issue 16): μ0 = 0.32, RMS amplitude A = 0.004 (V/10 mm/s)(Ra/1 µm)^0.9
+    (a power law: log_prefactor ln 0.0004 at V_ref = 1 mm/s), the 4th-order roll-off at 1.5 kHz."""
+    model = AmplitudeModel("power_law", np.array([np.log(0.0004), 0.9, 1.0]),
+                           ("log_prefactor", "roughness_exponent", "velocity_exponent"), np.zeros(3), np.zeros((3, 3)),
+                           terms=("roughness_ra", "sliding_velocity"))
+    return PerturbedCoulombLaw(TWIN_MU0, SHAPE_F, SHAPE, model, (SHAPE_F[0], SHAPE_F[-1]), injection=injection,
+                               reference_velocity=0.01 if injection == "convected" else None)
+
+
 def band_fraction(law, band=ANALYSIS_BAND, velocity=None) -> float:
     """∫_band s df of the law's normalised shape (fine trapezoid; the shape is piecewise linear)."""
     f = np.linspace(band[0], band[1], 200001)
@@ -72,7 +86,7 @@ def _smoothstep(x):
 
 def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", duration=3.2, fs=FS,
                   noise=1e-3, offsets=(0.02, -0.05), hum=(4e-3, 1.5e-3, 6e-4), mains=50.02, acceleration_psd=None,
-                  unloaded=0.6):
+                  unloaded=0.6, drift=0.0, glitches=0):
     """A SYNTHETIC RunDataset from ``law`` (see the module docstring).
 
     Parameters
@@ -89,6 +103,12 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
         Amplitudes [N] of the mains hum at the 1st, 3rd, 5th... harmonics of ``mains`` [Hz].
     unloaded : float
         Duration [s] of the unloaded start (the load ramps up over the next 0.1 s, the base over the 0.1 s after).
+    drift : float
+        Thermal drift of both force sensors' offsets [N s-1] (linear from t = 0, friction channel; the
+        normal channel drifts by -drift/2), as measured rigs show.
+    glitches : int
+        DAQ glitches: this many single-sample spikes of ±(2 to 10) N on a random force channel, and
+        ``glitches // 3`` dropouts where both force channels read 0 N for 1 to 3 samples.
     acceleration_psd : callable, optional
         One-sided PSD [m2 s-4 Hz-1] of the acceleration (default: white, 0.5 m s-2 RMS).
     """
@@ -105,8 +125,17 @@ def synthetic_run(law, *, velocity, roughness, normal_load, seed, run_id="S1", d
     ft = (law.mu0 + mup) * fn * _smoothstep(slide / 0.3)  # full Coulomb friction once sliding has started
     hum_t = sum(a * np.sin(2 * np.pi * (2 * k + 1) * mains * t + rng.uniform(0, 6.28)) for k, a in enumerate(hum))
     hum_n = sum(0.5 * a * np.sin(2 * np.pi * (2 * k + 1) * mains * t + rng.uniform(0, 6.28)) for k, a in enumerate(hum))
-    ft_m = ft + offsets[0] + noise * rng.standard_normal(n) + hum_t
-    fn_m = fn + offsets[1] + noise * rng.standard_normal(n) + hum_n
+    ft_m = ft + offsets[0] + noise * rng.standard_normal(n) + hum_t + drift * t
+    fn_m = fn + offsets[1] + noise * rng.standard_normal(n) + hum_n - 0.5 * drift * t
+    if glitches:
+        grng = np.random.default_rng(seed + 2_000_003)  # glitches do not change the other draws
+        for k in grng.integers(0, n, glitches):
+            channel = ft_m if grng.random() < 0.5 else fn_m
+            channel[k] += grng.choice([-1.0, 1.0]) * grng.uniform(2.0, 10.0)
+        for k in grng.integers(0, n - 3, glitches // 3):
+            width = int(grng.integers(1, 4))
+            ft_m[k:k + width] = 0.0
+            fn_m[k:k + width] = 0.0
     v_m = v + 0.01 * velocity * rng.standard_normal(n)
     ds = xr.Dataset(
         {

@@ -88,7 +88,12 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
 
     truth, generate = _twin_truth(Path(root))
     runs = [read_rig_csv(p) for p in sorted(glob.glob(str(Path(root) / "sample_data" / "twin" / "*.csv")))]
-    res = identify_friction_law(runs)
+    res = identify_friction_law(runs, categorical=True)
+    # the generating form (one line per roughness level) is asked for and its intervals checked: the
+    # question here is the bias of A at the defaults. At 6 runs AICc does not support it (n - k - 1 = 0:
+    # no AICc) nor any 3-coefficient law (correction +40): the chosen form is the constant, whose
+    # cross-validation error says how poor a predictor it is (see docs/identification.md).
+    lines = next(f for f in res.form_fits if f.form == "linear_velocity")
     true_law = generate.truth_law(truth)
     fc, (t1, t2) = truth["corner"], truth["band"]
     b1, b2 = max(res.band[0], t1), min(res.band[1], t2)
@@ -97,11 +102,11 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
     for run in generate.conditions(truth):
         v, ra = np.array([run["sliding_velocity"]]), np.array([run["roughness_ra"]])
         a_true = float(true_law.amplitude(v, ra)[0]) * in_band
-        a, lo, hi = (float(x[0]) for x in amplitude_interval(res.law.amplitude_model, v, ra,
+        a, lo, hi = (float(x[0]) for x in amplitude_interval(lines.model, v, ra,
                                                              np.array([truth["normal_load"]])))
         ratios.append(a / a_true)
         assert lo <= a_true <= hi, (run["run_id"], a_true, a, lo, hi)
-    print("twin at defaults, A / A_true:", np.round(ratios, 4), "form", res.law.amplitude_model.form)
+    print("twin at defaults, A / A_true:", np.round(ratios, 4), "chosen form", res.law.amplitude_model.form)
     # without a tare mu0 carries the sensor offsets (0.012 N, -0.02 N at 5 N: +0.0036); the result says so
     # and suggests a tare inside the 20 ms unloaded pre-trigger
     hint = [m for m in res.messages if m.startswith("no tare given")]

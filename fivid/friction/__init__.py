@@ -4,7 +4,8 @@
 - :class:`PerturbedCoulombLaw` — μ = μ0 + μp(t), μp with one-sided PSD A(V, Ra, Fn)^2 s(f) (DESIGN §3).
 - :func:`load_law` / :func:`write_law` — the law file written by ``fivid identify``.
 - :func:`synthesise_perturbation` — random-phase / Gaussian spectral synthesis (pyfftw, seeded).
-- :class:`AmplitudeModel` — the amplitude forms A(V, Ra, Fn).
+- :class:`AmplitudeModel` — the amplitude forms A(V, Ra, Fn); :func:`predict_amplitude` — A with its
+  prediction interval, checked against the identified domain (:class:`ConditionDomain`).
 - :mod:`fivid.friction.jenkins` — Jenkins (Masing) and Iwan elements for friction dampers (seed 004).
 """
 
@@ -17,14 +18,26 @@ from fivid.friction.jenkins import (
     jenkins_periodic_force,
     loop_energy,
 )
-from fivid.friction.amplitude import AMPLITUDE_FORMS, AmplitudeModel, amplitude_design_matrix
-from fivid.friction.lawfile import law_dataset, law_from_dataset, load_law, write_law
+from fivid.friction.amplitude import (AMPLITUDE_FORMS, CATEGORICAL_FORMS, CONTINUOUS_FORMS, INTERACTION_FORMS,
+                                      AmplitudeModel, amplitude_design_matrix, coefficient_units)
+from fivid.friction.domain import ConditionDomain
+from fivid.friction.lawfile import domain_from_dataset, law_dataset, law_from_dataset, load_law, write_law
+from fivid.friction.prediction import AmplitudePrediction, ExtrapolationWarning, predict_amplitude
 from fivid.friction.laws import INJECTION_MODES, CoulombLaw, FrictionLaw, PerturbedCoulombLaw
 from fivid.friction.synthesis import synthesise_perturbation
 
 __all__ = [
     "AMPLITUDE_FORMS",
+    "CONTINUOUS_FORMS",
+    "INTERACTION_FORMS",
+    "CATEGORICAL_FORMS",
     "AmplitudeModel",
+    "coefficient_units",
+    "ConditionDomain",
+    "domain_from_dataset",
+    "predict_amplitude",
+    "AmplitudePrediction",
+    "ExtrapolationWarning",
     "amplitude_design_matrix",
     "CoulombLaw",
     "FrictionLaw",

@@ -1,6 +1,6 @@
 """The FrictionLaw file (netCDF4): write a law object and read it back.
 
-Layout (``law_file_version`` 1)::
+Layout (``law_file_version`` 2; version 1 files are read too)::
 
     coords   frequency [Hz]            grid of the normalised shape (inside the valid band)
              coefficient, coefficient_b amplitude-model coefficient names
@@ -12,6 +12,22 @@ Layout (``law_file_version`` 1)::
              roughness_levels (roughness_level) [m]
     attrs    law ("perturbed_coulomb" | "coulomb"), amplitude_form, amplitude_terms, band_lower,
              band_upper [Hz], injection, reference_velocity [m s-1], reference scales, history, source
+
+Added in version 2 (absent from version-1 files, which read as before; what is missing is then said):
+
+    vars     amplitude_coefficient_units (coefficient)        CF units of each coefficient
+             domain_sliding_velocity, domain_roughness_ra, domain_normal_load (domain_condition)
+                                               the conditions the law was fitted on (its domain)
+             shape_condition (shape_condition_index, frequency), shape_condition_sliding_velocity,
+             shape_condition_roughness_ra, shape_condition_normal_load (shape_condition_index)
+                                               per-condition shapes, when the shape depends on the condition
+    attrs    amplitude_residual_variance, amplitude_residual_relative, amplitude_df_resid
+                                               for prediction intervals (fivid.friction.prediction)
+             shape_dependence                  "one shape" or "per condition" (and the test's p-value,
+                                               written by fivid.identify)
+
+Version-1 files have no domain variables: :func:`domain_from_dataset` then takes the conditions of
+the used runs of the per-run table, when there is one.
 
 :mod:`fivid.identify` adds the per-run table (dim ``run``) and the candidate-form table (dim ``form``)
 to the same dataset; :func:`load_law` ignores what it does not need.
@@ -26,15 +42,18 @@ import numpy as np
 
 from fivid import __version__
 from fivid.errors import FividError, SchemaError
-from fivid.friction.amplitude import REFERENCE_SCALES, AmplitudeModel
+from fivid.friction.amplitude import REFERENCE_SCALES, AmplitudeModel, coefficient_units
 from fivid.friction.laws import CoulombLaw, PerturbedCoulombLaw
 
-__all__ = ["LAW_FILE_VERSION", "law_dataset", "law_from_dataset", "load_law", "write_law"]
+__all__ = ["LAW_FILE_VERSION", "READABLE_VERSIONS", "law_dataset", "law_from_dataset", "load_law", "write_law",
+           "domain_from_dataset"]
 
-LAW_FILE_VERSION = 1
+LAW_FILE_VERSION = 2
+#: versions :func:`law_from_dataset` reads
+READABLE_VERSIONS = (1, 2)
 
 
-def law_dataset(law, *, mu0_ci=None, confidence: float = 0.95, attrs: dict | None = None):
+def law_dataset(law, *, mu0_ci=None, confidence: float = 0.95, attrs: dict | None = None, domain=None):
     """The law-file content of a law object, as an xarray Dataset.
 
     Parameters
@@ -46,6 +65,8 @@ def law_dataset(law, *, mu0_ci=None, confidence: float = 0.95, attrs: dict | Non
         Level of ``mu0_ci``.
     attrs : dict, optional
         Extra global attributes (provenance, settings).
+    domain : ConditionDomain, optional
+        The conditions the amplitude law was identified at.
     """
     import xarray as xr
 
@@ -86,6 +107,8 @@ def law_dataset(law, *, mu0_ci=None, confidence: float = 0.95, attrs: dict | Non
                     np.asarray(m.covariance, float).reshape(len(names), len(names)),
                     {"long_name": "covariance of the amplitude-law coefficients"},
                 ),
+                "amplitude_coefficient_units": ("coefficient", np.array([coefficient_units(n) for n in names],
+                                                                          dtype=object)),
                 "roughness_levels": (
                     "roughness_level",
                     np.asarray(m.roughness_levels, float),
@@ -108,13 +131,51 @@ def law_dataset(law, *, mu0_ci=None, confidence: float = 0.95, attrs: dict | Non
                 "reference_velocity": np.nan if law.reference_velocity is None else law.reference_velocity,
                 "reference_velocity_units": "m s-1",
                 **{f"reference_{k}": v for k, v in REFERENCE_SCALES.items()},
+                "amplitude_residual_variance": float(m.residual_variance),
+                "amplitude_residual_relative": int(m.residual_relative),
+                "amplitude_df_resid": float(m.df_resid),
+                "shape_dependence": "one shape" if law.condition_shapes is None else "per condition",
             },
         )
+        if law.condition_shapes is not None:
+            points, shapes = law.condition_shapes
+            ds["shape_condition"] = (("shape_condition_index", "frequency"), shapes,
+                                     {"units": "Hz-1", "long_name": "normalised shape at each test condition"})
+            for j, (name, units) in enumerate(_CONDITIONS):
+                ds[f"shape_condition_{name}"] = ("shape_condition_index", points[:, j], {"units": units})
     else:
         raise FividError(f"cannot write a law of type {type(law).__name__}; expected CoulombLaw or PerturbedCoulombLaw")
+    if domain is not None:
+        for j, (name, units) in enumerate(_CONDITIONS):
+            ds[f"domain_{name}"] = ("domain_condition", domain.points[:, j],
+                                    {"units": units, "long_name": f"{name} of the conditions the law was fitted on"})
     if attrs:
         ds.attrs.update(attrs)
     return ds
+
+
+_CONDITIONS = (("sliding_velocity", "m s-1"), ("roughness_ra", "m"), ("normal_load", "N"))
+
+
+def domain_from_dataset(ds):
+    """The :class:`~fivid.friction.domain.ConditionDomain` of a law file, or None when it holds none.
+
+    Version 2: the ``domain_*`` variables; version 1: the conditions of the used runs of the per-run
+    table (``run_*``), when the file has one.
+    """
+    from fivid.friction.domain import ConditionDomain
+
+    if "domain_sliding_velocity" in ds:
+        cols = [ds[f"domain_{name}"].values for name, _ in _CONDITIONS]
+    elif "run_sliding_velocity" in ds:
+        used = ds["run_used"].values.astype(bool) if "run_used" in ds else np.ones(ds.sizes["run"], bool)
+        cols = [ds[f"run_{name}"].values[used] for name, _ in _CONDITIONS]
+    else:
+        return None
+    points = np.column_stack([np.asarray(c, float) for c in cols])
+    if points.size == 0 or not np.all(np.isfinite(points) & (points > 0)):
+        return None
+    return ConditionDomain(points)
 
 
 def _what_it_is(ds) -> str:
@@ -142,8 +203,9 @@ def law_from_dataset(ds, *, source: str = "", file=None):
     if version is None:
         raise error(f"not a fivid friction-law file: it has no 'law_file_version' attribute and is "
                     f"{_what_it_is(ds)}; give the law file written by 'fivid identify ... -o LAW.nc'")
-    if version != LAW_FILE_VERSION:
-        raise error(f"law_file_version {version!r}; this fivid reads version {LAW_FILE_VERSION}")
+    if version not in READABLE_VERSIONS:
+        raise error(f"law_file_version {version!r}; this fivid reads versions "
+                    f"{', '.join(map(str, READABLE_VERSIONS))}")
     if "mu0" not in ds:
         raise error("variable 'mu0' is missing")
     mu0 = float(ds["mu0"].values)
@@ -165,7 +227,14 @@ def law_from_dataset(ds, *, source: str = "", file=None):
         covariance=np.asarray(ds["amplitude_covariance"].values, float),
         terms=terms,
         roughness_levels=tuple(float(r) for r in ds["roughness_levels"].values) if "roughness_levels" in ds else (),
+        residual_variance=float(ds.attrs.get("amplitude_residual_variance", np.nan)),
+        residual_relative=bool(ds.attrs.get("amplitude_residual_relative", 0)),
+        df_resid=float(ds.attrs.get("amplitude_df_resid", np.nan)),
     )
+    condition_shapes = None
+    if "shape_condition" in ds:
+        condition_shapes = (np.column_stack([ds[f"shape_condition_{name}"].values for name, _ in _CONDITIONS]),
+                            ds["shape_condition"].values)
     ref = ds.attrs.get("reference_velocity")
     ref = None if ref is None or not np.isfinite(ref) else float(ref)
     return PerturbedCoulombLaw(
@@ -177,6 +246,7 @@ def law_from_dataset(ds, *, source: str = "", file=None):
         injection=injection,
         reference_velocity=ref,
         source=source,
+        condition_shapes=condition_shapes,
     )
 
 

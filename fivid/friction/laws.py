@@ -132,6 +132,11 @@ class PerturbedCoulombLaw:
         V_ref [m s-1] of the shape; required for ``convected``.
     source : str, optional
         Where the law came from (law file path and sha256), for ``describe``.
+    condition_shapes : (ndarray (m, 3), ndarray (m, len(shape_frequency))), optional
+        Shapes per test condition (V [m s-1], Ra [m], Fn [N]) on ``shape_frequency``, when the
+        identification found that the shape depends on the condition: :meth:`normalised_shape` then
+        interpolates between them (:meth:`fivid.friction.domain.ConditionDomain.interpolate`), and
+        ``shape`` is their average, used where no condition is given.
     """
 
     def __init__(
@@ -145,6 +150,7 @@ class PerturbedCoulombLaw:
         injection: str = "uniform",
         reference_velocity: float | None = None,
         source: str = "",
+        condition_shapes=None,
     ):
         mu0 = float(mu0)
         if not (np.isfinite(mu0) and mu0 >= 0):
@@ -175,6 +181,28 @@ class PerturbedCoulombLaw:
         self.injection = injection
         self.reference_velocity = None if reference_velocity is None else float(reference_velocity)
         self.source = source
+        self.condition_shapes = None
+        if condition_shapes is not None:
+            points, shapes = (np.asarray(x, dtype=float) for x in condition_shapes)
+            if points.ndim != 2 or points.shape[1] != 3 or shapes.shape != (points.shape[0], f.size):
+                raise FividError(f"condition_shapes: conditions {points.shape} and shapes {shapes.shape} must be "
+                                 f"(m, 3) and (m, {f.size})")
+            if not np.all(np.isfinite(shapes)) or np.any(shapes < 0):
+                raise FividError("condition_shapes: every shape must be finite and >= 0")
+            self.condition_shapes = (points, shapes)
+
+    def _shape_at(self, velocity, roughness, normal_load):
+        """The shape on ``shape_frequency`` at a condition (interpolated between conditions, renormalised)."""
+        if self.condition_shapes is None or roughness is None:
+            return self.shape
+        from fivid.friction.domain import ConditionDomain
+
+        points, shapes = self.condition_shapes
+        s = ConditionDomain(points).interpolate(
+            shapes, *(np.nan if x is None else float(np.asarray(x).reshape(-1)[0])
+                      for x in (velocity, roughness, normal_load)))
+        s = np.maximum(s, 0.0)
+        return s / np.trapezoid(s, self.shape_frequency)
 
     def amplitude(self, velocity, roughness, normal_load=None):
         """RMS A of μp [-] over the band at sliding velocity [m s-1], roughness Ra [m], normal load [N]."""
@@ -183,8 +211,11 @@ class PerturbedCoulombLaw:
             return float(a[0])
         return a
 
-    def normalised_shape(self, frequency, velocity=None) -> np.ndarray:
-        """s(f) [Hz-1] at ``frequency`` [Hz] (linear interpolation, 0 outside the band), scaled for convection."""
+    def normalised_shape(self, frequency, velocity=None, roughness=None, normal_load=None) -> np.ndarray:
+        """s(f) [Hz-1] at ``frequency`` [Hz] (linear interpolation, 0 outside the band), scaled for convection.
+
+        With per-condition shapes, the shape at (velocity, roughness, normal_load) when ``roughness`` is given.
+        """
         f = np.asarray(frequency, dtype=float)
         scale = 1.0
         if self.injection == "convected":
@@ -193,12 +224,13 @@ class PerturbedCoulombLaw:
             scale = self.reference_velocity / float(velocity)
         fr = f * scale
         inside = (fr >= max(self.band[0], self.shape_frequency[0])) & (fr <= min(self.band[1], self.shape_frequency[-1]))
-        return np.where(inside, np.interp(fr, self.shape_frequency, self.shape) * scale, 0.0)
+        shape = self._shape_at(velocity, roughness, normal_load)
+        return np.where(inside, np.interp(fr, self.shape_frequency, shape) * scale, 0.0)
 
     def psd(self, frequency, velocity, roughness, normal_load=None):
         """One-sided PSD of μp [Hz-1]: ``A(V, Ra, Fn)^2 s(f)``."""
         a = float(np.asarray(self.amplitude_model(velocity, roughness, normal_load)).reshape(-1)[0])
-        return a**2 * self.normalised_shape(frequency, velocity)
+        return a**2 * self.normalised_shape(frequency, velocity, roughness, normal_load)
 
     def sample(self, duration, sample_rate, velocity, roughness, seed, n_signals=1, normal_load=None):
         """Zero-mean μp(t) [-] with the law's PSD at (V, Ra, Fn), reproducible from ``seed``.
@@ -212,7 +244,7 @@ class PerturbedCoulombLaw:
         """
         n = check_sampling(duration, sample_rate, n_signals)
         f = fft_frequencies(n, sample_rate)
-        s = self.normalised_shape(f, velocity)
+        s = self.normalised_shape(f, velocity, roughness, normal_load)
         s[0] = 0.0
         if n % 2 == 0:
             s[-1] = 0.0
@@ -222,7 +254,7 @@ class PerturbedCoulombLaw:
                 f"a record of {duration} s at {sample_rate} Hz has no frequency bin inside the law's band "
                 f"{self.band[0]:g}-{self.band[1]:g} Hz (bin spacing {f[1] - f[0]:g} Hz, Nyquist {f[-1]:g} Hz)"
             )
-        if f[-1] < self.band[1] and np.trapezoid(self.normalised_shape(f, velocity), f) < 0.99:
+        if f[-1] < self.band[1] and np.trapezoid(self.normalised_shape(f, velocity, roughness, normal_load), f) < 0.99:
             _log.warning(
                 "sample rate %g Hz: Nyquist %g Hz is below the law's band edge %g Hz and more than 1 %% of "
                 "the spectral shape lies above it; the shape is renormalised over the bins below Nyquist",
@@ -238,23 +270,14 @@ class PerturbedCoulombLaw:
         Linear forms scale every coefficient; power laws add ``ln factor`` to ``log_prefactor``.
         Standard errors and covariance are scaled alike (relative errors unchanged).
         """
-        import dataclasses
-
         factor = float(factor)
         if not (np.isfinite(factor) and factor > 0):
             raise FividError(f"amplitude scale factor {factor!r} must be finite and > 0")
-        m = self.amplitude_model
-        if m.is_log_form:
-            coeffs = np.array(m.coefficients, float)
-            coeffs[list(m.names).index("log_prefactor")] += np.log(factor)
-            model = dataclasses.replace(m, coefficients=coeffs)
-        else:
-            model = dataclasses.replace(m, coefficients=np.asarray(m.coefficients, float) * factor,
-                                        stderr=np.asarray(m.stderr, float) * factor,
-                                        covariance=np.asarray(m.covariance, float) * factor**2)
+        model = self.amplitude_model.scaled(factor)
         return PerturbedCoulombLaw(self.mu0, self.shape_frequency, self.shape, model, self.band,
                                    injection=self.injection, reference_velocity=self.reference_velocity,
-                                   source=f"{self.source} scaled by {factor:.6g}".strip())
+                                   source=f"{self.source} scaled by {factor:.6g}".strip(),
+                                   condition_shapes=self.condition_shapes)
 
     def describe(self) -> str:
         """A few lines: μ0, the amplitude form and coefficients, the band, the injection mode."""
@@ -266,6 +289,9 @@ class PerturbedCoulombLaw:
             f"  spectral shape on {self.shape_frequency.size} frequencies, valid band "
             f"{self.band[0]:g}-{self.band[1]:g} Hz, injection {self.injection}",
         ]
+        if self.condition_shapes is not None:
+            lines.append(f"  the shape depends on the condition: {self.condition_shapes[0].shape[0]} shapes, "
+                         "interpolated between conditions")
         if self.source:
             lines.append(f"  source: {self.source}")
         return "\n".join(lines)
@@ -281,7 +307,10 @@ class PerturbedCoulombLaw:
             "reference_velocity": self.reference_velocity,
             "amplitude_model": self.amplitude_model.to_dict(),
         }
-        return _sha256_of(content, self.shape_frequency, self.shape)
+        if self.condition_shapes is None:
+            return _sha256_of(content, self.shape_frequency, self.shape)
+        content["condition_shapes"] = True
+        return _sha256_of(content, self.shape_frequency, self.shape, *self.condition_shapes)
 
     def __repr__(self):
         return f"PerturbedCoulombLaw(mu0={self.mu0!r}, form={self.amplitude_model.form!r}, band={self.band!r})"

@@ -9,7 +9,8 @@
 
 from fivid.identify.damping import DampingIdentification, RayleighFit, fit_rayleigh, identify_damping
 from fivid.identify.inverse import InverseAmplitude, inverse_amplitude_scale
-from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, choose_form, fit_amplitude_forms
+from fivid.identify.amplitude_fit import (SELECTION_RULE, FormFit, akaike_weights, candidate_forms, choose_form,
+                                          fit_amplitude_forms)
 from fivid.identify.friction import FrictionIdentification, identify_friction_law
 from fivid.identify.runs import RunAnalysis, RunSettings, analyse_run
 
@@ -24,6 +25,8 @@ __all__ = [
     "FrictionIdentification",
     "fit_amplitude_forms",
     "choose_form",
+    "akaike_weights",
+    "candidate_forms",
     "FormFit",
     "SELECTION_RULE",
     "RunAnalysis",

@@ -20,11 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError, FividError
-from fivid.friction import AMPLITUDE_FORMS, AmplitudeModel, PerturbedCoulombLaw, law_dataset
-from fivid.identify.amplitude_fit import SELECTION_RULE, FormFit, akaike_weights, choose_form, fit_amplitude_forms
+from fivid.friction import AmplitudeModel, ConditionDomain, PerturbedCoulombLaw, coefficient_units, law_dataset
+from fivid.identify.amplitude_fit import (COOKS_RULE, SELECTION_RULE, FormFit, akaike_weights, candidate_forms,
+                                          choose_form, fit_amplitude_forms, influential_runs)
 from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis, RunSettings,
                                   analyse_run)
-from fivid.identify.shape import SpectralShape, identify_shape
+from fivid.identify.shape import SpectralShape, identify_shape, shape_dependence
 
 __all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
 
@@ -49,18 +50,52 @@ class FrictionIdentification:
     law_across_runs: bool
     messages: list = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+    domain: ConditionDomain | None = None
+    shape_test: dict = field(default_factory=dict)
 
     @property
     def used_runs(self) -> list:
         return [r for r in self.runs if r.used]
+
+    def selection_table(self) -> list:
+        """One row per candidate form: AICc, dAICc, Akaike weight (from AICc), CV error, AIC, BIC, or why not fitted."""
+        weights = akaike_weights(self.form_fits)
+        fitted = [f.aicc for f in self.form_fits if f.fitted and np.isfinite(f.aicc)]
+        best = min(fitted) if fitted else np.nan
+        rows = []
+        for f in self.form_fits:
+            rows.append({
+                "form": f.form, "fitted": f.fitted, "chosen": self.chosen is f, "n_params": f.n_params,
+                "aicc": _num(f.aicc), "delta_aicc": _num(f.aicc - best), "akaike_weight": weights.get(f.form),
+                "cv_error": _num(f.cv_error), "aic": _num(f.aic), "bic": _num(f.bic),
+                "reason": f.reason or f.cv_reason,
+            })
+        return rows
+
+    def influence(self) -> dict:
+        """Cook's distance per used run in the chosen fit and whether it exceeds 4/n (run_id -> (D, flag))."""
+        if self.chosen is None or self.chosen.cooks_distance.size != len(self.used_runs):
+            return {}
+        flags = influential_runs(self.chosen)
+        return {r.run_id: (float(d), bool(k)) for r, d, k in zip(self.used_runs, self.chosen.cooks_distance, flags)}
 
     def to_json(self) -> dict:
         """The JSON report: ``mu0``, ``mu0_ci``, ``amplitude_model``, ``candidate_forms``, ``runs``, ..."""
         m = self.law.amplitude_model
         ci = self.chosen.conf_int if self.chosen is not None else None
         amp = m.to_dict()
+        amp["units"] = {n: coefficient_units(n) for n in m.names}
+        amp["residual_variance"] = _num(m.residual_variance)
+        amp["df_resid"] = _num(m.df_resid)
         if ci is not None:
             amp["ci95"] = {n: [float(a), float(b)] for n, (a, b) in zip(m.names, ci)}
+        influence = self.influence()
+        runs = []
+        for r in self.runs:
+            row = r.table_row()
+            if r.run_id in influence:
+                row["cooks_distance"], row["influential"] = influence[r.run_id]
+            runs.append(row)
         return {
             "mu0": self.mu0,
             "mu0_ci": list(self.mu0_ci),
@@ -68,9 +103,13 @@ class FrictionIdentification:
             "band": list(self.band),
             "law_across_runs": self.law_across_runs,
             "amplitude_model": amp,
-            "selection": {"rule": SELECTION_RULE, "chosen": m.form, "why": self.why},
+            "selection": {"rule": SELECTION_RULE, "chosen": m.form, "why": self.why,
+                          "table": self.selection_table()},
             "candidate_forms": [dict(f.to_json(), akaike_weight=akaike_weights(self.form_fits).get(f.form))
                                 for f in self.form_fits],
+            "domain": None if self.domain is None else self.domain.to_json(),
+            "outliers": {"rule": COOKS_RULE, "influential": [k for k, (_, flag) in influence.items() if flag]},
+            "shape_dependence": dict(self.shape_test),
             "shape": {
                 "method": self.shape_method,
                 "smoothing_octaves": self.shape.smoothing_octaves,
@@ -78,7 +117,7 @@ class FrictionIdentification:
                 "rolloff": self.shape.rolloff_params,
             },
             "injection": self.law.injection,
-            "runs": [r.table_row() for r in self.runs],
+            "runs": runs,
             "messages": list(self.messages),
             "settings": dict(self.settings),
             "law_sha256": self.law.sha256,
@@ -92,16 +131,20 @@ class FrictionIdentification:
             f"{self.mu0_ci[1]:.5f}) from {len(used)} of {len(self.runs)} runs",
             f"band {self.band[0]:g}-{self.band[1]:g} Hz; amplitude form {self.law.amplitude_model.form}: {self.why}",
         ]
-        weights = akaike_weights(self.form_fits)
-        for f in self.form_fits:
-            if f.fitted:
-                r2 = f.diagnostics.get("r_squared")
-                lines.append(f"  {f.form:22s} AIC {f.aic:9.2f}  BIC {f.bic:9.2f}  Akaike weight {weights.get(f.form, float('nan')):.3f}  "
-                             f"R2 {float('nan') if r2 is None else r2:.3f}")
+        for row in self.selection_table():
+            if row["fitted"]:
+                w = row["akaike_weight"]
+                lines.append(f"  {row['form']:26s} AICc {_fmt(row['aicc'], '9.2f')}  dAICc {_fmt(row['delta_aicc'], '7.2f')}  "
+                             f"weight {_fmt(w, '.3f')}  CV error {_fmt(row['cv_error'], '.3g')}"
+                             + ("  <- chosen" if row["chosen"] else ""))
             else:
-                lines.append(f"  {f.form:22s} not fitted: {f.reason}")
+                lines.append(f"  {row['form']:26s} not fitted: {row['reason']}")
+        influence = self.influence()
         for r in self.runs:
             state = "used" if r.used else f"excluded: {r.reason}"
+            if r.run_id in influence:
+                d, flag = influence[r.run_id]
+                state += f", Cook's D {d:.2g}" + (" > 4/n: influential (kept)" if flag else "")
             lines.append(f"  run {r.run_id}: mu {r.mu_mean:.4f}, A {r.mu_rms:.3g} ± {r.mu_rms_stderr:.2g} ({state})")
         lines += [f"note: {m}" for m in self.messages]
         return "\n".join(lines)
@@ -121,6 +164,7 @@ class FrictionIdentification:
                 attrs[f"setting_{k}"] = _attr(v)
         attrs.update({
             "selection_rule": SELECTION_RULE,
+            "outlier_rule": COOKS_RULE,
             "selection_why": self.why,
             "law_across_runs": int(self.law_across_runs),
             "shape_method": self.shape_method,
@@ -128,7 +172,9 @@ class FrictionIdentification:
             "source": "; ".join(f"{r.run_id}: {r.source}" for r in self.runs),
             "history": new_history(f"identify: friction law from {len(self.used_runs)} of {len(self.runs)} runs"),
         })
-        ds = law_dataset(self.law, mu0_ci=self.mu0_ci, confidence=conf, attrs=attrs)
+        for k, v in self.shape_test.items():
+            attrs[f"shape_test_{k}"] = _attr(v)
+        ds = law_dataset(self.law, mu0_ci=self.mu0_ci, confidence=conf, attrs=attrs, domain=self.domain)
         if self.chosen is not None:
             ds["amplitude_ci_lower"] = ("coefficient", self.chosen.conf_int[:, 0], {"confidence": conf})
             ds["amplitude_ci_upper"] = ("coefficient", self.chosen.conf_int[:, 1], {"confidence": conf})
@@ -161,15 +207,28 @@ class FrictionIdentification:
                                         {"units": "1"})
         ds["run_mains_removal"] = ("run", np.array([r.mains_removal for r in self.runs], dtype=object))
         ds["run_reason"] = ("run", np.array([r.reason for r in self.runs], dtype=object))
+        ds["run_glitches_replaced"] = ("run", np.array([r.glitches_replaced for r in self.runs], dtype=np.int32),
+                                       {"units": "1", "long_name": "force samples replaced as DAQ glitches"})
+        influence = self.influence()
+        ds["run_cooks_distance"] = ("run", np.array([influence.get(r.run_id, (np.nan, False))[0] for r in self.runs]),
+                                    {"units": "1", "long_name": "Cook's distance in the chosen amplitude fit"})
+        ds["run_influential"] = ("run", np.array([influence.get(r.run_id, (np.nan, False))[1] for r in self.runs],
+                                                 np.int8), {"long_name": COOKS_RULE})
         ds = ds.assign_coords(run=("run", run))
         forms = np.array([f.form for f in self.form_fits], dtype=object)
         if forms.size:
             ds = ds.assign_coords(form=("form", forms))
-            for name in ("aic", "aicc", "bic", "loglik"):
+            for name in ("aic", "aicc", "bic", "loglik", "cv_error"):
                 ds[f"form_{name}"] = ("form", np.array([getattr(f, name) for f in self.form_fits], float))
+            table = self.selection_table()
+            ds["form_delta_aicc"] = ("form", np.array([_nan(r["delta_aicc"]) for r in table]))
+            ds["form_akaike_weight"] = ("form", np.array([_nan(r["akaike_weight"]) for r in table]),
+                                        {"long_name": "Akaike weight from AICc"})
+            ds["form_chosen"] = ("form", np.array([r["chosen"] for r in table], np.int8))
             ds["form_n_params"] = ("form", np.array([f.n_params for f in self.form_fits], np.int32))
             ds["form_fitted"] = ("form", np.array([f.fitted for f in self.form_fits], np.int8))
             ds["form_reason"] = ("form", np.array([f.reason for f in self.form_fits], dtype=object))
+            ds["form_cv_reason"] = ("form", np.array([f.cv_reason for f in self.form_fits], dtype=object))
         return ds
 
     def write(self, path, *, overwrite: bool = False):
@@ -177,6 +236,18 @@ class FrictionIdentification:
         from fivid.friction import write_law
 
         return write_law(self.to_dataset(), path, overwrite=overwrite)
+
+
+def _num(x):
+    return float(x) if x is not None and np.isfinite(x) else None
+
+
+def _nan(x):
+    return np.nan if x is None else float(x)
+
+
+def _fmt(x, spec):
+    return "-" if x is None else format(x, spec)
 
 
 def _attr(v):
@@ -290,7 +361,9 @@ def identify_friction_law(
     transfer_function=None,
     shape_method: str = "smoothed",
     smoothing_octaves: float = 1.0 / 6.0,
-    forms=AMPLITUDE_FORMS,
+    forms=None,
+    interaction: bool = False,
+    categorical: bool = False,
     weighting: str = "estimator",
     injection: str = "uniform",
     confidence: float = 0.95,
@@ -326,8 +399,13 @@ def identify_friction_law(
         Which shape goes into the law (both are in the law file).
     smoothing_octaves : float, default 1/6
         Width of the log-frequency smoothing [octaves].
-    forms : sequence of str
-        Candidate amplitude forms.
+    forms : sequence of str, optional
+        Candidate amplitude forms; default :func:`fivid.identify.amplitude_fit.candidate_forms`: the forms
+        continuous in V, Ra and Fn, plus the following two on request.
+    interaction : bool, default False
+        Also the power law with an Ra × V interaction.
+    categorical : bool, default False
+        Also the categorical forms (one line in V per roughness level; they refuse an Ra between levels).
     weighting : {"estimator", "none"}
         WLS with the per-run estimator variances as relative weights (default), or OLS.
     injection : {"uniform", "per_node", "convected"}
@@ -372,6 +450,9 @@ def identify_friction_law(
     messages = [f"run {r.run_id} excluded: {r.reason}" for r in analyses if not r.used]
     messages += [f"run {r.run_id}: mains-line removal {r.mains_removal}" for r in used
                  if r.mains_removal.startswith("not done")]
+    messages += [f"run {r.run_id}: {r.glitches_replaced} force sample(s) replaced as DAQ glitches (spikes or "
+                 "dropouts, fivid.identify.glitches; see docs/identification.md)" for r in analyses
+                 if r.glitches_replaced]
     mu0, mu0_ci = _mu0_interval(used, confidence)
     hint = _tare_hint(datasets, analyses) if tare is None else None
     if hint:
@@ -380,6 +461,8 @@ def identify_friction_law(
     v_ref = float(np.exp(np.mean(np.log([r.sliding_velocity for r in used])))) if injection == "convected" else None
     shape = identify_shape(used, band, smoothing_octaves=smoothing_octaves, injection=injection,
                            reference_velocity=v_ref)
+    if forms is None:
+        forms = candidate_forms(interaction=interaction, categorical=categorical)
     amplitude = np.array([r.mu_rms for r in used])
     stderr = np.array([r.mu_rms_stderr for r in used])
     if len(used) >= 2:
@@ -395,6 +478,10 @@ def identify_friction_law(
         for f in fits:
             if not f.fitted and f.form != "constant":
                 messages.append(f"amplitude form {f.form} not fitted: {f.reason}")
+        for r, d, flag in zip(used, chosen.cooks_distance, influential_runs(chosen)):
+            if flag:
+                messages.append(f"run {r.run_id} is influential in the {chosen.form} fit: Cook's distance {d:.3g} > "
+                                f"4/n = {4 / len(used):.3g} (kept; check the run)")
     else:
         run = used[0]
         why = (f"a single usable run ({run.run_id}): no amplitude law across runs can be fitted; the law "
@@ -407,8 +494,18 @@ def identify_friction_law(
         if shape.rolloff is None:
             raise FividError(f"shape_method 'rolloff': {shape.rolloff_params.get('reason', 'the fit failed')}")
         law_shape = shape.rolloff
+    shape_test, condition_shapes = shape_dependence(used, band, injection=injection, reference_velocity=v_ref,
+                                                    smoothing_octaves=smoothing_octaves, frequency=shape.frequency)
+    if shape_test["depends"]:
+        messages.append(f"the spectral shape depends on {', '.join(shape_test['variables'])} (p = "
+                        f"{shape_test['p_value']:.3g} < {shape_test['alpha']:g}): the law holds one shape per "
+                        f"condition ({condition_shapes[0].shape[0]}) and interpolates between them")
     law = PerturbedCoulombLaw(mu0, shape.frequency, law_shape, model, band, injection=injection,
-                              reference_velocity=v_ref)
+                              reference_velocity=v_ref, condition_shapes=condition_shapes)
+    points = np.array([[r.sliding_velocity, r.roughness_ra, r.normal_load] for r in used])
+    domain = ConditionDomain(points) if np.all(np.isfinite(points) & (points > 0)) else None
+    if domain is None:
+        messages.append("a used run lacks a sliding velocity, roughness or load > 0: the law file records no domain")
     recorded = {
         "band": band, **settings.to_dict(),
         "transfer_function": "none" if transfer_function is None else "given",
@@ -420,5 +517,5 @@ def identify_friction_law(
     return FrictionIdentification(
         law=law, mu0=mu0, mu0_ci=mu0_ci, band=band, runs=analyses, shape=shape, shape_method=shape_method,
         form_fits=fits, chosen=chosen, why=why, law_across_runs=law_across_runs, messages=messages,
-        settings=recorded,
+        settings=recorded, domain=domain, shape_test=shape_test,
     )

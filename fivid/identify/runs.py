@@ -4,7 +4,9 @@ For one RunDataset: optional tare (subtract force-sensor offsets measured on an 
 the steady-sliding window (:func:`fivid.signal.steady_sliding_window`), checks of the normal force,
 μ(t), its mean with a batch-means confidence interval, the Welch PSD of μp = μ − mean with mains
 lines removed and an optional force-chain transfer function divided out, and the band RMS A with
-its standard error. Runs that cannot be used are returned with ``used=False`` and a reason.
+its standard error. DAQ glitches (spikes, dropouts) of the force channels are replaced first and
+counted (:mod:`fivid.identify.glitches`). Runs that cannot be used are returned with ``used=False``
+and a reason.
 
 Uncertainties
 -------------
@@ -113,6 +115,7 @@ class RunAnalysis:
     weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mains_bins_removed: int = 0
     mains_removal: str = ""
+    glitches_replaced: int = 0
     noise_fraction: float = np.nan
     psd_attrs: dict = field(default_factory=dict)
 
@@ -135,6 +138,7 @@ class RunAnalysis:
             "mu_rms_total": self.mu_rms_total,
             "mains_bins_removed": self.mains_bins_removed,
             "mains_removal": self.mains_removal,
+            "glitches_replaced": self.glitches_replaced,
             "noise_fraction": self.noise_fraction,
         }
 
@@ -346,8 +350,10 @@ def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=Non
     if not res.normal_load > 0:
         res.reason = f"nominal normal load {res.normal_load!r} N is not > 0"
         return res
-    ft = np.asarray(ds["friction_force"].values, float)
-    fn = np.asarray(ds["normal_force"].values, float)
+    from fivid.identify.glitches import replace_glitches
+
+    (ft, fn), glitch = replace_glitches(ds["friction_force"].values, ds["normal_force"].values)
+    res.glitches_replaced = int(glitch.sum())
     tare_sel = None
     if settings.tare is not None:
         ft, fn, tare_sel = _tare(t, ft, fn, settings, label)

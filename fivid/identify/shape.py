@@ -9,6 +9,16 @@ out of the average:
   log-frequency), renormalised to unit integral;
 - roll-off: the parametric fit ``s(f) = c / (1 + (f/f_c)^(2p))`` by nonlinear least squares on
   ln s (:func:`scipy.optimize.curve_fit`), with standard errors of ``f_c`` [Hz] and ``p`` [-].
+
+Does the shape depend on the condition? (:func:`shape_dependence`)
+    Two summaries of each run's normalised spectrum s_i(f) in the band: its centroid in log frequency
+    ``c_i = ∫ ln f s_i df`` and its spread ``w_i = sqrt(∫ (ln f − c_i)² s_i df)``. Each is regressed by
+    OLS (statsmodels) on ln V, ln Ra, ln Fn (those that vary across the runs); the regression F-test
+    asks whether any slope differs from 0. The two p-values are combined by Bonferroni
+    (``p = min(1, 2 min(p_c, p_w))``). With ``p < 0.01`` the shape is taken as depending on the
+    condition: the smoothed shape of each test condition (the mean of its runs' normalised spectra) is
+    stored, and the law interpolates between them (linearly in log coordinates,
+    :meth:`fivid.friction.domain.ConditionDomain.interpolate`); otherwise one shape for all.
 """
 
 from __future__ import annotations
@@ -20,7 +30,8 @@ import numpy as np
 
 from fivid.errors import FividError
 
-__all__ = ["SpectralShape", "identify_shape", "average_normalised_spectra", "octave_smooth", "octave_median", "fit_rolloff", "rolloff_shape"]
+__all__ = ["SpectralShape", "identify_shape", "average_normalised_spectra", "normalised_spectra", "shape_dependence",
+           "SHAPE_TEST_ALPHA", "octave_smooth", "octave_median", "fit_rolloff", "rolloff_shape"]
 
 
 @dataclass
@@ -43,8 +54,8 @@ def _normalise(f, s):
     return s / area
 
 
-def average_normalised_spectra(runs, band, *, injection="uniform", reference_velocity=None):
-    """Frequency grid [Hz] inside ``band`` and the mean of the runs' normalised PSDs on it [Hz-1].
+def normalised_spectra(runs, band, *, injection="uniform", reference_velocity=None):
+    """Frequency grid [Hz] inside ``band`` and each run's normalised PSD on it [Hz-1], shape (runs, grid).
 
     Parameters
     ----------
@@ -52,7 +63,8 @@ def average_normalised_spectra(runs, band, *, injection="uniform", reference_vel
         Used runs (with ``frequency``, ``psd``, ``mu_rms`` and ``sliding_velocity``).
     band : (float, float)
     injection : str
-        ``"convected"`` maps each spectrum to ``reference_velocity``.
+        ``"convected"`` maps each spectrum to ``reference_velocity`` (NaN where a run's spectrum does
+        not reach).
     reference_velocity : float, optional
         [m s-1].
     """
@@ -67,12 +79,84 @@ def average_normalised_spectra(runs, band, *, injection="uniform", reference_vel
             stack.append(ratio * np.interp(fg * ratio, r.frequency, norm, left=np.nan, right=np.nan))
         else:
             stack.append(np.interp(fg, r.frequency, norm))
-    stack = np.array(stack)
+    return fg, np.array(stack)
+
+
+def average_normalised_spectra(runs, band, *, injection="uniform", reference_velocity=None):
+    """Frequency grid [Hz] inside ``band`` and the mean of the runs' normalised PSDs on it [Hz-1]
+    (:func:`normalised_spectra`; grid points no run reaches are dropped)."""
+    fg, stack = normalised_spectra(runs, band, injection=injection, reference_velocity=reference_velocity)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns of a convected map
         mean = np.nanmean(stack, axis=0)
     keep = np.isfinite(mean)
     return fg[keep], mean[keep]
+
+
+SHAPE_TEST_ALPHA = 0.01
+
+
+def shape_dependence(runs, band, *, injection="uniform", reference_velocity=None, smoothing_octaves=1.0 / 6.0,
+                          frequency=None, alpha: float = SHAPE_TEST_ALPHA):
+    """Whether the normalised spectrum's shape depends on V, Ra or Fn (see the module docstring).
+
+    Returns
+    -------
+    result : dict
+        ``depends`` (bool or None when not testable), ``p_value``, ``p_centroid``, ``p_spread``,
+        ``variables``, ``statistic``, ``alpha`` and ``reason``.
+    condition_shapes : (ndarray (m, 3), ndarray (m, len(frequency))) or None
+        Conditions (V, Ra, Fn) and their smoothed, normalised shapes on ``frequency`` [Hz] (default: the
+        common grid), when the shape depends on the condition.
+    """
+    import statsmodels.api as sm
+
+    from fivid.identify.amplitude_fit import condition_groups, distinct_levels
+
+    out = {"statistic": "log-frequency centroid and spread of the normalised spectrum ~ ln of the varying "
+                        "conditions (OLS F-tests, Bonferroni x2)", "alpha": alpha, "depends": None,
+           "p_value": None, "p_centroid": None, "p_spread": None, "variables": [], "reason": ""}
+    fg, stack = normalised_spectra(runs, band, injection=injection, reference_velocity=reference_velocity)
+    cols = np.all(np.isfinite(stack), axis=0) & (fg > 0)
+    f, s = fg[cols], stack[:, cols]
+    conds = np.array([[r.sliding_velocity, r.roughness_ra, r.normal_load] for r in runs])
+    names = ("sliding_velocity", "roughness_ra", "normal_load")
+    vary = [j for j in range(3) if np.all(conds[:, j] > 0) and distinct_levels(conds[:, j]).size > 1]
+    out["variables"] = [names[j] for j in vary]
+    if not vary:
+        out["reason"] = "not tested: no condition variable varies across the runs"
+        return out, None
+    if len(runs) < len(vary) + 3 or f.size < 3:
+        out["reason"] = f"not tested: {len(runs)} runs for {len(vary)} condition variables (need {len(vary) + 3})"
+        return out, None
+    area = np.trapezoid(s, f, axis=1)
+    lf = np.log(f)
+    centroid = np.trapezoid(s * lf, f, axis=1) / area
+    spread = np.sqrt(np.trapezoid(s * (lf[None, :] - centroid[:, None]) ** 2, f, axis=1) / area)
+    X = sm.add_constant(np.log(conds[:, vary]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = [float(sm.OLS(y, X).fit().f_pvalue) for y in (centroid, spread)]
+    p = [1.0 if not np.isfinite(x) else x for x in p]  # an exact fit (no residual) tests nothing
+    out["p_centroid"], out["p_spread"] = p
+    out["p_value"] = min(1.0, 2 * min(p))
+    out["depends"] = bool(out["p_value"] < alpha)
+    if not out["depends"]:
+        return out, None
+    grid = fg if frequency is None else np.asarray(frequency, float)
+    groups = condition_groups(conds[:, 0], conds[:, 1], conds[:, 2])
+    points, shapes = [], []
+    for g in np.unique(groups):
+        member = groups == g
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            mean = np.nanmean(stack[member], axis=0)
+        ok = np.isfinite(mean)
+        sm_g = octave_smooth(fg[ok], mean[ok], smoothing_octaves)
+        shape = np.maximum(np.interp(grid, fg[ok], sm_g), 0.0)
+        shapes.append(_normalise(grid, shape))
+        points.append(conds[member].mean(axis=0))
+    return out, (np.array(points), np.array(shapes))
 
 
 def octave_smooth(frequency, values, octaves: float = 1.0 / 6.0) -> np.ndarray:

@@ -40,16 +40,14 @@ def _versions() -> list[list[str]]:
 def amplitude_interval(model, velocity, roughness, normal_load=None, z: float = _Z95):
     """Fitted amplitude and its pointwise interval ``(A, lower, upper)`` from the coefficient covariance.
 
-    The linear predictor η = Xβ has variance diag(X Σ Xᵀ); the interval η ± z·σ is mapped through
-    the form's link (identity, clipped at 0, for linear forms; exp for power laws).
+    The predictor η has variance gᵀ Σ g, g = ∂η/∂β (the design row X for forms linear in β); the
+    interval η ± z·σ is mapped through the form's link (identity, clipped at 0, for the categorical
+    lines; exp for the forms on ln A). The interval of the law's mean: for a new run's amplitude see
+    :func:`fivid.friction.predict_amplitude`.
     """
-    from fivid.friction.amplitude import amplitude_design_matrix
-
-    X, _ = amplitude_design_matrix(model.form, model.terms, velocity, roughness, normal_load, model.roughness_levels)
-    beta = np.asarray(model.coefficients, float)
-    cov = np.asarray(model.covariance, float).reshape(beta.size, beta.size)
-    eta = X @ beta
-    sigma = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", X, np.nan_to_num(cov), X), 0.0))
+    eta, g = model.predictor_and_gradient(velocity, roughness, normal_load)
+    cov = np.asarray(model.covariance, float).reshape(g.shape[1], g.shape[1])
+    sigma = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", np.nan_to_num(g), np.nan_to_num(cov), np.nan_to_num(g)), 0.0))
     lo, hi = eta - z * sigma, eta + z * sigma
     if model.is_log_form:
         return np.exp(eta), np.exp(lo), np.exp(hi)
@@ -125,13 +123,25 @@ def _law_section(page: Page, inputs: dict) -> None:
                     f"fitted {model.form} law (lines) with its pointwise 95 % interval (bands, from the "
                     f"coefficient covariance) and the per-run estimates (circles, ±1.96 standard errors); normal load {load:g} N.",
                     "amplitude against velocity")
-    rows = [[n, float(c), float(s)] for n, c, s in zip(model.names, model.coefficients, model.stderr)]
-    page.raw(table(["coefficient", "value", "standard error"], rows))
+    from fivid.friction import coefficient_units
+
+    lower = ds["amplitude_ci_lower"].values if "amplitude_ci_lower" in ds else np.full(len(model.names), np.nan)
+    upper = ds["amplitude_ci_upper"].values if "amplitude_ci_upper" in ds else np.full(len(model.names), np.nan)
+    rows = [[n, coefficient_units(n), float(c), float(s), float(lo), float(hi)]
+            for n, c, s, lo, hi in zip(model.names, model.coefficients, model.stderr, lower, upper)]
+    page.raw(table(["coefficient", "units", "value", "standard error", "95 % CI lower", "95 % CI upper"], rows))
     if "form" in ds.dims:
-        cols = [v for v in ds.data_vars if ds[v].dims == ("form",)]
+        cols = [v for v in _SELECTION_COLUMNS if v in ds]
+        cols += [v for v in ds.data_vars if ds[v].dims == ("form",) and v not in cols]
         rows = [[str(ds["form"].values[i])] + [_py(ds[c].values[i]) for c in cols] for i in range(ds.sizes["form"])]
-        page.paragraph("Candidate amplitude forms (the selected one is named above):")
+        page.paragraph("Candidate amplitude forms: AICc, Akaike weight (from AICc) and leave-one-condition-out "
+                       "cross-validation error (RMS of ln(A_pred/A)); "
+                       f"selection rule: {ds.attrs.get('selection_rule', 'not recorded')}.")
         page.raw(table(["form"] + cols, rows))
+
+
+_SELECTION_COLUMNS = ("form_chosen", "form_aicc", "form_delta_aicc", "form_akaike_weight", "form_cv_error",
+                      "form_n_params")
 
 
 def _py(x):

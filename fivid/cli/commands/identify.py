@@ -10,8 +10,10 @@ _DESCRIPTION = """\
 Identify the friction law of DESIGN §3 from RunDatasets (files written by 'fivid ingest'):
 mu0 with its confidence interval, the normalised spectrum of the friction perturbation in the
 valid band, the per-run RMS amplitudes and the amplitude law A(V, Ra, Fn) fitted in every candidate
-form (linear in V per roughness, with/without load; power law Ra^n V^m, with/without load), with
-AIC/BIC and the chosen form. Runs not in steady sliding or with a normal force near zero are
+form continuous in V, Ra and Fn (power law, (a + bV) Ra^n, log-linear; Fn wherever the runs differ in
+load), with AICc, Akaike weights, leave-one-condition-out cross-validation error and the chosen form,
+the identified domain, Cook's distance of every run, and a test of whether the spectrum's shape
+depends on the condition. 'fivid law show LAW.nc' and 'fivid law eval' read the result. Runs not in steady sliding or with a normal force near zero are
 excluded with the reason. Writes the law file (netCDF) read by 'fivid simulate --law'.
 With --damping, modal damping ratios are identified from the acceleration PSD peaks and a Rayleigh
 (alpha, beta) fit is written as a model-config fragment (YAML)."""
@@ -43,6 +45,11 @@ def register(subparsers) -> None:
                    help="spectral shape written into the law (default smoothed)")
     p.add_argument("--injection", choices=("uniform", "per_node", "convected"), default="uniform",
                    help="injection mode of the law (default uniform)")
+    p.add_argument("--interaction", action="store_true",
+                   help="also fit the power law with an Ra x V interaction term")
+    p.add_argument("--categorical", action="store_true",
+                   help="also fit the categorical forms (one line in V per roughness level; they cannot be "
+                   "evaluated at an Ra between the identified levels)")
     p.add_argument("--weighting", choices=("estimator", "none"), default="estimator",
                    help="amplitude-law fit: WLS with the per-run estimator variances (default) or OLS")
     p.add_argument("--damping", metavar="DAMPING.yaml",
@@ -93,6 +100,8 @@ def _run(args) -> int:
         shape_method=args.shape,
         injection=args.injection,
         weighting=args.weighting,
+        interaction=args.interaction,
+        categorical=args.categorical,
     )
     report = result.to_json()
     damping = None
