@@ -23,7 +23,8 @@ from fivid import __version__
 from fivid.cli.types import Quantity, integer_at_least, quantity
 from fivid.errors import FividError
 
-__all__ = ["main", "build_parser", "integer_at_least", "quantity", "Quantity", "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
+__all__ = ["main", "build_parser", "integer_at_least", "quantity", "Quantity",
+           "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

@@ -21,9 +21,12 @@ def register(subparsers) -> None:
     """Add the ``cea`` sub-command."""
     help_ = "complex eigenvalue analysis: mode-coupling instability against the friction coefficient"
     p = subparsers.add_parser("cea", help=help_, description=_DESCRIPTION)
-    p.add_argument("model", metavar="MODEL.yaml", help="model config with a contact pair and a base motion")
+    p.add_argument("model", metavar="MODEL.yaml",
+                   help="model config with a contact pair and a base motion, or the name of a built-in model "
+                        "such as triboair_coarse")
     p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
-                   help="normal load, e.g. '5 N' (a bare number is in N; the preload the contact is linearised about); leave it "
+                   help="normal load, e.g. '5 N' (a bare number is in N; the preload the contact is linearised "
+                        "about); leave it "
                         "out for a model pressed by its own pressure loads (e.g. configs/models/ring.yaml)")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")

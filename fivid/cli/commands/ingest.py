@@ -40,8 +40,8 @@ def register(subparsers) -> None:
     parser.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
                         help="output folder (created if missing); one OUTDIR/<run_id>.nc per input file")
     parser.add_argument("--rig", metavar="PROFILE", default=None,
-                        help="rig profile: a name in configs/rigs/ (e.g. triboair, labdaq) or a YAML path; "
-                             "default: the fivid-rig-csv format")
+                        help="rig profile: the name of a built-in profile (triboair, labdaq: shipped with fivid, "
+                             "configs/rigs/ in a checkout) or a YAML path; default: the fivid-rig-csv format")
     parser.add_argument("--overwrite", action="store_true", help="replace existing output files")
     parser.add_argument("--json", action="store_true",
                         help='print {"written": [{"input", "output", "run_id", "samples", "sample_rate_hz"}, ...], '

@@ -20,7 +20,9 @@ def register(subparsers) -> None:
         "With --load the bodies are coupled at the contact nodes closed under that normal load (static preload "
         "solve): the linearisation about the sliding equilibrium. Mode shapes can be written to netCDF.",
     )
-    p.add_argument("model", metavar="MODEL.yaml", help="model config (see docs/model-config.md)")
+    p.add_argument("model", metavar="MODEL.yaml",
+                   help="model config (see docs/model-config.md), or the name of a built-in model such as "
+                        "triboair_coarse (configs/models/, shipped with fivid)")
     p.add_argument("-n", "--n-modes", type=int, default=30, metavar="N", help="number of modes (default 30)")
     p.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...], ...} as JSON')
     p.add_argument("-o", "--output", metavar="MODES.nc", help="write frequencies and mode shapes to netCDF")
@@ -28,7 +30,8 @@ def register(subparsers) -> None:
     p.add_argument("--mass", choices=("consistent", "lumped"), default="consistent",
                    help="mass matrix (default consistent; lumped is what the explicit solver uses)")
     p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
-                   help="normal load, e.g. '5 N' (a bare number is in N): couple the bodies by normal penalty springs at the slave "
+                   help="normal load, e.g. '5 N' (a bare number is in N): couple the bodies by normal penalty "
+                        "springs at the slave "
                         "nodes closed under it (static preload solve; no friction)")
     p.add_argument("--contact", action="store_true",
                    help="couple the bodies at the contact: with --load, under that normal load; without, under the "

@@ -48,9 +48,11 @@ def register(subparsers) -> None:
                         "(default: the instrument's cursor window when the file has one, else the whole profile)")
     p.add_argument("--form", default="line", metavar="FORM",
                    help="form removed by least squares over the window: line (default), poly:N or none")
-    p.add_argument("--cutoff", metavar="Q", type=_POSITIVE_LENGTH, help="cut-off wavelength λc of the Gaussian roughness filter, e.g. "
-                                                 "'0.8 mm' (default: no filter; R parameters of the primary profile)")
-    p.add_argument("--short-cutoff", metavar="Q", type=_POSITIVE_LENGTH, help="cut-off λs of the Gaussian short-wave filter, e.g. '2.5 um'")
+    p.add_argument("--cutoff", metavar="Q", type=_POSITIVE_LENGTH,
+                   help="cut-off wavelength λc of the Gaussian roughness filter, e.g. '0.8 mm' (default: no filter; "
+                        "R parameters of the primary profile)")
+    p.add_argument("--short-cutoff", metavar="Q", type=_POSITIVE_LENGTH,
+                   help="cut-off λs of the Gaussian short-wave filter, e.g. '2.5 um'")
     p.add_argument("--ends", choices=("trim", "keep"), default="trim",
                    help="with --cutoff: drop λc/2 at each end of the window (trim, default) or keep them")
     p.add_argument("--json", action="store_true",

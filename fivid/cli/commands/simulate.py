@@ -22,7 +22,9 @@ def register(subparsers) -> None:
         "Quantities take units, e.g. --velocity '10 mm/s' --load '5 N' --duration '0.1 s'; a bare number is in "
         "SI units (m/s, N, m, s, Hz).",
     )
-    p.add_argument("model", metavar="MODEL.yaml", help="model config (see docs/model-config.md)")
+    p.add_argument("model", metavar="MODEL.yaml",
+                   help="model config (see docs/model-config.md), or the name of a built-in model such as "
+                        "triboair_coarse (configs/models/, shipped with fivid)")
     fr = p.add_mutually_exclusive_group()
     fr.add_argument("--law", metavar="LAW.nc", help="friction-law file written by 'fivid identify'")
     fr.add_argument("--mu", type=float, metavar="MU", help="constant Coulomb friction coefficient for every pair")
