@@ -5,6 +5,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -49,19 +50,32 @@ def test_the_lock_is_portable():
     assert "fcntl" not in source and "from filelock import" in source
 
 
+@pytest.fixture
+def own_tmp():
+    """A temporary folder outside pytest's numbered tmp folders: those are pruned to the last three runs, and
+    other pytest runs on a shared machine prune them during this test's minutes of pip install."""
+    with tempfile.TemporaryDirectory(prefix="fivid-wheel-") as folder:
+        yield Path(folder)
+
+
 @pytest.mark.slow
-def test_a_wheel_installed_in_a_fresh_venv_ingests_with_a_built_in_rig_profile(tmp_path):
+def test_a_wheel_installed_in_a_fresh_venv_ingests_with_a_built_in_rig_profile(own_tmp):
     """Build the wheel, install it (dependencies from the package index: minutes), ingest outside the checkout."""
-    wheels, venv, work = tmp_path / "whl", tmp_path / "venv", tmp_path / "work"
-    subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "-w", str(wheels), "-q"],
-                   check=True, cwd=tmp_path)
+    tmp_path = own_tmp
+    src, wheels, venv, work = tmp_path / "src", tmp_path / "whl", tmp_path / "venv", tmp_path / "work"
+    # the checkout must not be on the path: pip would take its fivid for installed and skip the wheel
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    # build from a copy: an in-tree build leaves build/ and fivid.egg-info/ in the checkout
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", "out",
+                                                             ".pytest_cache", ".hypothesis", "benchmarks"))
+    subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps", "-w", str(wheels), "-q"],
+                   check=True, cwd=tmp_path, env=env)
     (wheel,) = wheels.glob("fivid-*.whl")
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, env=env)
     bin_ = venv / ("Scripts" if os.name == "nt" else "bin")
-    subprocess.run([str(bin_ / "python"), "-m", "pip", "install", "-q", str(wheel)], check=True)
+    subprocess.run([str(bin_ / "python"), "-m", "pip", "install", "-q", str(wheel)], check=True, env=env)
     work.mkdir()
     shutil.copy(DAQ_CSV, work / DAQ_CSV.name)
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # the installed copy, not the checkout
     out = subprocess.run([str(bin_ / "fivid"), "ingest", DAQ_CSV.name, "--rig", "labdaq", "-o", "runs", "--json"],
                          cwd=work, env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
