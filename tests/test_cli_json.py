@@ -28,12 +28,6 @@ def test_damper_actions_have_json():
     assert all("--json" in _options(p) for p in actions.values())
 
 
-@pytest.fixture(scope="module")
-def ingested(tmp_path_factory):
-    out = tmp_path_factory.mktemp("runs")
-    return out
-
-
 def test_ingest_and_psd_json(tmp_path, capsys):
     assert main(["ingest", str(SAMPLE), "-o", str(tmp_path), "--json"]) == 0
     j = json.loads(capsys.readouterr().out)
