@@ -81,7 +81,7 @@ def test_cea_json_per_mode(tmp_path, capsys):
     (["modes", COARSE, "--load", "-5 N"], "positive"),
     (["cea", COARSE, "--load", "0 N", "--mu", "0", "1", "5"], "positive"),
     # a unit error names the option it came from
-    (["modes", COARSE, "--load", "5"], "--load: '5' has no unit"),
+    (["modes", COARSE, "--load", "5 furlong"], "--load: '5 furlong' is not a force"),
     (["cea", COARSE, "--load", "5 kg", "--mu", "0", "1", "5"], "--load: '5 kg'"),
 ])
 def test_bad_input_exits_2_with_one_line(argv, words, capsys):

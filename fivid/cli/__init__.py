@@ -20,9 +20,11 @@ import pkgutil
 import sys
 
 from fivid import __version__
+from fivid.cli.types import Quantity, integer_at_least, quantity
 from fivid.errors import FividError
 
-__all__ = ["main", "build_parser", "integer_at_least", "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
+__all__ = ["main", "build_parser", "integer_at_least", "quantity", "Quantity",
+           "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -38,27 +40,21 @@ exit status: 0 ok, 2 bad input or configuration, 3 scores below thresholds (fivi
 Run 'fivid COMMAND --help' for a command's options."""
 
 
-def integer_at_least(minimum: int):
-    """An argparse ``type``: an integer >= ``minimum``, refused (exit 2, option and value named) before any work."""
+class _Parser(argparse.ArgumentParser):
+    """argparse with the error contract of fivid: one line on stderr naming the command, exit status 2.
 
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = None
-        if value is None or value < minimum:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {text!r}")
-        return value
+    Sub-command parsers are of this class too (``add_subparsers`` uses the parent's class).
+    """
 
-    parse.__name__ = f"integer >= {minimum}"
-    return parse
+    def error(self, message: str):
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every sub-command found in :mod:`fivid.cli.commands`."""
     from fivid.cli import commands
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="fivid",
         description="fivid: friction-induced vibration identification. From friction test-rig "
         "measurements to an identified friction law, a finite-element contact simulation and "
@@ -67,14 +63,42 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"fivid {__version__}")
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv for debug)")
+    _add_verbosity(parser, 0)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
         if info.name.startswith("_"):
             continue
         module = importlib.import_module(f"fivid.cli.commands.{info.name}")
         module.register(sub)
+    for command_parser in _subparsers(parser):
+        _add_verbosity(command_parser, argparse.SUPPRESS)
     return parser
+
+
+def _add_verbosity(parser: argparse.ArgumentParser, default) -> None:
+    """``-v``/``-q`` on ``parser``. On a sub-command they count into their own attributes (``default``
+    SUPPRESS: absent unless given), added to the top-level counts by :func:`_verbosity`, so that
+    ``fivid -v psd X.nc`` and ``fivid psd X.nc -v`` mean the same."""
+    suffix = "" if default == 0 else "_after_command"
+    parser.add_argument("-v", "--verbose", action="count", default=default, dest="verbose" + suffix,
+                        help="more log output (-vv for debug); also accepted after the command")
+    parser.add_argument("-q", "--quiet", action="count", default=default, dest="quiet" + suffix,
+                        help="less log output: errors only; also accepted after the command")
+
+
+def _subparsers(parser: argparse.ArgumentParser):
+    """Every sub-command parser below ``parser``, nested ones (``fivid damper fit``) included."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in dict.fromkeys(action.choices.values()):  # aliases map to the same parser
+                yield child
+                yield from _subparsers(child)
+
+
+def _verbosity(args: argparse.Namespace) -> int:
+    """-v count minus -q count, before and after the sub-command."""
+    counts = [getattr(args, name, 0) for name in ("verbose", "verbose_after_command", "quiet", "quiet_after_command")]
+    return counts[0] + counts[1] - counts[2] - counts[3]
 
 
 @contextlib.contextmanager
@@ -84,7 +108,8 @@ def _logging_to_stderr(verbosity: int):
     Restoring matters when ``main`` is called in-process (tests, notebooks): the logger must not keep a
     handler on a stream that is closed later, nor stop propagating to the caller's handlers.
     """
-    level = logging.WARNING if verbosity <= 0 else logging.INFO if verbosity == 1 else logging.DEBUG
+    levels = {-1: logging.ERROR, 0: logging.WARNING, 1: logging.INFO}
+    level = levels.get(verbosity, logging.ERROR if verbosity < 0 else logging.DEBUG)
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("fivid: %(levelname)s: %(message)s"))
     log = logging.getLogger("fivid")
@@ -111,12 +136,17 @@ def _missing_optional(exc: BaseException) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     """Run the ``fivid`` command; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse refused the command line (message on stderr): return its status;
+        if exc.code in (0, None):  # --help and --version still exit as argparse does
+            raise
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_BAD_INPUT
     if args.command is None:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        with _logging_to_stderr(args.verbose):
+        with _logging_to_stderr(_verbosity(args)):
             status = args.func(args)
     except FividError as exc:
         print(f"fivid {args.command}: error: {exc}", file=sys.stderr)

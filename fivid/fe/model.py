@@ -522,7 +522,29 @@ def load_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     The configuration format is documented in ``docs/model-config.md``. Every problem raises
     :class:`~fivid.errors.ConfigError` naming the file, line and key path (``bodies.upper.material.nu``),
     the value given and what is allowed.
+
+    A name without a folder or suffix (``"triboair_coarse"``) that is not a file is one of the example
+    models shipped with fivid (``configs/models/``, installed with the package: :mod:`fivid.builtin`).
     """
     from fivid.fe.config import build_model
 
-    return build_model(source)
+    return build_model(_resolve_model_name(source))
+
+
+def _resolve_model_name(source):
+    """``source`` unchanged, or the built-in model file when it is the name of one and not an existing file."""
+    import os
+    from pathlib import Path
+
+    from fivid.builtin import builtin_names, find_builtin
+    from fivid.errors import ConfigError
+
+    if isinstance(source, (str, os.PathLike)) and not Path(source).exists():
+        found = find_builtin("models", str(source))
+        if found is not None:
+            return found
+        text = str(source)
+        if not any(c in text for c in "/\\") and not text.endswith((".yaml", ".yml")):  # meant as a name
+            raise ConfigError(f"no model file or built-in model named {text!r}; built-in models: "
+                              f"{', '.join(builtin_names('models')) or '(none)'}; or give the path of a YAML file")
+    return source

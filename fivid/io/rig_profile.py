@@ -131,10 +131,13 @@ class RigProfile:
 
 
 def profile_search_path() -> list[Path]:
-    """Folders searched for ``<name>.yaml``: ``./configs/rigs`` then the repository's ``configs/rigs``."""
+    """Folders searched for ``<name>.yaml``: ``./configs/rigs``, then the built-in profiles
+    (:func:`fivid.builtin.builtin_folders`: the checkout's ``configs/rigs``, the installed copy in a wheel)."""
+    from fivid.builtin import builtin_folders
+
     here = Path.cwd() / "configs" / "rigs"
-    repo = Path(__file__).resolve().parents[2] / "configs" / "rigs"
-    return [here] if here.resolve() == repo else [here, repo]
+    builtin = [f for f in builtin_folders("rigs") if f.resolve() != here.resolve()]
+    return [here] + builtin
 
 
 def load_rig_profile(name_or_path) -> RigProfile:

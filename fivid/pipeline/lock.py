@@ -1,19 +1,20 @@
 """A lock on an output folder: one pipeline run at a time.
 
-The lock file ``<output>/.fivid-run.lock`` holds an exclusive ``flock`` for the life of the run and
-records the holder's pid, host name, start time and command. A second run on the same folder is
-refused with a message naming the holder. The kernel drops the ``flock`` when its holder dies (even
-by SIGKILL), so a lock file left by a dead run on this host is taken over, and the takeover is
-logged with the dead run's pid and start time. A lock file written by another host cannot be
-checked from here (``flock`` is not reliable across NFS): it is refused with a message saying how
-to remove it if that run is gone.
+The lock is the OS file lock of ``<output>/.fivid-run.flock``, taken through the ``filelock``
+package (``flock`` on POSIX, ``msvcrt.locking`` on Windows), held for the life of the run. The
+holder's pid, host name, start time and command are recorded beside it in ``<output>/.fivid-run.lock``
+(JSON, written atomically after the lock is taken, removed when it is released). A second run on the
+same folder is refused with a message naming the holder. The OS drops the lock when its holder dies
+(even by SIGKILL), so a record left by a dead run on this host is taken over, and the takeover is
+logged with the dead run's pid and start time. A record written by another host cannot be checked
+from here (file locks are not reliable across NFS): it is refused with a message saying how to
+remove it if that run is gone. The empty ``.fivid-run.flock`` stays in the folder: removing a lock
+file others may be opening would let two runs lock two different files.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import errno
-import fcntl
 import json
 import logging
 import os
@@ -27,7 +28,8 @@ __all__ = ["OutputLock", "LockedError", "pid_alive"]
 
 log = logging.getLogger("fivid")
 
-LOCK_NAME = ".fivid-run.lock"
+LOCK_NAME = ".fivid-run.lock"  # the holder's record (JSON)
+FLOCK_NAME = ".fivid-run.flock"  # the file the OS lock is taken on
 
 
 class LockedError(FividError):
@@ -64,14 +66,14 @@ class OutputLock:
     def __init__(self, folder: str | os.PathLike):
         self.folder = Path(folder)
         self.path = self.folder / LOCK_NAME
-        self.fd: int | None = None
+        self._lock = None  # a filelock.FileLock while held
         self.took_over: dict | None = None
 
-    def _read(self, fd: int) -> dict:
-        os.lseek(fd, 0, os.SEEK_SET)
-        data = b""
-        while chunk := os.read(fd, 65536):
-            data += chunk
+    def _read(self) -> dict:
+        try:
+            data = self.path.read_bytes()
+        except FileNotFoundError:
+            return {}
         try:
             obj = json.loads(data.decode("utf-8")) if data.strip() else {}
         except (ValueError, UnicodeDecodeError):
@@ -79,37 +81,27 @@ class OutputLock:
         return obj if isinstance(obj, dict) else {}
 
     def acquire(self) -> "OutputLock":
+        from filelock import FileLock, Timeout
+
         self.folder.mkdir(parents=True, exist_ok=True)
         host = socket.gethostname()
-        while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as exc:
-                if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
-                    os.close(fd)
-                    raise
-                holder = self._read(fd)
-                os.close(fd)
-                raise LockedError(
-                    f"output folder {str(self.folder)!r} is in use by another fivid run: {_describe(holder)}; "
-                    "wait for it to finish or use another output folder", file=self.path) from None
-            # The file may have been unlinked by a finishing holder between our open and flock.
-            try:
-                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
-            except FileNotFoundError:
-                same = False
-            if same:
-                break
-            os.close(fd)
-        previous = self._read(fd)
+        lock = FileLock(self.folder / FLOCK_NAME, timeout=0)
+        try:
+            lock.acquire()
+        except Timeout:
+            holder = self._read()  # may be {} for a moment: the holder writes it just after locking
+            who = _describe(holder) if holder else "its record is being written"
+            raise LockedError(
+                f"output folder {str(self.folder)!r} is in use by another fivid run: {who}; "
+                "wait for it to finish or use another output folder", file=self.path) from None
+        previous = self._read()
         if previous.get("pid") is not None:
             if previous.get("hostname") not in (None, host):
-                os.close(fd)
+                lock.release()
                 raise LockedError(
                     f"output folder {str(self.folder)!r} is locked by a run on another host: {_describe(previous)}; "
                     f"if that run is no longer active, delete {str(self.path)!r}", file=self.path)
-            # Same host and we hold the flock: the recorded holder is dead (or its pid was reused).
+            # Same host and we hold the OS lock: the recorded holder is dead (or its pid was reused).
             self.took_over = previous
             log.warning("took over a stale lock of a run that is no longer active: %s", _describe(previous))
         record = {
@@ -119,22 +111,24 @@ class OutputLock:
             "command": " ".join(sys.argv),
             "alive_at_takeover": None if previous.get("pid") is None else pid_alive(int(previous["pid"])),
         }
-        os.ftruncate(fd, 0)
-        os.lseek(fd, 0, os.SEEK_SET)
-        os.write(fd, json.dumps(record).encode("utf-8"))
-        os.fsync(fd)
-        self.fd = fd
+        tmp = self.path.with_name(f"{LOCK_NAME}.{os.getpid()}.tmp")
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(json.dumps(record))
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, self.path)  # a reader sees the old record or the new one, never half of one
+        self._lock = lock
         return self
 
     def release(self) -> None:
-        if self.fd is None:
+        if self._lock is None:
             return
         try:
             self.path.unlink()
         except FileNotFoundError:
             pass
-        os.close(self.fd)  # closing drops the flock
-        self.fd = None
+        self._lock.release()
+        self._lock = None
 
     def __enter__(self) -> "OutputLock":
         return self.acquire()

@@ -299,6 +299,7 @@ def ctx_to_report_inputs(ctx, checks) -> dict:
             "config": {"path": str(cfg.path), "sha256": cfg.sha256, "content": cfg.raw},
             "model": {"path": str(cfg.model), "sha256": file_sha256(cfg.model)},
             "inputs": ctx.data.get("input_sha256", {}),
+            "settings": effective_settings(ctx),
         },
         "runs": ctx.data.get("runs", {}),
         "conditions": ctx.data.get("conditions", {}),
@@ -312,6 +313,27 @@ def ctx_to_report_inputs(ctx, checks) -> dict:
         "band": cfg.band,
         "nperseg": cfg.nperseg,
         "checks": checks,
+    }
+
+
+def effective_settings(ctx) -> dict:
+    """The settings the run used (config values after defaults and command-line overrides), SI units."""
+    cfg = ctx.config
+    return {
+        "output folder": str(ctx.out),
+        "inputs": f"{cfg.input_folder / cfg.input_pattern} ({len(cfg.input_files)} files)",
+        "rig profile": cfg.rig_profile or "fivid-rig-csv (none)",
+        "model": str(cfg.model),
+        "scoring band [Hz]": list(cfg.band),
+        "Welch nperseg [samples]": cfg.nperseg,
+        "settle [s]": cfg.settle,
+        "identify": dict(cfg.identify),
+        "modes": cfg.n_modes,
+        "simulated duration [s]": cfg.duration,
+        "simulated sample rate [Hz]": cfg.sample_rate,
+        "seeds": list(cfg.seeds),
+        "thresholds": [t.describe() for t in cfg.thresholds],
+        "workers": ctx.workers if ctx.scheduler is None else f"scheduler {ctx.scheduler}",
     }
 
 

@@ -6,6 +6,7 @@ self-contained ``report.html`` (figures embedded as PNG data URIs, no script, no
 
 from __future__ import annotations
 
+import datetime as _dt
 import json
 import os
 import platform
@@ -137,7 +138,25 @@ def _law_section(page: Page, inputs: dict) -> None:
         page.paragraph("Candidate amplitude forms: AICc, Akaike weight (from AICc) and leave-one-condition-out "
                        "cross-validation error (RMS of ln(A_pred/A)); "
                        f"selection rule: {ds.attrs.get('selection_rule', 'not recorded')}.")
-        page.raw(table(["form"] + cols, rows))
+        page.raw(table(["amplitude-law form"] + [_long_name(ds[c]) for c in cols], rows))
+
+
+def _long_name(da) -> str:
+    """A column header for a variable: its CF ``long_name`` (else its name) and its units, if any."""
+    name = str(da.attrs.get("long_name") or da.name)
+    units = str(da.attrs.get("units", "")).strip()
+    return f"{name} [{units}]" if units and units != "1" else name
+
+
+def _condition_order(item) -> tuple:
+    """Sort key of a (condition key, condition) item: numerically by velocity, load, roughness, then the key
+    (so that 5 mm/s comes before 10 mm/s, which a string sort of the keys does not give)."""
+    key, c = item
+    return tuple(float(c.get(k, np.nan)) for k in ("sliding_velocity", "normal_load", "roughness_ra")) + (str(key),)
+
+
+def _condition_title(c: dict) -> str:
+    return f"{c['sliding_velocity'] * 1e3:g} mm/s, {c['normal_load']:g} N, Ra {c['roughness_ra'] * 1e6:g} µm"
 
 
 _SELECTION_COLUMNS = ("form_chosen", "form_aicc", "form_delta_aicc", "form_akaike_weight", "form_cv_error",
@@ -169,9 +188,8 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
     band = inputs["band"]
     all_f, all_psd, units = None, [], ""
     checks = inputs.get("checks", [])
-    for cond, c in sorted(inputs.get("conditions", {}).items()):
-        page.heading(f"{c['sliding_velocity'] * 1e3:g} mm/s, {c['normal_load']:g} N, Ra {c['roughness_ra'] * 1e6:g} µm",
-                     level=3)
+    for cond, c in sorted(inputs.get("conditions", {}).items(), key=_condition_order):
+        page.heading(_condition_title(c), level=3)
         psd_file = inputs.get("psd_files", {}).get(cond)
         if psd_file and Path(psd_file).is_file():
             with xr.open_dataset(psd_file, engine="netcdf4") as ds:
@@ -197,15 +215,23 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
             rows = [[p["measured"], p["simulated"]] + [p["scores"].get(k) for k in _SCORE_COLUMNS]
                     for p in sc.get("pairs", [])]
             rows.append(["mean", ""] + [sc["summary"].get(k) for k in _SCORE_COLUMNS])
-            page.raw(table(["measured run", "simulation"] + list(_SCORE_COLUMNS), rows))
+            page.raw(table(["measured run", "simulation"] + [SCORE_NAMES[k] for k in _SCORE_COLUMNS], rows))
         mine = [k for k in checks if k["condition"] == cond]
         if mine:
             page.raw(table(["score", "value (mean)", "threshold", "result"],
-                           [[k["score"], k["value"], k["threshold"], bool(k["pass"])] for k in mine]))
+                           [[SCORE_NAMES.get(k["score"], k["score"]), k["value"], k["threshold"], bool(k["pass"])]
+                            for k in mine]))
     return all_f, all_psd, units
 
 
 _SCORE_COLUMNS = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
+#: the scores (DESIGN §6, fivid.score) as the report names them
+SCORE_NAMES = {
+    "lsd_db": "log-spectral distance [dB]",
+    "level_diff_db": "band level difference, simulated - measured [dB]",
+    "band_level_rms_error_db": "RMS error of the 1/3-octave band levels [dB]",
+    "shape_correlation": "correlation of the log-PSD shapes [-]",
+}
 
 
 def _modal_section(page: Page, inputs: dict, frequency, psds, units: str) -> None:
@@ -254,9 +280,23 @@ def _provenance(page: Page, inputs: dict) -> None:
     if prov.get("inputs"):
         page.paragraph("Input files:")
         page.raw(table(["input file", "sha256"], [[k, v] for k, v in sorted(prov["inputs"].items())]))
+    if prov.get("settings"):
+        page.paragraph("Effective settings: the values this run used, after defaults and command-line overrides "
+                       "(SI units):")
+        page.raw(table(["setting", "value"], [[k, _setting(v)] for k, v in prov["settings"].items()]))
     if "config" in prov and "content" in prov["config"]:
-        page.paragraph("Run configuration:")
+        page.paragraph("Run configuration as written in the file" + (" (the effective settings above take "
+                       "precedence)" if prov.get("settings") else "") + ":")
         page.pre(yaml.safe_dump(prov["config"]["content"], sort_keys=False))
+
+
+def _setting(value):
+    """A setting for the provenance table: numbers as they are, lists and mappings on one line."""
+    if isinstance(value, (list, tuple)):
+        return ", ".join(str(_setting(v)) for v in value)
+    if isinstance(value, dict):
+        return "; ".join(f"{k}: {_setting(v)}" for k, v in value.items())
+    return f"{value:g}" if isinstance(value, float) else value
 
 
 def render_report(path: str | os.PathLike, inputs: dict) -> Path:
@@ -271,9 +311,13 @@ def render_report(path: str | os.PathLike, inputs: dict) -> Path:
         ``runs`` and ``conditions`` (as built by the pipeline's ingest stage); ``law_path``;
         ``modal_path``; ``psd_files`` and ``score_files`` per condition; ``band`` [Hz];
         ``checks`` (threshold checks); optional ``synthetic_note`` (the run's description, shown
-        highlighted: say there when the inputs are synthetic).
+        highlighted: say there when the inputs are synthetic); optional ``provenance["settings"]``
+        (the effective settings, shown above the configuration as written); optional ``generated``
+        (the date shown, default now in UTC).
     """
     page = Page(inputs.get("title", "fivid validation report"))
+    generated = inputs.get("generated") or _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    page.paragraph(f"Generated {generated} by fivid {__version__}.", cls="generated")
     checks = inputs.get("checks", [])
     ok = bool(checks) and all(c["pass"] for c in checks)
     page.heading("Verdict")
@@ -282,8 +326,12 @@ def render_report(path: str | os.PathLike, inputs: dict) -> Path:
                f"FAIL: {n_fail} of {len(checks)} threshold checks fail" if checks else "NO VERDICT: nothing was scored")
     page.raw(f'<p class="verdict {"pass" if ok else "fail"}">{verdict}</p>')
     if checks:
-        page.raw(table(["condition", "score", "value", "threshold", "result"],
-                       [[c["condition"], c["score"], c["value"], c["threshold"], bool(c["pass"])] for c in checks]))
+        conditions = inputs.get("conditions", {})
+        order = {k: i for i, (k, _) in enumerate(sorted(conditions.items(), key=_condition_order))}
+        rows = [[_condition_title(conditions[c["condition"]]) if c["condition"] in conditions else c["condition"],
+                 SCORE_NAMES.get(c["score"], c["score"]), c["value"], c["threshold"], bool(c["pass"])]
+                for c in sorted(checks, key=lambda c: order.get(c["condition"], len(order)))]
+        page.raw(table(["condition", "score", "value", "threshold", "result"], rows))
     if inputs.get("synthetic_note"):
         page.paragraph(str(inputs["synthetic_note"]), cls="synthetic")
     _law_section(page, inputs)

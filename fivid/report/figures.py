@@ -10,7 +10,8 @@ import numpy as np
 
 from fivid.report.html import figure_data_uri
 
-__all__ = ["law_shape_figure", "amplitude_figure", "psd_overlay_figure", "modal_figure"]
+__all__ = ["law_shape_figure", "amplitude_figure", "psd_overlay_figure", "modal_figure", "psd_axis_limits",
+           "PSD_DYNAMIC_RANGE_DB"]
 
 
 def _figure(width: float = 7.0, height: float = 4.0):
@@ -65,9 +66,31 @@ def amplitude_figure(curves: list[dict], points: list[dict]) -> str:
     return figure_data_uri(fig)
 
 
-def _finish_psd(fig, ax, f, band, units: str) -> str:
-    """Common axes of the PSD figures: the band (with margins), labels, grid, legend; the data URI."""
-    ax.set_xlim(max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
+#: dynamic range shown on the PSD figures: decades below the highest level in view (80 dB). Below it lie
+#: window leakage, the noise floor and the numerical floor of a simulation, which would squeeze the peaks.
+PSD_DYNAMIC_RANGE_DB = 80.0
+
+
+def psd_axis_limits(f, curves, xlim) -> tuple[float, float] | None:
+    """y limits of a PSD plot: from ``PSD_DYNAMIC_RANGE_DB`` below the highest level inside ``xlim`` to a
+    little above it (None when nothing positive is in view)."""
+    f = np.asarray(f, float)
+    inside = (f >= xlim[0]) & (f <= xlim[1])
+    levels = [np.asarray(c, float)[inside] for c in curves]
+    peak = max((np.nanmax(v[v > 0]) for v in levels if np.any(v > 0)), default=None)
+    if peak is None:
+        return None
+    return peak * 10 ** (-PSD_DYNAMIC_RANGE_DB / 10), peak * 2.0
+
+
+def _finish_psd(fig, ax, f, band, units: str, curves) -> str:
+    """Common axes of the PSD figures: the band (with margins), the dynamic range of ``curves`` in view,
+    labels, grid, legend; the data URI."""
+    xlim = (max(f[1], band[0] / 2), min(f[-1], band[1] * 1.1))
+    ax.set_xlim(*xlim)
+    ylim = psd_axis_limits(f, curves, xlim)
+    if ylim is not None:
+        ax.set_ylim(*ylim)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel(f"acceleration PSD [{units}]")
     ax.grid(True, which="both", alpha=0.3)
@@ -90,7 +113,7 @@ def psd_overlay_figure(frequency, measured: list[dict], simulated: list[dict], b
         ax.fill_between(f, s["lower"], s["upper"], color=color, alpha=0.2, lw=0)
         ax.semilogy(f, s["psd"], color=color, lw=1.0, label=s["label"])
     ax.axvspan(band[0], band[1], color="C2", alpha=0.05)
-    return _finish_psd(fig, ax, f, band, units)
+    return _finish_psd(fig, ax, f, band, units, [c["psd"] for c in measured + simulated])
 
 
 def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, units: str) -> str:
@@ -103,4 +126,4 @@ def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, unit
     if len(peak_frequencies):
         idx = np.searchsorted(f, peak_frequencies).clip(0, f.size - 1)
         ax.plot(f[idx], np.asarray(psd)[idx], "v", color="C3", ms=7, label="measured peaks")
-    return _finish_psd(fig, ax, f, band, units)
+    return _finish_psd(fig, ax, f, band, units, [psd])

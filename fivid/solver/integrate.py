@@ -95,7 +95,8 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     seg_len = seg_len if np.isfinite(seg_len) else 1.0
     gs_tol = settings.gs_tolerance * seg_len
     mu_tab = np.ascontiguousarray(fric.mu)
-    with tqdm(total=n_int, disable=None if progress is None else not progress, unit="sample",
+    # the bar counts output samples (n_int records at the oversampled rate are decimated to n_int / oversample)
+    with tqdm(total=n_int // settings.oversample, disable=None if progress is None else not progress, unit="sample",
               desc="fivid simulate", leave=False) as bar:
         r0 = 0
         while r0 < n_int:
@@ -117,8 +118,8 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
             )
             if status != K.OK:
                 raise SimulationDiverged(_diagnosis(model, st, status, diag, dt, settings, u, v))
+            bar.update((r0 + nr) // settings.oversample - r0 // settings.oversample)
             r0 += nr
-            bar.update(nr)
     return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, acc, n_int * n_sub)
 
 

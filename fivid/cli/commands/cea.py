@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from fivid.cli import quantity
+
 __all__ = ["register"]
 
 _DESCRIPTION = (
@@ -19,9 +21,12 @@ def register(subparsers) -> None:
     """Add the ``cea`` sub-command."""
     help_ = "complex eigenvalue analysis: mode-coupling instability against the friction coefficient"
     p = subparsers.add_parser("cea", help=help_, description=_DESCRIPTION)
-    p.add_argument("model", metavar="MODEL.yaml", help="model config with a contact pair and a base motion")
-    p.add_argument("--load", metavar="Q",
-                   help="normal load with unit, e.g. '5 N' (the preload the contact is linearised about); leave it "
+    p.add_argument("model", metavar="MODEL.yaml",
+                   help="model config with a contact pair and a base motion, or the name of a built-in model "
+                        "such as triboair_coarse")
+    p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
+                   help="normal load, e.g. '5 N' (a bare number is in N; the preload the contact is linearised "
+                        "about); leave it "
                         "out for a model pressed by its own pressure loads (e.g. configs/models/ring.yaml)")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")
@@ -64,10 +69,7 @@ def run(args) -> int:
         raise ConfigError(f"--basis ({args.basis}) must be >= -n ({args.n_modes})")
     if args.output:
         check_writable(args.output, overwrite=args.overwrite)
-    from fivid.cli.commands.modes import _positive_load
-    from fivid.units import parse_quantity
-
-    load = None if args.load is None else _positive_load(args.load, parse_quantity)
+    load = None if args.load is None else float(args.load)
     model = load_model(args.model)
     if load is None and not model.loads:
         raise ConfigError("--load Q is needed (e.g. --load '5 N'): the contact is linearised about the nodes closed "

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from fivid.cli import quantity
+
 __all__ = ["register"]
 
 
@@ -28,8 +30,8 @@ def register(subparsers) -> None:
                          "a damper model YAML at one or more normal loads, over the model's frequency range. Units: "
                          "Hz, m, m/N, N.")
     frf.add_argument("model", help="damper model YAML (see configs/dampers/)")
-    frf.add_argument("--normal-load", type=float, nargs="+", required=True, metavar="F",
-                     help="normal load(s) [N]")
+    frf.add_argument("--normal-load", type=quantity("N", positive=True), nargs="+", required=True, metavar="F",
+                     help="normal load(s), e.g. '5 N' '500 mN'; a bare number is in N")
     frf.add_argument("--points", type=int, default=200, help="frequencies in the range (default 200)")
     frf.add_argument("--arclength", action="store_true",
                      help="follow the branch by arclength continuation (adaptive points, Floquet stability) "
@@ -75,9 +77,6 @@ def _frf(args: argparse.Namespace) -> int:
 
     if args.points < 2:
         raise FividError(f"--points must be >= 2, got {args.points}", key="--points")
-    bad = [fn for fn in args.normal_load if not (np.isfinite(fn) and fn > 0)]
-    if bad:
-        raise FividError(f"normal force must be finite and > 0 N, got {bad[0]!r}", key="--normal-load")
     model = load_damper_model(args.model)
     freqs = np.linspace(*model.frequency_range, args.points)
     curves = []
@@ -92,7 +91,7 @@ def _frf(args: argparse.Namespace) -> int:
             f_c = freqs
             amp = np.array([abs(s.measurement[0]) for s in hb.sweep(freqs)])
         i = int(np.argmax(amp))
-        curves.append({"normal_load": fn, "slip_force": model.slip_force(fn), "peak_frequency": float(f_c[i]),
+        curves.append({"normal_load": float(fn), "slip_force": model.slip_force(fn), "peak_frequency": float(f_c[i]),
                        "peak_amplitude": float(amp[i]), "amplitude": amp,
                        "receptance": amp / model.excitation_amplitude, **extra})
     if args.json:

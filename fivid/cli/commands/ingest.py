@@ -40,9 +40,12 @@ def register(subparsers) -> None:
     parser.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
                         help="output folder (created if missing); one OUTDIR/<run_id>.nc per input file")
     parser.add_argument("--rig", metavar="PROFILE", default=None,
-                        help="rig profile: a name in configs/rigs/ (e.g. triboair, labdaq) or a YAML path; "
-                             "default: the fivid-rig-csv format")
+                        help="rig profile: the name of a built-in profile (triboair, labdaq: shipped with fivid, "
+                             "configs/rigs/ in a checkout) or a YAML path; default: the fivid-rig-csv format")
     parser.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    parser.add_argument("--json", action="store_true",
+                        help='print {"written": [{"input", "output", "run_id", "samples", "sample_rate_hz"}, ...], '
+                             '"rejected": [{"input", "error"}, ...]} on stdout instead of one line per file')
     parser.set_defaults(func=run)
 
 
@@ -52,18 +55,27 @@ def run(args) -> int:
 
     from fivid.io import ingest_files
     from fivid.io.ingest import expand_inputs
+    from fivid.storage import dumps_json
 
     n_files = len(expand_inputs(args.paths))
     bar = tqdm(total=n_files, unit="file", desc="ingest", disable=n_files < 2 or not sys.stderr.isatty())
 
+    records = []
+
     def written(path, target, ds):
-        n = ds.sizes["time"]
-        bar.write(f"{path} -> {target} (run {ds.attrs['run_id']}: {n} samples at {ds.attrs['sample_rate']:.6g} Hz)",
-                  file=sys.stdout)
+        record = {"input": str(path), "output": str(target), "run_id": str(ds.attrs["run_id"]),
+                  "samples": int(ds.sizes["time"]), "sample_rate_hz": float(ds.attrs["sample_rate"])}
+        records.append(record)
+        if not args.json:
+            bar.write(f"{path} -> {target} (run {record['run_id']}: {record['samples']} samples at "
+                      f"{record['sample_rate_hz']:.6g} Hz)", file=sys.stdout)
 
     with bar:
         result = ingest_files(args.paths, args.outdir, profile=args.rig, overwrite=args.overwrite,
                               on_written=written, on_file_done=lambda path: bar.update())
+    if args.json:
+        print(dumps_json({"written": records, "rejected": [{"input": str(r.path), "error": str(r)}
+                                                            for r in result.rejected]}))
     for rejection in result.rejected:
         print(f"fivid ingest: rejected: {rejection}", file=sys.stderr)
     if result.rejected:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import sys
 
+from fivid.cli import quantity
+
 __all__ = ["register"]
 
 
@@ -18,15 +20,18 @@ def register(subparsers) -> None:
         "With --load the bodies are coupled at the contact nodes closed under that normal load (static preload "
         "solve): the linearisation about the sliding equilibrium. Mode shapes can be written to netCDF.",
     )
-    p.add_argument("model", metavar="MODEL.yaml", help="model config (see docs/model-config.md)")
+    p.add_argument("model", metavar="MODEL.yaml",
+                   help="model config (see docs/model-config.md), or the name of a built-in model such as "
+                        "triboair_coarse (configs/models/, shipped with fivid)")
     p.add_argument("-n", "--n-modes", type=int, default=30, metavar="N", help="number of modes (default 30)")
     p.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...], ...} as JSON')
     p.add_argument("-o", "--output", metavar="MODES.nc", help="write frequencies and mode shapes to netCDF")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--mass", choices=("consistent", "lumped"), default="consistent",
                    help="mass matrix (default consistent; lumped is what the explicit solver uses)")
-    p.add_argument("--load", metavar="Q",
-                   help="normal load with unit, e.g. '5 N': couple the bodies by normal penalty springs at the slave "
+    p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
+                   help="normal load, e.g. '5 N' (a bare number is in N): couple the bodies by normal penalty "
+                        "springs at the slave "
                         "nodes closed under it (static preload solve; no friction)")
     p.add_argument("--contact", action="store_true",
                    help="couple the bodies at the contact: with --load, under that normal load; without, under the "
@@ -50,9 +55,7 @@ def run(args) -> int:
         check_writable(args.output, overwrite=args.overwrite)
     if args.damping_curve:
         check_writable(args.damping_curve, overwrite=True)
-    from fivid.units import parse_quantity
-
-    load = None if args.load is None else _positive_load(args.load, parse_quantity)
+    load = None if args.load is None else float(args.load)
     model = load_model(args.model)
     if args.contact and load is None and not model.loads:
         raise ConfigError("--contact needs --load Q (e.g. --load '5 N'): the contact is linearised about the "
@@ -135,15 +138,3 @@ def _plot_damping_curve(model, frequencies, path) -> None:
         fig.savefig(tmp, format="png", dpi=120, bbox_inches="tight")
     plt.close(fig)
 
-
-def _positive_load(text, parse_quantity) -> float:
-    """``--load`` in newtons, > 0 (ConfigError naming the option otherwise)."""
-    from fivid.errors import ConfigError, FividError
-
-    try:
-        load = parse_quantity(text, "N")
-    except FividError as exc:  # name the option: the bare message does not say which argument it was
-        raise type(exc)(f"--load: {exc.message}") from None
-    if not load > 0:
-        raise ConfigError(f"--load must be a positive force, got {text!r}")
-    return float(load)

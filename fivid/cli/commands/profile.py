@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from fivid.cli import quantity
+
 __all__ = ["register"]
 
 _DESCRIPTION = """\
@@ -27,6 +29,11 @@ example:
   fivid profile trace.csv --cutoff '0.8 mm' --short-cutoff '2.5 um' -o trace.nc --plot trace.png"""
 
 
+# a bare number is refused: profiles are read in um, and '468' as metres is a slip, not SI
+_LENGTH = quantity("m", bare_numbers=False)
+_POSITIVE_LENGTH = quantity("m", bare_numbers=False, positive=True)
+
+
 def register(subparsers) -> None:
     """Add the ``profile`` sub-command."""
     import argparse
@@ -36,14 +43,16 @@ def register(subparsers) -> None:
         description=_DESCRIPTION, epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("file", metavar="FILE", help="profile file: Dektak .csv export, 'x [um],z [um]' .csv/.txt, .x3p")
-    p.add_argument("--window", nargs=2, metavar=("START", "END"),
+    p.add_argument("--window", nargs=2, metavar=("START", "END"), type=_LENGTH,
                    help="evaluation window, both ends included, as lengths with units, e.g. '468 um' '733 um' "
                         "(default: the instrument's cursor window when the file has one, else the whole profile)")
     p.add_argument("--form", default="line", metavar="FORM",
                    help="form removed by least squares over the window: line (default), poly:N or none")
-    p.add_argument("--cutoff", metavar="Q", help="cut-off wavelength λc of the Gaussian roughness filter, e.g. "
-                                                 "'0.8 mm' (default: no filter; R parameters of the primary profile)")
-    p.add_argument("--short-cutoff", metavar="Q", help="cut-off λs of the Gaussian short-wave filter, e.g. '2.5 um'")
+    p.add_argument("--cutoff", metavar="Q", type=_POSITIVE_LENGTH,
+                   help="cut-off wavelength λc of the Gaussian roughness filter, e.g. '0.8 mm' (default: no filter; "
+                        "R parameters of the primary profile)")
+    p.add_argument("--short-cutoff", metavar="Q", type=_POSITIVE_LENGTH,
+                   help="cut-off λs of the Gaussian short-wave filter, e.g. '2.5 um'")
     p.add_argument("--ends", choices=("trim", "keep"), default="trim",
                    help="with --cutoff: drop λc/2 at each end of the window (trim, default) or keep them")
     p.add_argument("--json", action="store_true",
@@ -52,24 +61,6 @@ def register(subparsers) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("--plot", metavar="PNG", help="write a figure of the profile, roughness and PSD to this PNG")
     p.set_defaults(func=run)
-
-
-def _length(text: str, option: str) -> float:
-    """A length with unit in metres; the error names the option and the form allowed."""
-    from fivid.errors import ConfigError, FividError
-    from fivid.units import parse_quantity
-
-    allowed = "give a length with a unit, e.g. '468 um' or '0.8 mm'"
-    try:
-        float(text)
-    except ValueError:
-        pass
-    else:
-        raise ConfigError(f"{option}: {text!r} has no unit; {allowed}")
-    try:
-        return parse_quantity(text, "m")
-    except FividError as exc:
-        raise ConfigError(f"{option}: {exc.message}; {allowed}") from None
 
 
 def _summary(profile, ev) -> dict:
@@ -95,9 +86,9 @@ def run(args) -> int:
     for path in (args.output, args.plot):
         if path:
             check_writable(path, overwrite=args.overwrite)
-    window = None if args.window is None else tuple(_length(v, "--window") for v in args.window)
-    cutoff = None if args.cutoff is None else _length(args.cutoff, "--cutoff")
-    short = None if args.short_cutoff is None else _length(args.short_cutoff, "--short-cutoff")
+    window = None if args.window is None else tuple(float(v) for v in args.window)
+    cutoff = None if args.cutoff is None else float(args.cutoff)
+    short = None if args.short_cutoff is None else float(args.short_cutoff)
     profile = read_profile(args.file)
     if window is None and "instrument_window_start" in profile.attrs:
         window = (profile.attrs["instrument_window_start"], profile.attrs["instrument_window_end"])

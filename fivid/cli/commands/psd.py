@@ -40,6 +40,9 @@ def register(subparsers) -> None:
                         help="analyse only the steady-sliding window (needs velocity or position)")
     parser.add_argument("-o", "--output", required=True, metavar="PSD.nc", help="output netCDF file")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output file")
+    parser.add_argument("--json", action="store_true",
+                        help="print a JSON summary on stdout (output, run, variable, units, resolution, segments, "
+                             "degrees of freedom, peak, settings; see docs/cli.md)")
     parser.set_defaults(func=run)
 
 
@@ -52,7 +55,7 @@ def run(args) -> int:
     from fivid.schema import new_history
     from fivid.signal import steady_sliding_window, welch_psd
     from fivid.signal.sampling import run_label
-    from fivid.storage import check_writable, write_netcdf
+    from fivid.storage import check_writable, dumps_json, write_netcdf
 
     check_writable(args.output, overwrite=args.overwrite)
     ds = read_run(args.run_path)
@@ -60,11 +63,11 @@ def run(args) -> int:
     if args.variable not in ds.data_vars:
         raise SchemaError(f"{label} has no variable {args.variable!r}; it has: "
                           f"{', '.join(sorted(map(str, ds.data_vars)))}")
-    window = ""
+    window, steady = "", None
     if args.steady:
         t0, t1 = steady_sliding_window(ds)
         ds = ds.sel(time=slice(t0, t1))
-        window = f", steady window [{t0:.6g}, {t1:.6g}] s"
+        window, steady = f", steady window [{t0:.6g}, {t1:.6g}] s", [float(t0), float(t1)]
     psd = welch_psd(ds[args.variable], nperseg=args.nperseg, noverlap=args.noverlap, window=args.window,
                     detrend=args.detrend, confidence=args.confidence, label=label,
                     fs=ds.attrs.get("sample_rate"))
@@ -80,7 +83,28 @@ def run(args) -> int:
                                f"{window}"),
     }
     write_netcdf(out, args.output, overwrite=args.overwrite)
+    if args.json:
+        print(dumps_json(_summary(args, out.attrs["run_id"], psd, steady)))
+        return 0
     print(f"{args.output}: PSD of {args.variable} ({psd.attrs['units']}), {psd.sizes['frequency']} bins of "
           f"{psd.attrs['frequency_resolution']:.6g} Hz, {psd.attrs['n_segments']} segments, "
           f"{psd.attrs['equivalent_degrees_of_freedom']:.4g} degrees of freedom")
     return 0
+
+
+def _summary(args, run_id: str, psd, steady) -> dict:
+    """The ``--json`` record of ``fivid psd`` (shape in docs/cli.md)."""
+    import numpy as np
+
+    a = psd.attrs
+    values = np.asarray(psd.values, dtype=float).reshape(psd.sizes["frequency"], -1).max(axis=1)
+    peak = int(np.nanargmax(values)) if np.isfinite(values).any() else None
+    return {
+        "output": str(args.output), "run_id": run_id, "variable": args.variable, "units": a["units"],
+        "n_frequencies": int(psd.sizes["frequency"]), "frequency_resolution_hz": float(a["frequency_resolution"]),
+        "n_segments": int(a["n_segments"]), "equivalent_degrees_of_freedom": float(a["equivalent_degrees_of_freedom"]),
+        "peak_frequency_hz": None if peak is None else float(psd.frequency[peak]),
+        "steady_window_s": steady,
+        "settings": {"nperseg": args.nperseg, "noverlap": args.noverlap, "window": args.window,
+                     "detrend": args.detrend, "confidence": args.confidence},
+    }

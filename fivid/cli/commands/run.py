@@ -31,6 +31,9 @@ def register(subparsers) -> None:
     p.add_argument("--dry-run", action="store_true", help="validate and print what would run; compute nothing")
     p.add_argument("--force", action="store_true", help="re-run every task, ignoring the cache")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--json", action="store_true",
+                   help="print <output>/summary.json on stdout (with --dry-run: the planned lines as "
+                        '{"dry_run": true, "plan": [...]}); progress lines go to stderr')
     p.set_defaults(func=_run)
 
 
@@ -39,13 +42,18 @@ def _run(args) -> int:
 
     from fivid.errors import ConfigError
     from fivid.pipeline import load_plan, run_pipeline
+    from fivid.storage import dumps_json
 
     if args.workers < 1:
         raise ConfigError(f"--workers must be at least 1, got {args.workers}", key="--workers")
     plan = load_plan(args.pipeline, args.config, output=args.output)
+    planned = []
+    echo = planned.append if args.json and args.dry_run else (
+        lambda line: print(line, file=sys.stderr if args.json else sys.stdout))
     status, summary = run_pipeline(plan, workers=args.workers, scheduler=args.scheduler, dry_run=args.dry_run,
-                                   force=args.force, progress=False if args.no_progress else None,
-                                   echo=lambda line: print(line, file=sys.stdout))
+                                   force=args.force, progress=False if args.no_progress else None, echo=echo)
+    if args.json:
+        print(dumps_json({"dry_run": True, "plan": planned} if args.dry_run else summary))
     if not args.dry_run:
         c = summary["cache"]
         print(f"fivid run: {summary['status']} (exit {status}) in {summary['seconds']:.1f} s; "

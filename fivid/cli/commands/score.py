@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from fivid.cli import integer_at_least
+from fivid.cli import integer_at_least, quantity
 
 __all__ = ["register", "run"]
 
@@ -32,8 +32,10 @@ def register(subparsers) -> None:
     parser.add_argument("measured", metavar="MEASURED.nc", help="measured RunDataset (netCDF)")
     parser.add_argument("simulated", metavar="SIMULATED.nc", help="simulated RunDataset (netCDF)")
     parser.add_argument("--variable", default="acceleration", help="variable to compare (default: acceleration)")
-    parser.add_argument("--band", nargs=2, type=float, default=None, metavar=("F_LO", "F_HI"),
-                        help="frequency band [Hz] (default: 4 PSD bins to 80%% of the lower Nyquist frequency)")
+    parser.add_argument("--band", nargs=2, type=quantity("Hz", nonnegative=True), default=None,
+                        metavar=("F_LO", "F_HI"),
+                        help="frequency band, e.g. '800 Hz' '5 kHz'; a bare number is in Hz (default: 4 PSD bins "
+                             "to 80%% of the lower Nyquist frequency)")
     parser.add_argument("--nperseg", type=integer_at_least(2), default=8192, metavar="N", help="Welch segment length (default 8192)")
     parser.add_argument("--sensor", default=None, help="sensor name when the variable has several")
     parser.add_argument("--steady", action="store_true", help="score only each run's steady-sliding window")

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from fivid.cli import quantity
+
 __all__ = ["register"]
 
 
@@ -17,21 +19,29 @@ def register(subparsers) -> None:
         "Friction is Coulomb (--mu, or each contact pair's mu) or an identified law (--law, mu0 + mu_p(t)). "
         "The output has the variable names of a measured run (acceleration, friction_force, normal_force), so "
         "'fivid score' compares them directly, plus contact diagnostics and the energy balance. "
-        "Quantities take units, e.g. --velocity '10 mm/s' --load '5 N' --duration '0.1 s'.",
+        "Quantities take units, e.g. --velocity '10 mm/s' --load '5 N' --duration '0.1 s'; a bare number is in "
+        "SI units (m/s, N, m, s, Hz).",
     )
-    p.add_argument("model", metavar="MODEL.yaml", help="model config (see docs/model-config.md)")
+    p.add_argument("model", metavar="MODEL.yaml",
+                   help="model config (see docs/model-config.md), or the name of a built-in model such as "
+                        "triboair_coarse (configs/models/, shipped with fivid)")
     fr = p.add_mutually_exclusive_group()
     fr.add_argument("--law", metavar="LAW.nc", help="friction-law file written by 'fivid identify'")
     fr.add_argument("--mu", type=float, metavar="MU", help="constant Coulomb friction coefficient for every pair")
-    p.add_argument("--velocity", metavar="Q", help="sliding velocity of the base, e.g. '10 mm/s' (default: config)")
-    p.add_argument("--load", metavar="Q", help="normal load at the force transducer, e.g. '5 N' (default: the "
-                   "configured clamp displacement)")
-    p.add_argument("--roughness", metavar="Q", help="roughness Ra, e.g. '0.8 um' (passed to the law, recorded)")
-    p.add_argument("--duration", metavar="Q", default="0.1 s",
-                   help="steady-sliding time after the transient (default '0.1 s')")
-    p.add_argument("--sample-rate", metavar="Q", default="51.2 kHz", help="output sample rate (default '51.2 kHz')")
+    p.add_argument("--velocity", metavar="Q", type=quantity("m s-1", positive=True),
+                   help="sliding velocity of the base, e.g. '10 mm/s'; bare number in m/s (default: config)")
+    p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
+                   help="normal load at the force transducer, e.g. '5 N'; bare number in N (default: the configured "
+                        "clamp displacement)")
+    p.add_argument("--roughness", metavar="Q", type=quantity("m", nonnegative=True),
+                   help="roughness Ra, e.g. '0.8 um'; bare number in m (passed to the law, recorded)")
+    p.add_argument("--duration", metavar="Q", default="0.1 s", type=quantity("s", positive=True),
+                   help="steady-sliding time after the transient; bare number in s (default '0.1 s')")
+    p.add_argument("--sample-rate", metavar="Q", default="51.2 kHz", type=quantity("Hz", positive=True),
+                   help="output sample rate; bare number in Hz (default '51.2 kHz')")
     p.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the friction-law synthesis (default 0)")
-    p.add_argument("--time-step", metavar="Q", help="solver step (default 0.9 x critical; refused above critical)")
+    p.add_argument("--time-step", metavar="Q", type=quantity("s", positive=True),
+                   help="solver step, e.g. '50 ns'; bare number in s (default 0.9 x critical; refused above critical)")
     p.add_argument("--run-id", metavar="ID", help="run identifier recorded in the output")
     p.add_argument("-o", "--output", metavar="SIM.nc", required=True, help="output RunDataset (netCDF)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -50,15 +60,9 @@ def run(args) -> int:
     from fivid.pipeline.resources import check_simulation_memory, simulation_memory
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
-    from fivid.units import parse_quantity
 
-    def q(text, units, option):
-        if text is None:
-            return None
-        try:
-            return parse_quantity(text, units)
-        except FividError as exc:
-            raise type(exc)(f"{option}: {exc.message}") from None
+    def si(value):  # a parsed Quantity -> plain float (None stays None)
+        return None if value is None else float(value)
 
     if not args.dry_run:
         check_writable(args.output, overwrite=args.overwrite)
@@ -70,8 +74,7 @@ def run(args) -> int:
             raise FividError("--law needs fivid.friction (friction laws), which this installation lacks") from None
         law = load_law(args.law)
     model = _load_model(args.model)
-    duration, sample_rate = q(args.duration, "s", "--duration"), q(args.sample_rate, "Hz", "--sample-rate")
-    time_step = q(args.time_step, "s", "--time-step")
+    duration, sample_rate, time_step = si(args.duration), si(args.sample_rate), si(args.time_step)
     size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
     check_simulation_memory(size)  # before any allocation: a year of records fails here, not in the kernel
     if args.dry_run:
@@ -81,9 +84,9 @@ def run(args) -> int:
         model,
         law=law,
         mu=args.mu,
-        sliding_velocity=q(args.velocity, "m s-1", "--velocity"),
-        normal_load=q(args.load, "N", "--load"),
-        roughness_ra=q(args.roughness, "m", "--roughness"),
+        sliding_velocity=si(args.velocity),
+        normal_load=si(args.load),
+        roughness_ra=si(args.roughness),
         duration=duration,
         sample_rate=sample_rate,
         seed=args.seed,
@@ -148,5 +151,5 @@ def _command_line(args) -> str:
     for option, dest in _OPTIONS:
         value = getattr(args, dest)
         if value is not None:
-            words += [option, str(value)]
+            words += [option, str(getattr(value, "text", value))]  # a quantity as it was written
     return shlex.join(words + (["--overwrite"] if args.overwrite else []))
