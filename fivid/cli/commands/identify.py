@@ -21,12 +21,14 @@ With --damping, modal damping ratios are identified from the acceleration PSD pe
 
 def register(subparsers) -> None:
     """Add the ``identify`` sub-command."""
+    from fivid.cli import quantity
+
     p = subparsers.add_parser("identify", help="identify the friction law (and damping) from measured runs",
                               description=_DESCRIPTION)
     p.add_argument("runs", nargs="+", metavar="RUN.nc", help="RunDataset netCDF files")
     p.add_argument("-o", "--output", required=True, metavar="LAW.nc", help="law file to write")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    p.add_argument("--band", nargs=2, type=float, metavar=("F_LO", "F_HI"),
+    p.add_argument("--band", nargs=2, type=quantity("Hz", nonnegative=True), metavar=("F_LO", "F_HI"),
                    help="valid band [Hz] (default 20 Hz to min(2 kHz, 0.4 fs): where the force chain is trustworthy)")
     p.add_argument("--json", action="store_true", help="print the JSON report on stdout")
     p.add_argument("--report", metavar="REPORT.json", help="also write the JSON report to this file")
@@ -34,12 +36,12 @@ def register(subparsers) -> None:
                    "mains-line removal takes only the lines, with >= 7 segments; see docs/identification.md)")
     p.add_argument("--tolerance", type=float, default=0.05,
                    help="relative velocity tolerance of the steady-sliding window (default 0.05)")
-    p.add_argument("--min-normal-force", type=float, default=0.1,
+    p.add_argument("--min-normal-force", type=quantity("N", nonnegative=True), default=0.1,
                    help="exclude runs whose mean normal force is below this [N] (default 0.1)")
-    p.add_argument("--tare", nargs=2, type=float, metavar=("T0", "T1"),
+    p.add_argument("--tare", nargs=2, type=quantity("s", nonnegative=True), metavar=("T0", "T1"),
                    help="unloaded interval [s]: its mean forces are subtracted (sensor offsets) and its noise PSD "
                    "is removed from the perturbation PSD")
-    p.add_argument("--mains-frequency", type=float, default=50.0,
+    p.add_argument("--mains-frequency", type=quantity("Hz", positive=True), default=50.0,
                    help="mains frequency [Hz] whose harmonics are removed when they stand out (0 disables; default 50)")
     p.add_argument("--shape", choices=("smoothed", "rolloff"), default="smoothed",
                    help="spectral shape written into the law (default smoothed)")
@@ -54,17 +56,17 @@ def register(subparsers) -> None:
                    help="amplitude-law fit: WLS with the per-run estimator variances (default) or OLS")
     p.add_argument("--damping", metavar="DAMPING.yaml",
                    help="also identify modal damping from the acceleration and write a Rayleigh fragment here")
-    p.add_argument("--damping-band", nargs=2, type=float, metavar=("F_LO", "F_HI"),
+    p.add_argument("--damping-band", nargs=2, type=quantity("Hz", nonnegative=True), metavar=("F_LO", "F_HI"),
                    help="band [Hz] searched for resonance peaks (default: the friction band)")
     p.add_argument("--damping-peaks", type=int, default=4, help="number of resonance peaks to use (default 4)")
     p.add_argument("--inverse", metavar="MODEL.yaml",
                    help="also run the inverse route of seed 001 with this FE model: scale the amplitude until the "
                    "simulated acceleration level matches the measured one (reported beside the forward estimate)")
-    p.add_argument("--inverse-band", nargs=2, type=float, metavar=("F_LO", "F_HI"),
+    p.add_argument("--inverse-band", nargs=2, type=quantity("Hz", nonnegative=True), metavar=("F_LO", "F_HI"),
                    help="band [Hz] of the level match (default: the friction band)")
     p.add_argument("--inverse-run", action="append", metavar="RUN_ID",
                    help="run(s) to match (repeatable; default: the first used run)")
-    p.add_argument("--inverse-duration", type=float, default=0.1,
+    p.add_argument("--inverse-duration", type=quantity("s", positive=True), default=0.1,
                    help="steady-sliding time simulated per iteration [s] (default 0.1)")
     p.add_argument("--inverse-iterations", type=int, default=4, help="maximum iterations (default 4)")
     p.set_defaults(func=_run)

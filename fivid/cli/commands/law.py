@@ -25,6 +25,8 @@ exit status: 0 ok; 2 bad input, or a condition outside the domain with --strict;
 
 def register(subparsers) -> None:
     """Add the ``law`` sub-command with ``show`` and ``eval``."""
+    from fivid.cli import quantity
+
     p = subparsers.add_parser("law", help="show an identified friction law or evaluate its amplitude",
                               description=_DESCRIPTION, epilog=_EPILOG,
                               formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -35,9 +37,12 @@ def register(subparsers) -> None:
     show.set_defaults(func=_show)
     ev = sub.add_parser("eval", help="predicted amplitude with its 95 %% prediction interval at a condition")
     ev.add_argument("law_path", metavar="LAW.nc", help="law file written by 'fivid identify'")
-    ev.add_argument("--velocity", required=True, metavar="Q", help="sliding velocity with units, e.g. '7.5 mm/s'")
-    ev.add_argument("--roughness", required=True, metavar="Q", help="roughness Ra with units, e.g. '1 um'")
-    ev.add_argument("--load", metavar="Q", help="normal load with units, e.g. '5 N' (needed when the law uses it)")
+    ev.add_argument("--velocity", required=True, metavar="Q", type=quantity("m s-1", nonnegative=True),
+                    help="sliding velocity, e.g. '7.5 mm/s' (a bare number is in m/s)")
+    ev.add_argument("--roughness", required=True, metavar="Q", type=quantity("m", nonnegative=True),
+                    help="roughness Ra, e.g. '1 um' (a bare number is in m)")
+    ev.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
+                    help="normal load, e.g. '5 N' (a bare number is in N; needed when the law uses it)")
     ev.add_argument("--confidence", type=float, default=0.95, help="level of the interval (default 0.95)")
     ev.add_argument("--strict", action="store_true", help="refuse a condition outside the identified domain (exit 2)")
     ev.add_argument("--json", action="store_true", help="print JSON instead of text")
@@ -164,11 +169,9 @@ def _eval(args) -> int:
     from fivid.errors import FividError
     from fivid.friction import ExtrapolationWarning, predict_amplitude
     from fivid.storage import dumps_json
-    from fivid.units import parse_quantity
 
-    v = parse_quantity(args.velocity, "m s-1")
-    ra = parse_quantity(args.roughness, "m")
-    fn = parse_quantity(args.load, "N") if args.load else None
+    v, ra = float(args.velocity), float(args.roughness)
+    fn = float(args.load) if args.load is not None else None
     ds, law, domain = _open(args.law_path)
     if not 0 < args.confidence < 1:
         raise FividError(f"--confidence {args.confidence!r}; it must be in (0, 1)")
