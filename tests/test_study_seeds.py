@@ -77,9 +77,9 @@ def test_weak_strong_study_quick(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_ring_study_quick(tmp_path, capsys):
-    """Seed 002's mu sweep (--quick: 180 x 10 mesh): stable at 0.01, mode coupling at 0.3 (growth, onset, limit
+    """Seed 002's mu sweep (--quick: 126 x 7 mesh): stable at 0.01, mode coupling at 0.3 (growth, onset, limit
     cycle), stick-slip at 1; the CEA's critical mu lies below 0.3, and the stable point decays at the CEA's rate
-    (transient -97 vs CEA -103 1/s on this mesh: within 15 %, the envelope fit's spread over 40 ms)."""
+    (transient -102 vs CEA -108 1/s on this mesh: within 15 %, the envelope fit's spread over 40 ms)."""
     assert main(["study", str(STUDIES / "ring_mu_sweep.yaml"), "-o", str(tmp_path / "ring"), "--quick",
                  "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
