@@ -134,3 +134,33 @@ def test_missing_library_gives_install_hint(tmp_path, recording, monkeypatch):
     monkeypatch.setitem(sys.modules, "nptdms", None)  # import nptdms raises ImportError
     with pytest.raises(FividError, match=r"needs the npTDMS package.*pip install 'fivid\[daq\]'"):
         read_daq_file(path, "labdaq")
+
+
+def test_tdms_waveform_time_when_no_time_channel(tmp_path, recording, reference):
+    """NI waveforms carry wf_start_offset and wf_increment instead of a time channel."""
+    from nptdms import ChannelObject, RootObject, TdmsWriter
+
+    channels, metadata = recording
+    path = tmp_path / "R002_v20_ra16.tdms"
+    wave = {"wf_start_offset": 0.0, "wf_increment": 1 / 51200}
+    with TdmsWriter(str(path)) as writer:
+        writer.write_segment([RootObject(properties=metadata)] + [
+            ChannelObject("Rig", name, values, properties=wave) for name, values in channels.items()
+            if name != "Time (s)"])
+    ds = read_daq_file(path, "labdaq")
+    _assert_same_run(ds, reference, 0.0, time_atol=5e-8 * (1 + 1e-9))  # the CSV prints times to 1e-7 s (half up)
+
+
+def test_folder_of_daq_files_is_expanded_and_uff_without_time_data_rejected(tmp_path, recording, capsys):
+    from fivid.io.export import export_uff58
+
+    write_tdms(tmp_path, *recording)
+    import xarray as xr
+
+    frf = xr.Dataset({"h": ("frequency", np.ones(4) + 1j, {"units": "m N-1"})},
+                     coords={"frequency": ("frequency", np.arange(1.0, 5.0), {"units": "Hz"})})
+    export_uff58(frf, tmp_path / "frf.uff")
+    assert main(["ingest", str(tmp_path), "-o", str(tmp_path / "out"), "--rig", "labdaq"]) == 2
+    err = capsys.readouterr().err
+    assert "frf.uff" in err and "no time-response dataset 58" in err
+    assert (tmp_path / "out" / "R002.nc").is_file()
