@@ -2,10 +2,12 @@
 
 * :func:`read_rig_csv` reads a ``fivid-rig-csv: 1`` file or a DAQ export described by a rig profile
   (:func:`load_rig_profile`, ``configs/rigs/*.yaml``) into a validated RunDataset in SI units;
+* :func:`read_daq_file` reads a DAQ file (TDMS, UFF58, MATLAB, LVM, MDF4) through the same profile;
 * :func:`ingest_files` converts many files to ``<outdir>/<run_id>.nc`` (what ``fivid ingest`` runs);
 * :func:`read_run` / :func:`write_run` read and write RunDataset netCDF files.
 """
 
+from fivid.io.daq import read_daq_file
 from fivid.io.ingest import IngestResult, Rejection, ingest_files
 from fivid.io.netcdf import read_run, write_run
 from fivid.io.rig_csv import read_rig_csv
@@ -14,6 +16,7 @@ from fivid.io.rig_profile import ColumnSpec, RigProfile, load_rig_profile
 
 __all__ = [
     "read_rig_csv",
+    "read_daq_file",
     "read_rig_head",
     "load_rig_profile",
     "RigProfile",

@@ -16,12 +16,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid.errors import FividError, OutputExistsError, SchemaError
+from fivid.io.daq import DAQ_SUFFIXES, is_daq_file, read_daq_file, read_daq_head
 from fivid.io.netcdf import write_run
 from fivid.io.rig_csv import as_rig_profile, read_rig_csv
 from fivid.io.rig_header import read_rig_head
 from fivid.storage import check_folder_writable
 
-__all__ = ["ingest_files", "IngestResult", "Rejection", "prepare_output_folder", "expand_inputs"]
+__all__ = ["ingest_files", "IngestResult", "Rejection", "prepare_output_folder", "expand_inputs", "read_recording",
+           "INPUT_SUFFIXES"]
+
+#: Suffixes of the files ``ingest`` reads (a folder is expanded to its files of these kinds).
+INPUT_SUFFIXES = (".csv", *DAQ_SUFFIXES)
 
 log = logging.getLogger("fivid")
 
@@ -79,12 +84,25 @@ def prepare_output_folder(outdir) -> Path:
     return outdir
 
 
+def _is_input(path: Path) -> bool:
+    return path.suffix.lower() in INPUT_SUFFIXES and path.is_file()
+
+
+def read_recording(path, profile=None):
+    """Read a rig CSV or a DAQ file (by its suffix: :data:`fivid.io.daq.DAQ_SUFFIXES`) into a RunDataset."""
+    return read_daq_file(path, profile) if is_daq_file(path) else read_rig_csv(path, profile)
+
+
+def _read_head(path, profile):
+    return read_daq_head(path, profile) if is_daq_file(path) else read_rig_head(path, profile)
+
+
 def expand_inputs(paths) -> list[Path]:
-    """Input paths with folders expanded to their ``*.csv`` files (sorted); the same file once."""
+    """Input paths with folders expanded to their rig CSV and DAQ files (sorted); the same file once."""
     out, seen = [], set()
     for p in paths:
         p = Path(p)
-        found = sorted(q for q in p.iterdir() if q.suffix.lower() == ".csv" and q.is_file()) if p.is_dir() else [p]
+        found = sorted(q for q in p.iterdir() if _is_input(q)) if p.is_dir() else [p]
         for q in found:
             key = q.resolve() if q.exists() else q
             if key not in seen:
@@ -94,16 +112,15 @@ def expand_inputs(paths) -> list[Path]:
 
 
 def _folders_without_csv(paths) -> list[Path]:
-    """The folders among ``paths`` that hold no ``*.csv`` file (they would silently convert nothing)."""
-    return [p for p in map(Path, paths)
-            if p.is_dir() and not any(q.suffix.lower() == ".csv" and q.is_file() for q in p.iterdir())]
+    """The folders among ``paths`` that hold no input file (they would silently convert nothing)."""
+    return [p for p in map(Path, paths) if p.is_dir() and not any(_is_input(q) for q in p.iterdir())]
 
 
 def _convert(path: Path, head, target: Path, profile, overwrite: bool):
     """Read one file and write its RunDataset to ``target``; raises FividError."""
     if target.exists() and not overwrite:
         raise OutputExistsError(f"output {str(target)!r} exists; pass --overwrite to replace it", file=path)
-    ds = read_rig_csv(path, profile)
+    ds = read_recording(path, profile)
     if ds.attrs["run_id"] != head.attrs["run_id"]:
         raise SchemaError(f"the file changed during the ingest (run_id {head.attrs['run_id']!r} became "
                           f"{ds.attrs['run_id']!r}); run the ingest again", file=path, key="run_id")
@@ -121,7 +138,8 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
     Parameters
     ----------
     paths : iterable of str or path-like
-        Rig CSV files (folders are expanded to their ``*.csv`` files).
+        Rig CSV files or DAQ files (``.tdms``, ``.uff``, ``.mat``, ``.lvm``, ``.mf4``; by suffix);
+        folders are expanded to such files.
     outdir : str or path-like
         Output folder, created if missing.
     profile : RigProfile, str or path-like, optional
@@ -155,11 +173,12 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
     inputs = expand_inputs(paths)
     for folder in _folders_without_csv(paths):
         result.rejected.append(Rejection(folder, FividError(
-            "the folder holds no *.csv file; give rig CSV files or a folder of them", file=folder)))
+            "the folder holds no *.csv file (nor a DAQ file: " + ", ".join(f"*{x}" for x in DAQ_SUFFIXES)
+            + "); give rig CSV or DAQ files or a folder of them", file=folder)))
     heads = {}
     for path in inputs:
         try:
-            heads[path] = read_rig_head(path, profile)
+            heads[path] = _read_head(path, profile)
         except FividError as exc:
             result.rejected.append(Rejection(path, exc.located(file=path)))
     by_run: dict[str, list[Path]] = {}

@@ -19,12 +19,10 @@ import threading
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
-from fivid.io.data_checks import (first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing,
-                                  time_without_resolution)
-from fivid.io.plausibility import plausibility_findings, quality_report
 from fivid.io.rig_header import RigHead, read_rig_head
 from fivid.io.rig_profile import RigProfile, load_rig_profile
-from fivid.schema import apply_cf_attrs, new_history, registry, validate_run
+from fivid.io.run_assembly import assemble_run, by_variable, check_finite
+from fivid.schema import registry
 
 __all__ = ["read_rig_csv", "as_rig_profile"]
 
@@ -190,91 +188,6 @@ def _first_null(column) -> int:
     return int(pc.index(pc.is_null(column), True).as_py())
 
 
-def _fail(head: RigHead, lines: _Lines, finding, column: str | None = None) -> DataQualityError:
-    line = lines(finding.index)
-    message = finding.message
-    if finding.previous is not None:
-        message += f" (previous sample at line {lines(finding.previous)})"
-    return DataQualityError(message, file=head.path, line=line, column=column)
-
-
-def _by_variable(head: RigHead) -> dict:
-    """``variable -> [(field index, ColumnSpec), ...]`` in header order (several for sensors)."""
-    groups: dict = {}
-    for index, spec in head.columns:
-        groups.setdefault(spec.variable, []).append((index, spec))
-    return groups
-
-
-def _time_spec(head: RigHead):
-    return next(spec for _, spec in head.columns if spec.variable == "time")
-
-
-def _sample_rate(head: RigHead, lines: _Lines, time: np.ndarray) -> float:
-    if time.size < 2:
-        raise SchemaError(
-            "no data rows after the header" if time.size == 0 else
-            "only one data row; a run needs at least two samples", file=head.path, line=head.header_line,
-        )
-    column = _time_spec(head).name
-    tolerance = head.profile.sampling_tolerance
-    checks = (lambda: time_without_resolution(time, tolerance), lambda: time_not_increasing(time),
-              lambda: sampling_deviation(time, tolerance))  # in order: each assumes the previous passed
-    for check in checks:
-        finding = check()
-        if finding is not None:
-            raise _fail(head, lines, finding, column=column)
-    measured = nominal_sample_rate(time)
-    stated = head.attrs.get("sample_rate")
-    if stated is None:
-        return measured
-    if abs(stated - measured) > head.profile.sampling_tolerance * measured:
-        hint = ""
-        for factor in (1e-3, 1e3, 1e-6, 1e6):
-            if abs(measured / (stated * factor) - 1) <= head.profile.sampling_tolerance:
-                hint = (f"; the ratio is {factor:g}: the time column's unit {_time_spec(head).units!r} looks wrong by "
-                        "that factor (times in ms under a header in s give 0.001); correct the unit in the header")
-        raise DataQualityError(
-            f"the stated sample rate {stated:.9g} Hz ({head.attr_origin['sample_rate']}) does not match the time "
-            f"column, which gives {measured:.9g} Hz; tolerance {100 * head.profile.sampling_tolerance:.3g} %{hint}",
-            file=head.path, key="sample_rate",
-        )
-    return float(stated)
-
-
-def _check_plausibility(head: RigHead, lines: _Lines, sample_rate: float, arrays: dict) -> str:
-    """Raise the first plausibility error (file, line, column or key); log the warnings; return the report."""
-    findings = plausibility_findings({**head.attrs, "sample_rate": sample_rate},
-                                     {name: values for name, (values, _) in arrays.items()})
-    for finding in findings:
-        if finding.severity == "error" and finding.subject in arrays:
-            column = ", ".join(spec.name for spec in arrays[finding.subject][1])
-            raise _fail(head, lines, finding, column=column)
-        if finding.severity == "error":
-            origin = head.attr_origin.get(finding.subject, "")
-            line = int(origin.split()[1]) if origin.startswith("line ") else None
-            raise DataQualityError(finding.message, file=head.path, line=line, key=finding.subject)
-        log.warning("%s: %s: %s", head.path, finding.subject, finding.message)
-    return quality_report(findings)
-
-
-def _history(head: RigHead, digest: str) -> str:
-    cols = []
-    for _, spec in head.columns:
-        how = f"{spec.name!r} [{spec.units}]"
-        if spec.sensitivity:
-            how += f" at {spec.sensitivity}"
-        if spec.scale != 1.0:
-            how += f" x {spec.scale:g}"
-        target = spec.variable if spec.sensor is None else f"{spec.variable}[{spec.sensor}]"
-        cols.append(f"{target} <- {how}")
-    origin = ", ".join(f"{k} ({v})" for k, v in head.attr_origin.items())
-    return new_history(
-        f"ingest {head.path.name} (sha256 {digest}) with {head.profile.describe()}; columns: {'; '.join(cols)}; "
-        f"metadata: {origin}"
-    )
-
-
 def _warn_misspelt_columns(head: RigHead) -> None:
     """Warn about fivid-rig-csv header names that are no variable but close to one ('positon').
 
@@ -337,7 +250,6 @@ def read_rig_csv(path, profile=None):
     0.01
     """
     import pyarrow as pa
-    import xarray as xr
 
     profile = as_rig_profile(profile)
     head = read_rig_head(path, profile)
@@ -357,7 +269,7 @@ def read_rig_csv(path, profile=None):
         finally:
             hasher.join()
         arrays = {}
-        for variable, members in _by_variable(head).items():
+        for variable, members in by_variable(head).items():
             n = len(arrow_columns[members[0][0]])
             sensors = [spec.sensor for _, spec in members]
             values = np.empty((n, len(members)) if sensors[0] is not None else n, dtype=np.float64)
@@ -370,40 +282,6 @@ def read_rig_csv(path, profile=None):
                 _to_si(column, spec.factor, spec.offset, target)
                 del column
                 pa.default_memory_pool().release_unused()  # give the Arrow column back: one copy at a time
-                finding = first_non_finite(target)
-                if finding is not None:
-                    raise _fail(head, lines, finding, column=spec.name)
+                check_finite(head, lines, target, spec.name)
             arrays[variable] = (values, [spec for _, spec in members])
-        time = arrays.pop("time")[0]
-        sample_rate = _sample_rate(head, lines, time)
-        report = _check_plausibility(head, lines, sample_rate, arrays)
-    digest = sha.hexdigest()
-    attrs = dict(head.attrs)
-    attrs["sample_rate"] = sample_rate
-    attrs["quality_report"] = report
-    attrs["source"] = f"{head.path.name} sha256:{digest}"
-    attrs["history"] = _history(head, digest)
-    data_vars, sensor_names = {}, None
-    for name, (values, specs) in arrays.items():
-        var_attrs = {"source_column": ", ".join(s.name for s in specs),
-                     "source_units": ", ".join(s.units for s in specs)}
-        if any(s.sensitivity for s in specs):
-            var_attrs["sensitivity"] = ", ".join(s.sensitivity or "-" for s in specs)
-        if any(s.scale != 1.0 for s in specs):
-            var_attrs["scale"] = ", ".join(f"{s.scale:g}" for s in specs) if len(specs) > 1 else specs[0].scale
-        if values.ndim == 2:
-            names = [s.sensor for s in specs]
-            if sensor_names is not None and names != sensor_names:
-                raise SchemaError(f"{name!r} has sensors {names} but another variable has {sensor_names}; "
-                                  "every variable with a sensor dimension must list the same sensors",
-                                  file=head.path, line=head.header_line, column=specs[0].name)
-            sensor_names = names
-        data_vars[name] = xr.Variable(("time",) if values.ndim == 1 else ("time", "sensor"), values, var_attrs)
-    time_spec = _time_spec(head)
-    coords = {"time": xr.Variable(("time",), time, {"source_column": time_spec.name, "source_units": time_spec.units})}
-    if sensor_names is not None:
-        coords["sensor"] = xr.Variable(("sensor",), np.array(sensor_names, dtype=object))
-    ds = apply_cf_attrs(xr.Dataset(data_vars, coords=coords, attrs=attrs))
-    known = registry().variables
-    ds = ds[[n for n in known if n in ds.data_vars]]  # canonical order
-    return validate_run(ds, name=str(head.path))
+        return assemble_run(head, lines, arrays, sha.hexdigest())

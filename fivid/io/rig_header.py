@@ -114,7 +114,7 @@ def _variables() -> dict:
     return {n: v for n, v in registry().variables.items() if not v.coordinate or n == "time"}
 
 
-def _rig_csv_columns(path: Path, fields: list[str], line: int):
+def rig_csv_columns(path: Path, fields: list[str], line: int):
     """Columns of a fivid-rig-csv header ``name [unit]`` or ``name:sensor [unit]``."""
     variables = _variables()
     columns, ignored, seen = [], [], {}
@@ -154,13 +154,14 @@ def _rig_csv_columns(path: Path, fields: list[str], line: int):
     return columns, ignored
 
 
-def _table_columns(path: Path, profile: RigProfile, fields: list[str], line: int):
-    """Columns of a table-format header, located by the names in the profile."""
+def table_columns(path: Path, profile: RigProfile, fields: list[str], line: int | None, what: str = "column"):
+    """Columns of a table-format header (or a DAQ file's channel names), located by the names in the profile."""
     columns, missing = [], []
     for spec in profile.columns:
         where = [i for i, f in enumerate(fields) if f == spec.name]
         if len(where) > 1:
-            raise SchemaError(f"column {spec.name!r} appears {len(where)} times in the header",
+            place = "the header" if what == "column" else "the file"
+            raise SchemaError(f"{what} {spec.name!r} appears {len(where)} times in {place}",
                               file=path, line=line, column=spec.name)
         if not where:
             missing.append(spec)
@@ -169,15 +170,27 @@ def _table_columns(path: Path, profile: RigProfile, fields: list[str], line: int
     variables = registry().variables
     for spec in missing:
         if spec.variable == "time" or variables[spec.variable].required:
+            has = "the header has" if what == "column" else f"the file's {what}s are"
             raise SchemaError(
-                f"required column {spec.name!r} ({spec.variable}) is missing; the header has "
+                f"required {what} {spec.name!r} ({spec.variable}) is missing; {has} "
                 f"{', '.join(repr(f) for f in fields)} ({profile.describe()})",
                 file=path, line=line, column=spec.name,
             )
-        log.warning("%s: optional column %r (%s) of %s is not in the file", path, spec.name, spec.variable, profile.name)
+        log.warning("%s: optional %s %r (%s) of %s is not in the file", path, what, spec.name, spec.variable,
+                    profile.name)
     mapped = {i for i, _ in columns}
     ignored = [f for i, f in enumerate(fields) if i not in mapped]
     return sorted(columns, key=lambda c: c[0]), ignored
+
+
+def metadata_attribute(profile: RigProfile, raw_key: str) -> str | None:
+    """The attribute a file's metadata key gives under a table ``profile`` (``metadata.in_file.keys``,
+    matched case-insensitively, or an attribute's own name), or None when it gives none."""
+    raw_key = raw_key.strip().strip('"').strip()
+    attr = profile.metadata_keys.get(raw_key.casefold())
+    if attr is None and raw_key in set(registry().attributes) - RESERVED_ATTRIBUTES:
+        attr = raw_key
+    return attr
 
 
 def _file_metadata(path: Path, profile: RigProfile, lines: list[tuple[int, str]]) -> dict:
@@ -197,15 +210,11 @@ def _file_metadata(path: Path, profile: RigProfile, lines: list[tuple[int, str]]
             found[key] = (m.group("value"), number)
         return found
     pattern = re.compile(profile.metadata_pattern)
-    names = set(registry().attributes) - RESERVED_ATTRIBUTES
     for number, text in lines:
         m = pattern.match(text)
         if m is None:
             continue
-        raw_key = m.group("key").strip().strip('"').strip()
-        attr = profile.metadata_keys.get(raw_key.casefold())
-        if attr is None and raw_key in names:
-            attr = raw_key
+        attr = metadata_attribute(profile, m.group("key"))
         if attr is None:
             continue
         value = m.group("value").strip().rstrip(profile.delimiter).strip().strip('"').strip()
@@ -249,21 +258,26 @@ def _from_file_name(path: Path, profile: RigProfile, attrs: dict, origin: dict) 
     return True
 
 
-def _resolve_metadata(path: Path, profile: RigProfile, found: dict):
-    """Attributes from the file, then the file name, then the profile; file and name must agree."""
+def resolve_metadata(path: Path, profile: RigProfile, found: dict):
+    """Attributes from the file, then the file name, then the profile; file and name must agree.
+
+    ``found`` maps an attribute to ``(raw value, where)``: ``where`` is the 1-based line of a text
+    file, or a description (``"file property 'Run'"``) for a file without lines.
+    """
     attrs, origin = {}, {}
     for attr, (raw, number) in found.items():
+        line = number if isinstance(number, int) else None
         if attr == MAGIC_KEY:
             continue
         if attr in RESERVED_ATTRIBUTES or attr.endswith("_units"):
             raise SchemaError(f"metadata {attr!r} is written by fivid itself; remove it from the file",
-                              file=path, line=number, key=attr)
+                              file=path, line=line, key=attr)
         try:
             attrs[attr] = metadata_value(attr, raw, default_units=profile.metadata_units.get(attr),
                                          decimal=profile.decimal)
         except FividError as exc:
-            raise exc.located(file=path, line=number, key=attr) from None
-        origin[attr] = f"line {number}"
+            raise exc.located(file=path, line=line, key=attr) from None
+        origin[attr] = f"line {number}" if line is not None else str(number)
     unmatched_name = not _from_file_name(path, profile, attrs, origin)
     for attr, value in profile.values.items():
         if attr not in attrs:
@@ -333,11 +347,11 @@ def read_rig_head(path, profile: RigProfile | None = None) -> RigHead:
             continue
         fields = _split(text, profile.delimiter)
         if profile.format == "fivid-rig-csv":
-            columns, ignored = _rig_csv_columns(path, fields, number)
+            columns, ignored = rig_csv_columns(path, fields, number)
         else:
-            columns, ignored = _table_columns(path, profile, fields, number)
+            columns, ignored = table_columns(path, profile, fields, number)
         found = _file_metadata(path, profile, preamble)
-        attrs, origin = _resolve_metadata(path, profile, found)
+        attrs, origin = resolve_metadata(path, profile, found)
         variables = {spec.variable for _, spec in columns}
         missing = [n for n, v in registry().variables.items() if (v.required or n == "time") and n not in variables]
         if missing:

@@ -50,7 +50,7 @@ PROFILE_VERSION = 1
 FORMATS = ("fivid-rig-csv", "table")
 #: Attributes fivid writes itself; a file or profile may not set them.
 RESERVED_ATTRIBUTES = frozenset({"source", "history", "fivid_version", "schema_version", "Conventions",
-                                 "quality_report"})
+                                 "quality_report", "source_format"})
 #: Preamble line ``key: value`` (also ``key;value``, ``key=value``, ``key<TAB>value``).
 DEFAULT_METADATA_PATTERN = r"^\s*(?P<key>[^:;=\t]+?)\s*[:;=\t]\s*(?P<value>.*?)\s*$"
 _ATTR_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")

@@ -12,7 +12,9 @@ Convert test-rig CSV files into RunDataset netCDF files OUTDIR/<run_id>.nc (SI u
 provenance: file name and sha256). A file is either a 'fivid-rig-csv: 1' file (metadata lines
 '# key: value' with units, header 'name [unit]') or a DAQ export described by a rig profile
 (configs/rigs/<name>.yaml: delimiter, decimal comma, column names, units, sensor sensitivity,
-metadata from the file, its name or the profile). See docs/ingest.md.
+metadata from the file, its name or the profile). NI TDMS (.tdms), UFF58 (.uff, .unv), MATLAB (.mat),
+LabVIEW LVM (.lvm) and ASAM MDF4 (.mf4) files are read by suffix through the same profile
+(pip install 'fivid[daq]'). See docs/ingest.md, section 9.
 
 Valid files are written even when others are bad; each rejected file gets one line on stderr
 naming the file, the line and the column or key. Outputs are written atomically: an interrupted
@@ -22,6 +24,7 @@ _EPILOG = """\
 examples:
   fivid ingest sample_data/R001_v10_ra08.csv -o out/
   fivid ingest exports/*.csv -o runs/ --rig labdaq
+  fivid ingest R002_v20_ra16.tdms -o runs/ --rig labdaq
   fivid ingest exports/ -o runs/ --rig configs/rigs/labdaq.yaml --overwrite
 
 exit status: 0 all files written; 2 a file was rejected or the options are wrong; 1 unexpected failure."""
@@ -31,12 +34,12 @@ def register(subparsers) -> None:
     """Add the ``ingest`` sub-command."""
     parser = subparsers.add_parser(
         "ingest",
-        help="convert rig CSV files to RunDataset netCDF files",
+        help="convert rig CSV and DAQ files to RunDataset netCDF files",
         description=_DESCRIPTION,
         epilog=_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("paths", nargs="+", metavar="PATH", help="rig CSV files, or folders of *.csv files")
+    parser.add_argument("paths", nargs="+", metavar="PATH", help="rig CSV or DAQ files (.tdms .uff .mat .lvm .mf4), or folders of them")
     parser.add_argument("-o", "--outdir", required=True, metavar="OUTDIR",
                         help="output folder (created if missing); one OUTDIR/<run_id>.nc per input file")
     parser.add_argument("--rig", metavar="PROFILE", default=None,

@@ -1,0 +1,197 @@
+"""From converted columns to a validated RunDataset: the checks and the assembly every reader shares.
+
+A reader (the rig CSV, or a DAQ file: TDMS, UFF58, MAT, LVM, MDF4) finds its columns through a
+rig profile (:class:`~fivid.io.rig_header.RigHead`), converts each to SI and hands them here as
+``variable -> (values, [ColumnSpec, ...])``. Here the time column is checked (resolution, strictly
+increasing, uniform sampling, the stated sample rate), the values for plausibility, and the Dataset
+is built with CF attributes and provenance. Where a finding is reported is the reader's business:
+``locate(row)`` gives the file's line of a 0-based sample, or None for a file without lines (the
+message then names the sample).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from fivid.errors import DataQualityError, SchemaError
+from fivid.io.data_checks import (first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing,
+                                  time_without_resolution)
+from fivid.io.plausibility import plausibility_findings, quality_report
+from fivid.io.rig_header import RigHead
+from fivid.schema import apply_cf_attrs, new_history, registry, validate_run
+
+__all__ = ["assemble_run", "finding_error", "by_variable", "check_finite"]
+
+log = logging.getLogger("fivid")
+
+
+def _where(locate, row: int) -> tuple[int | None, str]:
+    """``(line, text)`` of a 0-based sample: the file's line, or no line and ``"sample N"``."""
+    line = locate(row)
+    return line, (f"line {line}" if line is not None else f"sample {row + 1}")
+
+
+def finding_error(head: RigHead, locate, finding, column: str | None = None) -> DataQualityError:
+    """A :class:`~fivid.io.data_checks.Finding` as an error naming the file, line (or sample) and column."""
+    line, _ = _where(locate, finding.index)
+    message = finding.message
+    if line is None:
+        message += f" (at sample {finding.index + 1})"
+    if finding.previous is not None:
+        message += f" (previous sample at {_where(locate, finding.previous)[1]})"
+    return DataQualityError(message, file=head.path, line=line, column=column)
+
+
+def check_finite(head: RigHead, locate, values: np.ndarray, column: str) -> None:
+    """Raise at the first NaN or infinite value of ``values`` (a column already in SI)."""
+    finding = first_non_finite(values)
+    if finding is not None:
+        raise finding_error(head, locate, finding, column=column)
+
+
+def by_variable(head: RigHead) -> dict:
+    """``variable -> [(field index, ColumnSpec), ...]`` in header order (several for sensors)."""
+    groups: dict = {}
+    for index, spec in head.columns:
+        groups.setdefault(spec.variable, []).append((index, spec))
+    return groups
+
+
+def _time_spec(head: RigHead):
+    return next(spec for _, spec in head.columns if spec.variable == "time")
+
+
+def _sample_rate(head: RigHead, locate, time: np.ndarray) -> float:
+    if time.size < 2:
+        raise SchemaError(
+            "no data rows after the header" if time.size == 0 else
+            "only one data row; a run needs at least two samples", file=head.path, line=head.header_line,
+        )
+    column = _time_spec(head).name
+    tolerance = head.profile.sampling_tolerance
+    checks = (lambda: time_without_resolution(time, tolerance), lambda: time_not_increasing(time),
+              lambda: sampling_deviation(time, tolerance))  # in order: each assumes the previous passed
+    for check in checks:
+        finding = check()
+        if finding is not None:
+            raise finding_error(head, locate, finding, column=column)
+    measured = nominal_sample_rate(time)
+    stated = head.attrs.get("sample_rate")
+    if stated is None:
+        return measured
+    if abs(stated - measured) > head.profile.sampling_tolerance * measured:
+        hint = ""
+        for factor in (1e-3, 1e3, 1e-6, 1e6):
+            if abs(measured / (stated * factor) - 1) <= head.profile.sampling_tolerance:
+                hint = (f"; the ratio is {factor:g}: the time column's unit {_time_spec(head).units!r} looks wrong by "
+                        "that factor (times in ms under a header in s give 0.001); correct the unit in the header")
+        raise DataQualityError(
+            f"the stated sample rate {stated:.9g} Hz ({head.attr_origin['sample_rate']}) does not match the time "
+            f"column, which gives {measured:.9g} Hz; tolerance {100 * head.profile.sampling_tolerance:.3g} %{hint}",
+            file=head.path, key="sample_rate",
+        )
+    return float(stated)
+
+
+def _check_plausibility(head: RigHead, locate, sample_rate: float, arrays: dict) -> str:
+    """Raise the first plausibility error (file, line, column or key); log the warnings; return the report."""
+    findings = plausibility_findings({**head.attrs, "sample_rate": sample_rate},
+                                     {name: values for name, (values, _) in arrays.items()})
+    for finding in findings:
+        if finding.severity == "error" and finding.subject in arrays:
+            column = ", ".join(spec.name for spec in arrays[finding.subject][1])
+            raise finding_error(head, locate, finding, column=column)
+        if finding.severity == "error":
+            origin = head.attr_origin.get(finding.subject, "")
+            line = int(origin.split()[1]) if origin.startswith("line ") else None
+            raise DataQualityError(finding.message, file=head.path, line=line, key=finding.subject)
+        log.warning("%s: %s: %s", head.path, finding.subject, finding.message)
+    return quality_report(findings)
+
+
+def _history(head: RigHead, digest: str, what: str) -> str:
+    cols = []
+    for _, spec in head.columns:
+        how = f"{spec.name!r} [{spec.units}]"
+        if spec.sensitivity:
+            how += f" at {spec.sensitivity}"
+        if spec.scale != 1.0:
+            how += f" x {spec.scale:g}"
+        target = spec.variable if spec.sensor is None else f"{spec.variable}[{spec.sensor}]"
+        cols.append(f"{target} <- {how}")
+    origin = ", ".join(f"{k} ({v})" for k, v in head.attr_origin.items())
+    return new_history(
+        f"ingest {head.path.name}{what} (sha256 {digest}) with {head.profile.describe()}; columns: {'; '.join(cols)}; "
+        f"metadata: {origin}"
+    )
+
+
+def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_format: str | None = None):
+    """Check the converted columns and build the RunDataset.
+
+    Parameters
+    ----------
+    head : RigHead
+        The file's head: path, profile, mapped columns, metadata and where each came from.
+    locate : callable
+        ``locate(row)``: the file's 1-based line of 0-based sample ``row``, or None when the file has
+        no lines (a binary DAQ file); messages then name the sample.
+    arrays : dict
+        ``variable -> (values, [ColumnSpec, ...])`` in SI, finite, ``time`` included; ``values`` is
+        1-D, or 2-D ``(time, sensor)`` with one spec per sensor.
+    digest : str
+        sha256 of the file (hex), recorded in ``source`` and ``history``.
+    file_format : str, optional
+        Name of the file format when it is not a CSV (``"tdms"``); recorded in ``source_format``
+        and ``history``.
+
+    Returns
+    -------
+    xarray.Dataset
+        A valid RunDataset (see :func:`fivid.io.read_rig_csv`).
+
+    Raises
+    ------
+    DataQualityError, SchemaError
+        The time column fails a check, the stated sample rate disagrees with it, or a value is
+        implausible.
+    """
+    import xarray as xr
+
+    arrays = dict(arrays)
+    time = arrays.pop("time")[0]
+    sample_rate = _sample_rate(head, locate, time)
+    report = _check_plausibility(head, locate, sample_rate, arrays)
+    attrs = dict(head.attrs)
+    attrs["sample_rate"] = sample_rate
+    attrs["quality_report"] = report
+    attrs["source"] = f"{head.path.name} sha256:{digest}"
+    if file_format is not None:
+        attrs["source_format"] = file_format
+    attrs["history"] = _history(head, digest, "" if file_format is None else f" ({file_format})")
+    data_vars, sensor_names = {}, None
+    for name, (values, specs) in arrays.items():
+        var_attrs = {"source_column": ", ".join(s.name for s in specs),
+                     "source_units": ", ".join(s.units for s in specs)}
+        if any(s.sensitivity for s in specs):
+            var_attrs["sensitivity"] = ", ".join(s.sensitivity or "-" for s in specs)
+        if any(s.scale != 1.0 for s in specs):
+            var_attrs["scale"] = ", ".join(f"{s.scale:g}" for s in specs) if len(specs) > 1 else specs[0].scale
+        if values.ndim == 2:
+            names = [s.sensor for s in specs]
+            if sensor_names is not None and names != sensor_names:
+                raise SchemaError(f"{name!r} has sensors {names} but another variable has {sensor_names}; "
+                                  "every variable with a sensor dimension must list the same sensors",
+                                  file=head.path, line=head.header_line, column=specs[0].name)
+            sensor_names = names
+        data_vars[name] = xr.Variable(("time",) if values.ndim == 1 else ("time", "sensor"), values, var_attrs)
+    time_spec = _time_spec(head)
+    coords = {"time": xr.Variable(("time",), time, {"source_column": time_spec.name, "source_units": time_spec.units})}
+    if sensor_names is not None:
+        coords["sensor"] = xr.Variable(("sensor",), np.array(sensor_names, dtype=object))
+    ds = apply_cf_attrs(xr.Dataset(data_vars, coords=coords, attrs=attrs))
+    known = registry().variables
+    ds = ds[[n for n in known if n in ds.data_vars]]  # canonical order
+    return validate_run(ds, name=str(head.path))
