@@ -84,8 +84,10 @@ def test_free_ring_in_plane_modes_against_thin_ring_closed_form():
     E, rho, nu, R, h = 210e9, 7850.0, 0.3, 0.04, 0.002
     f = np.array([_ring_frequencies(n) for n in (128, 256, 512)])  # (3 meshes, 8)
     pairs = f[:, 0::2], f[:, 1::2]
-    # doublets: the periodic ring is symmetric under rotation by one element, so they coincide to solver precision
-    np.testing.assert_allclose(pairs[0], pairs[1], rtol=1e-7)
+    # doublets: the periodic ring is symmetric under rotation by one element, so they coincide to solver precision:
+    # shift-invert resolves an eigenvalue to about eps x cond(K - sigma M) ~ 1e-16 x 1e9 on the 512 x 4 ring
+    # (observed 1e-8 .. 1.06e-7 between runs: ARPACK's random start vector), so 1e-6 on the frequencies
+    np.testing.assert_allclose(pairs[0], pairs[1], rtol=1e-6)
     w = pairs[0][:, :3]
     order = np.log2((w[0] - w[1]) / (w[1] - w[2]))
     assert np.all(np.abs(order - 2.0) < 0.3), order
