@@ -170,3 +170,6 @@ def test_a_psd_keeps_the_conditions_of_its_run(written):
     with xr.open_dataset(written["psd"]) as ds:
         assert float(ds["sliding_velocity"]) == 0.005 and ds["sliding_velocity"].attrs["units"] == "m s-1"
         assert str(ds["run_id"].values) == "T01"
+    with xr.open_dataset(written["pipeline psd"]) as ds:  # one test condition: its velocity, not one run's id
+        assert float(ds["sliding_velocity"]) == 0.005 and "run_id" not in ds.variables
+        assert list(ds["measured_run"].values) == ["T01"] and ds["psd_measured"].dims == ("measured", "frequency")

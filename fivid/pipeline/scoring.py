@@ -122,7 +122,8 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
                                     {"units": units, "long_name": f"{bound[suffix]}Welch PSD of the {role} acceleration"})
                 for suffix in ("", "_lower", "_upper")}
 
-    conditions = {n: pm[0].coords[n] for n in ("sliding_velocity", "normal_load", "roughness_ra") if n in pm[0].coords}
+    conditions = {n: pm[0].coords[n].variable for n in ("sliding_velocity", "normal_load", "roughness_ra")
+                  if n in pm[0].coords}  # .variable: a coordinate DataArray would bring the run's run_id along
     # text labels along plain dimensions: a text coordinate variable would be a 2-D char array, not CF
     psd = xr.Dataset(
         {**stack(pm, "psd_measured", "measured", "measured"), **stack(ps, "psd_simulated", "simulated", "simulated")},
