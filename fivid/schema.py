@@ -34,6 +34,7 @@ __all__ = [
     "check_run",
     "validate_run",
     "apply_cf_attrs",
+    "with_condition_coords",
     "append_history",
     "new_history",
 ]
@@ -67,6 +68,7 @@ class Registry:
     schema_version: int
     variables: dict
     attributes: dict
+    conditions: tuple[str, ...] = ()
 
 
 @functools.lru_cache(maxsize=None)
@@ -97,7 +99,11 @@ def registry() -> Registry:
         )
         for name, spec in raw["attributes"].items()
     }
-    return Registry(int(raw["schema_version"]), variables, attributes)
+    conditions = tuple(raw.get("condition_coordinates", ()))
+    unknown = [c for c in conditions if c not in attributes]
+    if unknown:
+        raise SchemaError(f"condition_coordinates {unknown} are not attributes of the registry")
+    return Registry(int(raw["schema_version"]), variables, attributes, conditions)
 
 
 SCHEMA_VERSION = 1
@@ -213,10 +219,13 @@ def apply_cf_attrs(ds):
         attrs = dict(ds[name].attrs)
         attrs["units"] = var.units
         attrs["long_name"] = var.long_name
-        if name == "time":
-            attrs["standard_name"] = "time"
-            attrs["axis"] = "T"
+        if name == "time":  # seconds without a reference date: no CF time coordinate (fivid/data/variables.yaml)
+            attrs.pop("standard_name", None)
+            attrs.pop("axis", None)
         ds[name].attrs = attrs
+    for name in reg.conditions:
+        if name in ds.coords and ds[name].ndim == 0:
+            ds[name].attrs = _condition_attrs(reg.attributes[name])
     for name, att in reg.attributes.items():
         if att.units is not None and name in ds.attrs:
             ds.attrs[f"{name}_units"] = att.units
@@ -224,6 +233,31 @@ def apply_cf_attrs(ds):
     ds.attrs["fivid_version"] = __version__
     ds.attrs.setdefault("Conventions", "CF-1.8")
     return ds
+
+
+def with_condition_coords(ds):
+    """``ds`` (shallow copy) with its test conditions as scalar coordinates, rebuilt from the global attributes.
+
+    The registry's ``condition_coordinates`` (``run_id``, ``sliding_velocity`` [m s-1], ``normal_load`` [N],
+    ``roughness_ra`` [m]) present in ``ds.attrs`` become scalar coordinates with units and long_name, so runs
+    stacked along a new dimension (``xr.open_mfdataset(paths, combine="nested", concat_dim="run")``) keep them
+    as coordinates along it. The attributes are kept (readers use them) and stay the source of truth.
+    """
+    reg = registry()
+    coords = {}
+    for name in reg.conditions:
+        if name in ds.attrs:
+            value = ds.attrs[name]
+            coords[name] = ((), str(value) if reg.attributes[name].type == "str" else float(value))
+    ds = ds.assign_coords(coords)
+    for name in coords:
+        ds[name].attrs = _condition_attrs(reg.attributes[name])
+    return ds
+
+
+def _condition_attrs(att: Attribute) -> dict:
+    """CF attrs of the scalar coordinate of a condition attribute (text has no units)."""
+    return {"long_name": att.long_name, **({"units": att.units} if att.units else {})}
 
 
 def _stamp() -> str:

@@ -15,7 +15,7 @@ from pathlib import Path
 from fivid.errors import FividError, OutputExistsError
 
 __all__ = [
-    "atomic_path", "write_netcdf", "write_text", "write_json", "dumps_json", "check_writable", "check_folder_writable",
+    "atomic_path", "cf_encoding", "write_netcdf", "write_text", "write_json", "dumps_json", "check_writable", "check_folder_writable",
 ]
 
 
@@ -85,11 +85,34 @@ def atomic_path(path: str | os.PathLike, *, overwrite: bool = True):
             tmp.unlink()
 
 
+def cf_encoding(ds) -> dict:
+    """The netCDF encoding that keeps a Dataset CF-compliant, per variable.
+
+    * text (``str``/object) variables are written as char arrays (``dtype S1``, a ``string<N>`` dimension): CF has
+      no variable-length strings; xarray decodes them back to ``str``;
+    * coordinate variables (dimension and scalar coordinates) get no ``_FillValue``: CF does not allow missing
+      values in coordinate variables, and xarray would otherwise add a NaN ``_FillValue`` to every float one.
+    """
+    encoding: dict = {}
+    for name, var in ds.variables.items():
+        enc = {}
+        if var.dtype == object or var.dtype.kind == "U":
+            enc["dtype"] = "S1"
+        if name in ds.coords:
+            enc["_FillValue"] = None
+        if enc:
+            encoding[name] = enc
+    return encoding
+
+
 def write_netcdf(ds, path: str | os.PathLike, *, overwrite: bool = True, encoding: dict | None = None) -> Path:
-    """Write an xarray Dataset to netCDF4 atomically; returns the path."""
+    """Write an xarray Dataset to netCDF4 atomically, with :func:`cf_encoding` under ``encoding``; returns the path."""
     path = Path(path)
+    merged = cf_encoding(ds)
+    for name, enc in (encoding or {}).items():
+        merged[name] = {**merged.get(name, {}), **enc}
     with atomic_path(path, overwrite=overwrite) as tmp:
-        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=encoding)
+        ds.to_netcdf(tmp, format="NETCDF4", engine="netcdf4", encoding=merged)
     return path
 
 

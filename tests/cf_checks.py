@@ -2,13 +2,17 @@
 
 The standard-name table comes from the compliance-checker wheel (fetched once with ``pip download`` into the
 pytest cache folder); the area-type and region tables are the minimal stand-ins in ../shared/cf. Tests that use
-it skip when cfchecks, the UDUNITS-2 library or the tables are missing.
+it (through :func:`table_or_skip`) skip when cfchecks, the UDUNITS-2 library or the tables are missing, except in
+CI (environment variable ``CI`` set, as CI services do), where a missing checker is a failure naming what is
+missing: the CF checks must not silently stop running.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
+import tempfile
 import subprocess
 import sys
 import zipfile
@@ -48,12 +52,39 @@ def cf_check(path: Path, table: Path) -> tuple[int, int, str]:
     return int(err.group(1)), int(warn.group(1)) if warn else 0, out
 
 
-def available() -> bool:
-    """cfchecks importable (it needs the UDUNITS-2 C library) and the shared stand-in tables present."""
+def missing() -> str | None:
+    """Why the checker cannot run here (None when it can): cfchecks needs the UDUNITS-2 C library and the
+    shared stand-in tables."""
     if not (SHARED_CF / "area-type-table.xml").exists():
-        return False
+        return f"{SHARED_CF / 'area-type-table.xml'} is missing (../shared/cf beside the repository)"
     try:
         import cfchecker.cfchecks  # noqa: F401
-    except Exception:  # noqa: BLE001 - missing package or missing libudunits2
-        return False
-    return True
+    except Exception as exc:  # noqa: BLE001 - missing package or missing libudunits2
+        return (f"cfchecks cannot be imported ({type(exc).__name__}: {exc}); install the 'test' extra (cfchecker) "
+                "and the UDUNITS-2 library (Debian: apt-get install -y libudunits2-0)")
+    return None
+
+
+def available() -> bool:
+    """cfchecks importable (it needs the UDUNITS-2 C library) and the shared stand-in tables present."""
+    return missing() is None
+
+
+def table_or_skip(config) -> Path:
+    """The standard-name table for :func:`cf_check`; skips the test when the checker cannot run, fails in CI.
+
+    ``config`` is pytest's ``request.config`` (its cache folder keeps the table between runs).
+    """
+    import pytest
+
+    act = pytest.fail if os.environ.get("CI") else pytest.skip
+    reason = missing()
+    if reason is not None:
+        act(f"CF checker unavailable: {reason}")
+    cache = getattr(config, "cache", None)
+    folder = Path(cache.mkdir("cf")) if cache is not None else Path(tempfile.gettempdir()) / "fivid-cf"
+    table = standard_name_table(folder)
+    if table is None:
+        act("CF checker unavailable: the CF standard-name table could not be fetched (pip download "
+            "compliance-checker)")
+    return table

@@ -5,7 +5,6 @@ import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -334,13 +333,7 @@ def test_study_files_pass_the_cf_checker(tmp_path, request):
     """study.nc and every point file: no CF error and no warning (text as char arrays, long names, units)."""
     import cf_checks
 
-    if not cf_checks.available():
-        pytest.skip("cfchecks (package cfchecker + libudunits2) not installed")
-    cache = getattr(request.config, "cache", None)
-    folder = Path(cache.mkdir("cf")) if cache is not None else Path(tempfile.gettempdir()) / "fivid-cf"
-    table = cf_checks.standard_name_table(folder)
-    if table is None:
-        pytest.skip("the CF standard-name table could not be fetched (compliance-checker wheel)")
+    table = cf_checks.table_or_skip(request.config)
     study = _study([0.5, 1.2], duration="0.1 s")
     run_study(study, tmp_path / "out", workers=0, progress=False)
     for f in [tmp_path / "out" / "study.nc", *sorted((tmp_path / "out" / "points").glob("*.nc"))]:

@@ -314,11 +314,11 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
             "real_part": (("mu", "mode"), lam.real, {"units": "s-1", "long_name": "real part of the eigenvalue (> 0: unstable)"}),
             "damping_ratio": (("mu", "mode"), -lam.real / np.abs(lam), {"units": "1", "long_name": "modal damping ratio -Re/|lambda|"}),
             "critical_mu": ("mode", res["critical_mu"][:n], {"units": "1", "long_name": "friction coefficient at which Re(lambda) crosses 0 (NaN: stable over the sweep; the first mu if already unstable there)"}),
-            "partner": ("mode", partner + np.where(partner >= 0, 1, 0), {"long_name": "mode number of the coalescing partner (-1: stable, or the partner is not among the reported modes)"}),
+            "partner": ("mode", partner + np.where(partner >= 0, 1, 0), {"units": "1", "long_name": "mode number of the coalescing partner (-1: stable, or the partner is not among the reported modes)"}),
         },
         coords={
             "mu": ("mu", res["mu"], {"units": "1", "long_name": "friction coefficient"}),
-            "mode": ("mode", np.arange(1, n + 1), {"long_name": "mode number, by frequency at the first mu"}),
+            "mode": ("mode", np.arange(1, n + 1), {"units": "1", "long_name": "mode number, by frequency at the first mu"}),
         },
         attrs={
             "title": "fivid complex eigenvalue analysis",

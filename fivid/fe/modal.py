@@ -158,8 +158,9 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
     -------
     xarray.Dataset
         ``frequency(mode)`` [Hz] (rigid-body modes have 0), ``eigenvalue(mode)`` = omega^2 [s-2],
-        ``mode_shape(mode, node, component)`` [kg-1/2] (zero at constrained dofs), node coordinates
-        ``x(node)``, ``y(node)`` [m] and ``body(node)``; attrs record the model source and settings.
+        ``mode_shape(mode, node, component)`` [kg-1/2] (zero at constrained dofs; component 0 is x, 1 is y, named
+        by the label ``component_name(component)``), node coordinates ``x(node)``, ``y(node)`` [m] and
+        ``body(node)``; attrs record the model source and settings.
     """
     import xarray as xr
 
@@ -184,9 +185,10 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
                            {"units": "kg-1/2", "long_name": "mass-normalised mode shape (phi^T M phi = 1)"}),
         },
         coords={
-            "mode": ("mode", np.arange(1, len(lam) + 1), {"long_name": "mode number, ascending frequency"}),
-            "node": ("node", np.arange(model.n_nodes), {"long_name": "global node number"}),
-            "component": ("component", np.array(["x", "y"]), {"long_name": "displacement component"}),
+            "mode": ("mode", np.arange(1, len(lam) + 1), {"units": "1", "long_name": "mode number, ascending frequency"}),
+            "node": ("node", np.arange(model.n_nodes), {"units": "1", "long_name": "global node number"}),
+            # a label (CF 6.1), not a coordinate variable: text coordinate variables are char arrays, 2-D, not CF
+            "component_name": ("component", np.array(["x", "y"]), {"long_name": "displacement component"}),
             "x": ("node", model.coords[:, 0], {"units": "m", "long_name": "node x coordinate"}),
             "y": ("node", model.coords[:, 1], {"units": "m", "long_name": "node y coordinate"}),
             "body": ("node", body, {"long_name": "body the node belongs to"}),

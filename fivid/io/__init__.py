@@ -4,12 +4,13 @@
   (:func:`load_rig_profile`, ``configs/rigs/*.yaml``) into a validated RunDataset in SI units;
 * :func:`read_daq_file` reads a DAQ file (TDMS, UFF58, MATLAB, LVM, MDF4) through the same profile;
 * :func:`ingest_files` converts many files to ``<outdir>/<run_id>.nc`` (what ``fivid ingest`` runs);
-* :func:`read_run` / :func:`write_run` read and write RunDataset netCDF files.
+* :func:`read_run` / :func:`write_run` read and write RunDataset netCDF files; :func:`open_runs` stacks many
+  along a ``run`` dimension indexed by their test conditions.
 """
 
 from fivid.io.daq import read_daq_file
 from fivid.io.ingest import IngestResult, Rejection, ingest_files
-from fivid.io.netcdf import read_run, write_run
+from fivid.io.netcdf import open_runs, read_run, write_run
 from fivid.io.rig_csv import read_rig_csv
 from fivid.io.rig_header import read_rig_head
 from fivid.io.rig_profile import ColumnSpec, RigProfile, load_rig_profile
@@ -26,4 +27,5 @@ __all__ = [
     "Rejection",
     "read_run",
     "write_run",
+    "open_runs",
 ]

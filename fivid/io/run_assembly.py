@@ -20,7 +20,7 @@ from fivid.io.data_checks import (first_non_finite, nominal_sample_rate, samplin
                                   time_without_resolution)
 from fivid.io.plausibility import plausibility_findings, quality_report
 from fivid.io.rig_header import RigHead
-from fivid.schema import apply_cf_attrs, new_history, registry, validate_run
+from fivid.schema import apply_cf_attrs, new_history, registry, validate_run, with_condition_coords
 
 __all__ = ["assemble_run", "finding_error", "by_variable", "check_finite"]
 
@@ -191,7 +191,7 @@ def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_forma
     coords = {"time": xr.Variable(("time",), time, {"source_column": time_spec.name, "source_units": time_spec.units})}
     if sensor_names is not None:
         coords["sensor"] = xr.Variable(("sensor",), np.array(sensor_names, dtype=object))
-    ds = apply_cf_attrs(xr.Dataset(data_vars, coords=coords, attrs=attrs))
+    ds = apply_cf_attrs(with_condition_coords(xr.Dataset(data_vars, coords=coords, attrs=attrs)))
     known = registry().variables
     ds = ds[[n for n in known if n in ds.data_vars]]  # canonical order
     return validate_run(ds, name=str(head.path))

@@ -13,6 +13,7 @@ import logging
 import numpy as np
 
 from fivid.errors import DataQualityError
+from fivid.schema import new_history
 
 __all__ = ["score_condition", "steady_part", "acceleration_psd"]
 
@@ -77,8 +78,9 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
         ``pairs`` (per pair: names and :func:`fivid.score.scores_to_json` content) and ``summary``
         (mean and min/max over pairs of each headline score).
     psd : xarray.Dataset
-        ``psd_measured(measured_run, frequency)``, ``psd_simulated(simulated_seed, frequency)`` and
-        their ``_lower``/``_upper`` bounds [m2 s-4 Hz-1].
+        ``psd_measured(measured, frequency)``, ``psd_simulated(simulated, frequency)`` and their
+        ``_lower``/``_upper`` bounds [m2 s-4 Hz-1]; labels ``measured_run(measured)``,
+        ``simulated_seed(simulated)`` (file stems) and the condition's scalar coordinates.
     """
     from pathlib import Path
 
@@ -112,16 +114,28 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
                 f"{pm[0].attrs['sample_rate']:g} Hz: set simulate.sample_rate to the rig's rate")
     units = pm[0].attrs["units"]
 
-    def stack(spectra, name, dim):
+    def stack(spectra, name, dim, role):
+        bound = {"": "", "_lower": f"lower {pm[0].attrs['confidence']:.0%} chi2 bound of the ",
+                 "_upper": f"upper {pm[0].attrs['confidence']:.0%} chi2 bound of the "}
         return {f"{name}{suffix}": ((dim, "frequency"), np.array([p.values if not suffix else p[f"psd{suffix}"].values
-                                                                   for p in spectra]), {"units": units})
+                                                                   for p in spectra]),
+                                    {"units": units, "long_name": f"{bound[suffix]}Welch PSD of the {role} acceleration"})
                 for suffix in ("", "_lower", "_upper")}
 
+    conditions = {n: pm[0].coords[n].variable for n in ("sliding_velocity", "normal_load", "roughness_ra")
+                  if n in pm[0].coords}  # .variable: a coordinate DataArray would bring the run's run_id along
+    # text labels along plain dimensions: a text coordinate variable would be a 2-D char array, not CF
     psd = xr.Dataset(
-        {**stack(pm, "psd_measured", "measured_run"), **stack(ps, "psd_simulated", "simulated_seed")},
-        coords={"frequency": ("frequency", f, {"units": "Hz"}), "measured_run": list(meas),
-                "simulated_seed": list(sims)},
-        attrs={k: pm[0].attrs[k] for k in ("nperseg", "noverlap", "window", "detrend", "equivalent_averages",
-                                           "sample_rate", "confidence")},
+        {**stack(pm, "psd_measured", "measured", "measured"), **stack(ps, "psd_simulated", "simulated", "simulated")},
+        coords={"frequency": ("frequency", f, {"units": "Hz", "long_name": "frequency"}),
+                "measured_run": ("measured", list(meas), {"long_name": "measured run (file name without .nc)"}),
+                "simulated_seed": ("simulated", list(sims), {"long_name": "simulation (file name without .nc)"}),
+                **conditions},
+        attrs={**{k: pm[0].attrs[k] for k in ("nperseg", "noverlap", "window", "detrend", "equivalent_averages",
+                                              "sample_rate", "confidence")},
+               "title": "Welch PSDs of the measured and simulated acceleration of one test condition",
+               "Conventions": "CF-1.8",
+               "history": new_history(f"score_condition(band=[{band[0]:g}, {band[1]:g}] Hz, nperseg={nperseg}, "
+                                      f"settle={settle:g} s)")},
     )
     return {"band": list(band), "nperseg": nperseg, "settle": settle, "pairs": pairs, "summary": summary}, psd

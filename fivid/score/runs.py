@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError, SchemaError, UnitError
-from fivid.schema import new_history
+from fivid.schema import apply_cf_attrs, new_history
 from fivid.score.metrics import (
     band_levels_db,
     level_difference_db,
@@ -306,6 +306,15 @@ def _flag(value, threshold, larger_is_bad=True):
     return np.where(np.isfinite(value) & np.isfinite(threshold), out, False)
 
 
+_THRESHOLD = "{} of two estimates of one spectrum is below this with probability 'confidence'"
+
+
+def _significant(score: str, side: str = "above") -> dict:
+    """CF attrs of a significance flag (stored as 0/1: xarray writes booleans as int8)."""
+    return {"long_name": f"{score} {side} its threshold: significant at the 'confidence' level",
+            "flag_values": np.array([0, 1], dtype=np.int8), "flag_meanings": "within_uncertainty significant"}
+
+
 def _assemble(v: dict, *, measured, simulated, variable, units):
     import xarray as xr
 
@@ -320,22 +329,25 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
                                       "over the band"}),
             "lsd_db_threshold": ((), v["lsd_thr"], {**db, "long_name": "lsd of two estimates of one spectrum is "
                                                     "below this with probability 'confidence'"}),
-            "lsd_db_significant": ((), _flag(v["lsd"], v["lsd_thr"])),
+            "lsd_db_significant": ((), _flag(v["lsd"], v["lsd_thr"]), _significant("lsd_db")),
             "level_diff_db": ((), v["level"], {**db, "long_name": "10 log10 of band power ratio sim/meas"}),
             "level_diff_db_threshold": ((), v["level_thr"], {**db,
                                                              "long_name": "two-sided threshold of |level_diff_db|"}),
-            "level_diff_db_significant": ((), _flag(abs(v["level"]), v["level_thr"])),
+            "level_diff_db_significant": ((), _flag(abs(v["level"]), v["level_thr"]), _significant("|level_diff_db|")),
             "band_level_rms_error_db": ((), v["band_rms"], {**db, "long_name": "RMS over 1/3-octave bands of "
                                                             "band_level_error_db"}),
-            "band_level_rms_error_db_threshold": ((), v["band_rms_thr"], db),
-            "band_level_rms_error_db_significant": ((), _flag(v["band_rms"], v["band_rms_thr"])),
+            "band_level_rms_error_db_threshold": ((), v["band_rms_thr"], {**db, "long_name": _THRESHOLD.format(
+                "band_level_rms_error_db")}),
+            "band_level_rms_error_db_significant": ((), _flag(v["band_rms"], v["band_rms_thr"]),
+                                                    _significant("band_level_rms_error_db")),
             "shape_correlation": ((), v["corr"], {"units": "1", "long_name": "Pearson correlation of the log-PSDs"}),
             "shape_correlation_expected": ((), v["corr_expected"], {"units": "1", "long_name":
                                            "correlation of two noisy estimates of one spectrum (noise attenuation)"}),
             "shape_correlation_threshold": ((), v["corr_lowest"], {"units": "1", "long_name":
                                             "lowest correlation two estimates of one spectrum reach with "
                                             "probability 'confidence'"}),
-            "shape_correlation_significant": ((), _flag(v["corr"], v["corr_lowest"], larger_is_bad=False)),
+            "shape_correlation_significant": ((), _flag(v["corr"], v["corr_lowest"], larger_is_bad=False),
+                                              _significant("shape_correlation", "below")),
             "psd_measured": ("frequency", v["pmb"], {"units": psd_units, "long_name": f"PSD of measured {variable}"}),
             "psd_simulated": ("frequency", v["psb"], {"units": psd_units, "long_name": f"PSD of simulated {variable}"}),
             "log_psd_difference_db": ("frequency", v["diff"], {**db, "long_name": "10 log10(P_sim/P_meas)"}),
@@ -347,28 +359,37 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
                                         f"({units})2"}),
             "band_level_error_db": ("band_centre", v["band_err"], {**db, "long_name": "simulated minus measured "
                                     "1/3-octave band level"}),
-            "band_level_error_db_threshold": ("band_centre", v["z2"] * v["band_sd"], db),
-            "band_level_error_db_significant": ("band_centre", _flag(np.abs(v["band_err"]), v["z2"] * v["band_sd"])),
-            "peak_frequency_measured": ("peak", pk["fm"], {"units": "Hz"}),
+            "band_level_error_db_threshold": ("band_centre", v["z2"] * v["band_sd"], {
+                **db, "long_name": _THRESHOLD.format("|band_level_error_db|")}),
+            "band_level_error_db_significant": ("band_centre", _flag(np.abs(v["band_err"]), v["z2"] * v["band_sd"]),
+                                                _significant("|band_level_error_db|")),
+            "peak_frequency_measured": ("peak", pk["fm"], {"units": "Hz", "long_name": "frequency of a prominent "
+                                        "peak of the measured PSD in the band"}),
             "peak_frequency_simulated": ("peak", pk["fs"], {"units": "Hz", "long_name": "matched simulated peak "
                                          "(NaN: none within peak_match_tolerance)"}),
             "peak_frequency_error": ("peak", (pk["fs"] - pk["fm"]) / pk["fm"],
                                      {"units": "1", "long_name": "relative frequency error (f_sim - f_meas)/f_meas"}),
             "peak_frequency_error_threshold": ("peak", pk["freq_thr"] / pk["fm"], {
                 "units": "1", "long_name": "relative frequency difference within the peaks' resolution"}),
-            "peak_frequency_error_significant": ("peak", _flag(np.abs(pk["fs"] - pk["fm"]), pk["freq_thr"])),
+            "peak_frequency_error_significant": ("peak", _flag(np.abs(pk["fs"] - pk["fm"]), pk["freq_thr"]),
+                                                 _significant("|peak_frequency_error|")),
             "peak_level_diff_db": ("peak", pk["ls"] - pk["lm"], {**db, "long_name": "log-PSD at the simulated "
                                    "peak minus at the measured peak"}),
-            "peak_level_diff_db_threshold": ("peak", pk["level_thr"], db),
-            "peak_level_diff_db_significant": ("peak", _flag(np.abs(pk["ls"] - pk["lm"]), pk["level_thr"])),
+            "peak_level_diff_db_threshold": ("peak", pk["level_thr"], {**db, "long_name": _THRESHOLD.format(
+                "|peak_level_diff_db|")}),
+            "peak_level_diff_db_significant": ("peak", _flag(np.abs(pk["ls"] - pk["lm"]), pk["level_thr"]),
+                                               _significant("|peak_level_diff_db|")),
         },
         coords={
             "frequency": ("frequency", v["fb"], {"units": "Hz", "long_name": "frequency"}),
             "band_centre": ("band_centre", v["bands"]["centre"], {"units": "Hz", "long_name": "IEC 61260-1 base-10 "
                             "exact mid-band frequency"}),
-            "band_lower": ("band_centre", v["bands"]["lower"], {"units": "Hz"}),
-            "band_upper": ("band_centre", v["bands"]["upper"], {"units": "Hz"}),
-            "peak": ("peak", np.arange(pk["fm"].size)),
+            "band_lower": ("band_centre", v["bands"]["lower"], {"units": "Hz", "long_name": "lower band-edge "
+                           "frequency"}),
+            "band_upper": ("band_centre", v["bands"]["upper"], {"units": "Hz", "long_name": "upper band-edge "
+                           "frequency"}),
+            "peak": ("peak", np.arange(pk["fm"].size), {"units": "1", "long_name": "peak number, by measured "
+                     "frequency"}),
         },
     )
     psd_m, psd_s = v["psd_m"], v["psd_s"]
@@ -407,4 +428,4 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
         "history": new_history(f"score_runs({variable!r}, band=[{v['f_lo']:g}, {v['f_hi']:g}] Hz, "
                                f"nperseg={psd_m.attrs['nperseg']})"),
     }
-    return ds
+    return apply_cf_attrs(ds)  # Conventions, fivid_version

@@ -135,7 +135,7 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
     -------
     xarray.DataArray
         Density [u2 Hz-1] on dim ``frequency`` [Hz] (0 … fs/2), with coords ``psd_lower`` and
-        ``psd_upper`` [u2 Hz-1] and attrs recording every setting, ``n_segments``,
+        ``psd_upper`` [u2 Hz-1], the scalar coordinates of ``da`` (a run's test conditions) and attrs recording every setting, ``n_segments``,
         ``equivalent_degrees_of_freedom`` ν (Percival & Walden eq. 292b) and
         ``equivalent_averages`` = ν/2. Scaling equals :func:`scipy.signal.welch` with
         ``scaling="density"``, so ``sum(psd) * df`` is the variance of the detrended signal.
@@ -174,6 +174,8 @@ def welch_psd(da, *, nperseg, noverlap=None, window="hann", detrend="constant", 
     lower, upper = chi2_interval(psd, bin_degrees_of_freedom(nu, settings.nperseg), confidence)
     dims = tuple(d for d in da.dims if d != "time") + ("frequency",)
     coords = {d: da.coords[d] for d in dims[:-1] if d in da.coords}
+    # scalar coordinates (a run's test conditions, a selected sensor) describe the spectrum too
+    coords.update({n: c for n, c in da.coords.items() if c.ndim == 0})
     coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
     punits = power_units(units)
     long = f"power spectral density of {da.attrs.get('long_name', da.name)}"

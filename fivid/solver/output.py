@@ -42,7 +42,7 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     """The RunDataset of a finished run (see the module docstring)."""
     import xarray as xr
 
-    from fivid.schema import apply_cf_attrs, new_history
+    from fivid.schema import apply_cf_attrs, new_history, with_condition_coords
 
     q = settings.oversample
     t_int = 1.0 / (sample_rate * q)
@@ -161,4 +161,4 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     if record_state:
         ds.attrs["final_u"] = raw.u
         ds.attrs["final_v"] = raw.v
-    return apply_cf_attrs(ds)
+    return apply_cf_attrs(with_condition_coords(ds))

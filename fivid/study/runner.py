@@ -139,14 +139,13 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
                         ds.attrs.update({"Conventions": "CF-1.8", "point": i, "seconds": seconds, "worker_pid": pid,
                                          "study_digest": study.digest,
                                          **{f"condition_{k}": float(v) for k, v in table[i].items()}})
-                        write_netcdf(ds, files[i], encoding=_char_encoding(ds))
+                        write_netcdf(ds, files[i])
                     bar.update(1)
         wall = time.perf_counter() - started
         done = [i for i, f in enumerate(files) if f.exists()]
         cea = _study_cea(study)
         ds = _assemble(study, table, files, done, cea)
-        # text variables as char arrays (CF has no variable-length strings), decoded back to str by xarray
-        write_netcdf(ds, outdir / "study.nc", encoding=_char_encoding(ds))
+        write_netcdf(ds, outdir / "study.nc")  # text as char arrays: fivid.storage.cf_encoding
         summary = _summary(study, table, ds, done, failed, cea, timing, wall, workers if scheduler is None else None)
         from fivid.study.convergence import convergence_summary
 
@@ -158,11 +157,6 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
 
         render_study_report(outdir / "report.html", study, ds, summary)
     return summary
-
-
-def _char_encoding(ds) -> dict:
-    """Text variables as char arrays: CF has no variable-length strings (xarray decodes them back to str)."""
-    return {n: {"dtype": "S1"} for n in ds.variables if ds[n].dtype == object or ds[n].dtype.kind == "U"}
 
 
 def _study_cea(study):
