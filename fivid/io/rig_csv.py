@@ -271,8 +271,7 @@ def _history(head: RigHead, digest: str) -> str:
     origin = ", ".join(f"{k} ({v})" for k, v in head.attr_origin.items())
     return new_history(
         f"ingest {head.path.name} (sha256 {digest}) with {head.profile.describe()}; columns: {'; '.join(cols)}; "
-        f"metadata: {origin}"
-    )
+        f"metadata: {origin}", timestamp=False)  # same CSV, same bytes: see new_history
 
 
 def _warn_misspelt_columns(head: RigHead) -> None:
