@@ -105,6 +105,14 @@ class Interrupted(KeyboardInterrupt):
     A :class:`KeyboardInterrupt`, so code that already cleans up on Ctrl-C cleans up on SIGTERM too.
     """
 
+    received: int | None = None  # set by the CLI's handler: a signal seen even if a library swallowed the exception
+
+    @classmethod
+    def raise_if_received(cls) -> None:
+        """Raise at a safe point if a signal arrived whose exception was swallowed (a bare ``except:``)."""
+        if cls.received is not None:
+            raise cls(cls.received)
+
     def __init__(self, signum: int, detail: str = ""):
         import signal
 

@@ -158,3 +158,24 @@ def test_signal_stops_the_run_cleanly_and_a_rerun_completes(setup, reference, si
     ingest = next(st for st in again["stages"] if st["name"] == "ingest")
     assert ingest["cached"] == 2 and ingest["ran"] == 0
     _assert_same_content(_content(setup["out"]), reference)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [0.5, 8.0])  # while the dask cluster starts; while the workers simulate
+def test_sigterm_during_the_dask_sweep_stops_cleanly(setup, delay):
+    setup["recipe"].write_text("fivid-pipeline: 1\nstages: [ingest, identify, simulate]\n")
+    with open(setup["config"], "a") as f:
+        f.write("simulate: {duration: 0.05 s, sample_rate: 51.2 kHz, seeds: 1}\n"
+                "analysis: {band: [500 Hz, 5 kHz], nperseg: 512}\n")
+    proc = _cli(setup, "--workers", "1")
+    _wait_for_stage(proc, setup["out"], "simulate")
+    time.sleep(delay)
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    t_signal = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert "Traceback" not in err, err  # a half-started LocalCluster used to print one at exit
+    assert time.monotonic() - t_signal < 30
+    summary = json.loads((setup["out"] / "summary.json").read_text())
+    assert summary["interrupted"] == {"signal": "SIGTERM", "stage": "simulate"}

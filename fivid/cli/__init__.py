@@ -107,11 +107,13 @@ def exit_status_of_signal(signum: int) -> int:
 
 
 @contextlib.contextmanager
-def _sigterm_interrupts():
-    """While a command runs, SIGTERM raises :class:`~fivid.errors.Interrupted` as Ctrl-C raises KeyboardInterrupt.
+def _signals_interrupt():
+    """While a command runs, SIGINT and SIGTERM raise :class:`~fivid.errors.Interrupted` (a KeyboardInterrupt).
 
     The default SIGTERM action kills the process on the spot (no summary, lock file left, exit -15); as an
-    exception, the command cleans up like on Ctrl-C. Only the main thread can install handlers.
+    exception, the command cleans up like on Ctrl-C. The signal is also recorded in ``Interrupted.received``
+    so that a pipeline notices it at its next task even if a library swallowed the exception. Only the main
+    thread can install handlers.
     """
     import signal
     import threading
@@ -121,13 +123,17 @@ def _sigterm_interrupts():
         return
 
     def handler(signum, frame):
+        Interrupted.received = signum
         raise Interrupted(signum)
 
-    previous = signal.signal(signal.SIGTERM, handler)
+    Interrupted.received = None
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for s, h in previous.items():
+            signal.signal(s, h)
+        Interrupted.received = None
 
 
 def _missing_optional(exc: BaseException) -> str | None:
@@ -147,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        with _logging_to_stderr(args.verbose), _sigterm_interrupts():
+        with _logging_to_stderr(args.verbose), _signals_interrupt():
             status = args.func(args)
     except FividError as exc:
         print(f"fivid {args.command}: error: {exc}", file=sys.stderr)
@@ -156,8 +162,8 @@ def main(argv: list[str] | None = None) -> int:
         import signal
 
         signum = getattr(exc, "signum", signal.SIGINT)
-        detail = str(exc) if isinstance(exc, Interrupted) else "interrupted by SIGINT"
-        print(f"fivid {args.command}: {detail}", file=sys.stderr)
+        print(f"fivid {args.command}: {exc if isinstance(exc, Interrupted) else 'interrupted by SIGINT'}",
+              file=sys.stderr)
         return exit_status_of_signal(signum)
     except MemoryError as exc:  # a problem too large for this machine: its size is the input to change
         print(f"fivid {args.command}: error: out of memory ({exc or 'MemoryError'}); make the problem smaller "

@@ -80,9 +80,10 @@ class Context:
         return self.plan.config
 
     def finish(self, task: Task, seconds: float) -> None:
-        """Record a task whose outputs are written (manifest last, atomically)."""
+        """Record a task whose outputs are written (manifest last, atomically); then honour a pending signal."""
         self.digests.setdefault(task.stage, {})[task.name] = self.cache.record(task, seconds=seconds)
         log.info("%s/%s done in %.2f s", task.stage, task.name, seconds)
+        Interrupted.raise_if_received()
 
     def output(self, stage: str, task: str, label: str) -> Path:
         return Path(self.tasks[stage][task].outputs[label])
@@ -240,6 +241,7 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         write_output_manifest(out, f"fivid run {plan.path} --config {plan.config.path} --output {out}")
         for name, st in zip(plan.stages, stats):
             current = name
+            Interrupted.raise_if_received()
             _run_stage(ctx, name, st)
         current = None
         status = EXIT_PASS if _evaluate(ctx)[1] else EXIT_BELOW_THRESHOLD
