@@ -16,6 +16,7 @@ __all__ = [
     "DataQualityError",
     "UnitError",
     "OutputExistsError",
+    "Interrupted",
 ]
 
 
@@ -96,3 +97,25 @@ class UnitError(FividError):
 
 class OutputExistsError(FividError):
     """An output file exists and overwriting was not asked for."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by a signal (SIGINT: Ctrl-C; SIGTERM: what schedulers send); the CLI exits 128 + ``signum``.
+
+    A :class:`KeyboardInterrupt`, so code that already cleans up on Ctrl-C cleans up on SIGTERM too.
+    """
+
+    received: int | None = None  # set by the CLI's handler: a signal seen even if a library swallowed the exception
+
+    @classmethod
+    def raise_if_received(cls) -> None:
+        """Raise at a safe point if a signal arrived whose exception was swallowed (a bare ``except:``)."""
+        if cls.received is not None:
+            raise cls(cls.received)
+
+    def __init__(self, signum: int, detail: str = ""):
+        import signal
+
+        self.signum = int(signum)
+        self.signame = signal.Signals(self.signum).name
+        super().__init__(f"interrupted by {self.signame}" + (f" {detail}" if detail else ""))

@@ -264,9 +264,15 @@ def _stamp() -> str:
     return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-def new_history(step: str) -> str:
-    """A first ``history`` line: ISO timestamp, fivid version, what was done."""
-    return f"{_stamp()} fivid {__version__}: {step}"
+def new_history(step: str, *, timestamp: bool = True) -> str:
+    """A first ``history`` line: ISO timestamp, fivid version, what was done.
+
+    With ``timestamp=False`` the line has no wall-clock time, so the same inputs give a byte-identical
+    file (HDF5 itself writes no times): the run datasets of ``fivid ingest``, whose content the
+    pipeline's cache hashes. The time of such a step is recorded outside the file (the pipeline's
+    task manifests under ``.fivid-cache/``, ``fivid-run.log``; the file's mtime).
+    """
+    return f"{_stamp()} fivid {__version__}: {step}" if timestamp else f"fivid {__version__}: {step}"
 
 
 def append_history(ds, step: str):

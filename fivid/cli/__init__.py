@@ -7,7 +7,8 @@ other file. Command modules import heavy libraries inside their ``func``, so ``f
 
 Exit codes, for schedulers: 0 success; 2 bad input or configuration (one clear line per problem on
 stderr, no traceback); 3 the pipeline ran but scores are below their thresholds; 1 an unexpected
-failure (traceback on stderr); 130 interrupted.
+failure (traceback on stderr); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (what schedulers send to
+stop a job): 128 + the signal number, as a shell reports it.
 """
 
 from __future__ import annotations
@@ -21,10 +22,10 @@ import sys
 
 from fivid import __version__
 from fivid.cli.types import Quantity, integer_at_least, quantity
-from fivid.errors import FividError
+from fivid.errors import FividError, Interrupted
 
 __all__ = ["main", "build_parser", "integer_at_least", "quantity", "Quantity",
-           "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD"]
+           "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD", "exit_status_of_signal"]
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -36,7 +37,7 @@ _OPTIONAL = {"dask": "sweep", "distributed": "sweep", "matplotlib": "report"}
 
 _EPILOG = """\
 exit status: 0 ok, 2 bad input or configuration, 3 scores below thresholds (fivid run),
-1 unexpected failure, 130 interrupted.
+1 unexpected failure, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM).
 Run 'fivid COMMAND --help' for a command's options."""
 
 
@@ -124,6 +125,41 @@ def _logging_to_stderr(verbosity: int):
         log.setLevel(level0)
 
 
+def exit_status_of_signal(signum: int) -> int:
+    """The exit status of a command stopped by signal ``signum``: 128 + its number (130 SIGINT, 143 SIGTERM)."""
+    return 128 + int(signum)
+
+
+@contextlib.contextmanager
+def _signals_interrupt():
+    """While a command runs, SIGINT and SIGTERM raise :class:`~fivid.errors.Interrupted` (a KeyboardInterrupt).
+
+    The default SIGTERM action kills the process on the spot (no summary, lock file left, exit -15); as an
+    exception, the command cleans up like on Ctrl-C. The signal is also recorded in ``Interrupted.received``
+    so that a pipeline notices it at its next task even if a library swallowed the exception. Only the main
+    thread can install handlers.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        Interrupted.received = signum
+        raise Interrupted(signum)
+
+    Interrupted.received = None
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+        Interrupted.received = None
+
+
 def _missing_optional(exc: BaseException) -> str | None:
     """The optional package whose absence raised ``exc``, or None."""
     if isinstance(exc, ModuleNotFoundError):
@@ -146,14 +182,18 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        with _logging_to_stderr(_verbosity(args)):
+        with _logging_to_stderr(_verbosity(args)), _signals_interrupt():
             status = args.func(args)
     except FividError as exc:
         print(f"fivid {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print(f"fivid {args.command}: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM as Interrupted; no traceback
+        import signal
+
+        signum = getattr(exc, "signum", signal.SIGINT)
+        print(f"fivid {args.command}: {exc if isinstance(exc, Interrupted) else 'interrupted by SIGINT'}",
+              file=sys.stderr)
+        return exit_status_of_signal(signum)
     except MemoryError as exc:  # a problem too large for this machine: its size is the input to change
         print(f"fivid {args.command}: error: out of memory ({exc or 'MemoryError'}); make the problem smaller "
               "(mesh divisions, duration, sample rate, number of runs)", file=sys.stderr)

@@ -124,8 +124,7 @@ def _history(head: RigHead, digest: str, what: str) -> str:
     origin = ", ".join(f"{k} ({v})" for k, v in head.attr_origin.items())
     return new_history(
         f"ingest {head.path.name}{what} (sha256 {digest}) with {head.profile.describe()}; columns: {'; '.join(cols)}; "
-        f"metadata: {origin}"
-    )
+        f"metadata: {origin}", timestamp=False)  # same recording, same bytes: see new_history
 
 
 def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_format: str | None = None):

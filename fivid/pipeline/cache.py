@@ -3,7 +3,8 @@
 Every task of a stage (one CSV to ingest, one simulation, ...) has a *key*: the sha256 of its kind,
 fivid's version, its parameters and the sha256 of every input file. After a task has written its
 outputs (each atomically), a manifest ``<output>/.fivid-cache/<stage>/<task>.json`` is written
-(atomically, last) recording the key and the sha256 of each output. A task is a *hit* when its
+(atomically, last) recording the key, the sha256 of each output and when it finished (the outputs
+themselves hold no wall-clock time where that would change their bytes: ingested runs). A task is a *hit* when its
 manifest has the same key and every output still exists with the recorded sha256; otherwise it
 runs again. A run killed at any point therefore leaves either a complete, recorded task or one that
 is re-run; and because downstream keys hash the *content* of upstream outputs, a new CSV re-runs
@@ -12,6 +13,7 @@ only the tasks whose inputs changed.
 
 from __future__ import annotations
 
+import datetime as _dt
 import hashlib
 import json
 import os
@@ -107,7 +109,8 @@ class TaskCache:
         path = self._manifest(task)
         path.parent.mkdir(parents=True, exist_ok=True)
         write_json(path, {"key": task.key, "stage": task.stage, "task": task.name, "params": task.params,
-                          "inputs": task.inputs, "outputs": outputs, "seconds": seconds, "fivid_version": __version__})
+                          "inputs": task.inputs, "outputs": outputs, "seconds": seconds, "fivid_version": __version__,
+                          "finished": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")})
         return {label: e["sha256"] for label, e in outputs.items()}
 
     def forget(self, task: Task) -> None:

@@ -4,7 +4,11 @@
 logs to ``<output>/fivid-run.log``, runs each stage's tasks that are not already in the cache (see
 :mod:`fivid.pipeline.cache`), evaluates the scores against the configured thresholds and writes
 ``<output>/summary.json``. The exit status is for schedulers: 0 pass, 3 scores below thresholds,
-2 bad input or configuration, 1 unexpected failure.
+2 bad input or configuration, 1 unexpected failure, 130/143 interrupted by SIGINT/SIGTERM (the
+summary says ``interrupted`` with the signal and the stage; finished tasks stay in the cache).
+
+Before the lock is taken the output folder is checked (:mod:`fivid.pipeline.output`): a folder of
+unrelated files is refused unless ``force``; every task's outputs must lie inside the folder.
 """
 
 from __future__ import annotations
@@ -12,16 +16,19 @@ from __future__ import annotations
 import datetime as _dt
 import logging
 import platform
+import signal
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid import __version__
-from fivid.errors import FividError
+from fivid.errors import FividError, Interrupted
 from fivid.pipeline.cache import Task, TaskCache
 from fivid.pipeline.config import Plan
 from fivid.pipeline.lock import OutputLock
-from fivid.storage import write_json
+from fivid.pipeline.output import (check_inside, check_output_folder, remove_stale_temporaries,
+                                   write_output_manifest)
+from fivid.storage import check_folder_writable, write_json
 
 __all__ = ["Context", "StageStats", "run_pipeline", "EXIT_PASS", "EXIT_FAILURE", "EXIT_BAD_INPUT",
            "EXIT_BELOW_THRESHOLD"]
@@ -73,9 +80,10 @@ class Context:
         return self.plan.config
 
     def finish(self, task: Task, seconds: float) -> None:
-        """Record a task whose outputs are written (manifest last, atomically)."""
+        """Record a task whose outputs are written (manifest last, atomically); then honour a pending signal."""
         self.digests.setdefault(task.stage, {})[task.name] = self.cache.record(task, seconds=seconds)
         log.info("%s/%s done in %.2f s", task.stage, task.name, seconds)
+        Interrupted.raise_if_received()
 
     def output(self, stage: str, task: str, label: str) -> Path:
         return Path(self.tasks[stage][task].outputs[label])
@@ -108,6 +116,9 @@ def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
         ctx.pending.add(name)
         return [f"  {name:9s} runs after {', '.join(waits)} (its inputs are not computed yet)"]
     tasks = stage.plan(ctx)
+    for task in tasks:  # names come from input files and conditions: none may lead out of the folder
+        for path in task.outputs.values():
+            check_inside(ctx.out, path, what=f"output of task {name}/{task.name}")
     ctx.tasks[name] = {t.name: t for t in tasks}
     todo = []
     for task in tasks:
@@ -169,7 +180,8 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
     dry_run : bool
         Only report what would run (nothing is written, no lock is taken).
     force : bool
-        Re-run every task, ignoring the cache.
+        Re-run every task, ignoring the cache; also write into an existing folder that is not a fivid
+        output (refused otherwise).
     progress : bool, optional
         Progress bars (default: when stderr is a terminal).
     echo : callable, optional
@@ -178,7 +190,8 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
     Returns
     -------
     status : int
-        0 pass, 3 scores below thresholds, 2 bad input, 1 failure.
+        0 pass, 3 scores below thresholds, 2 bad input, 1 failure. An interruption (Ctrl-C, SIGTERM
+        through the CLI) is re-raised as :class:`~fivid.errors.Interrupted` after the summary is written.
     summary : dict
         The content of ``summary.json`` (empty for a dry run).
     """
@@ -187,6 +200,7 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
 
         check_scheduler_address(scheduler)
     out = plan.config.output
+    check_output_folder(out, force=force)
     ctx = Context(plan=plan, out=out, cache=TaskCache(out), workers=workers, scheduler=scheduler, force=force,
                   dry_run=dry_run, progress=progress)
     stats = [StageStats(name) for name in plan.stages]
@@ -199,6 +213,11 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
             (echo or log.warning)(line)
         return EXIT_PASS, {}
 
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise FividError(f"cannot create the output folder {str(out)!r}: {exc.strerror or exc}") from None
+    check_folder_writable(out)
     lock = OutputLock(out)
     lock.acquire()
     flog = logging.getLogger("fivid")
@@ -212,26 +231,40 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
     flog.setLevel(min(old_level or logging.WARNING, logging.INFO))
     started = _dt.datetime.now(_dt.timezone.utc)
     t0 = time.perf_counter()
-    status, error = EXIT_FAILURE, None
+    status, error, interrupted, current = EXIT_FAILURE, None, None, None
     if lock.took_over:
         log.warning("previous run (pid %s, started %s) did not finish; its completed tasks are reused",
                     lock.took_over.get("pid"), lock.took_over.get("started"))
     log.info("fivid %s: pipeline %s, config %s, output %s", __version__, plan.path, plan.config.path, out)
     try:
+        remove_stale_temporaries(out)  # under the lock: no other run is writing them
+        write_output_manifest(out, f"fivid run {plan.path} --config {plan.config.path} --output {out}")
         for name, st in zip(plan.stages, stats):
+            current = name
+            Interrupted.raise_if_received()
             _run_stage(ctx, name, st)
+        current = None
         status = EXIT_PASS if _evaluate(ctx)[1] else EXIT_BELOW_THRESHOLD
     except FividError as exc:
         status, error = EXIT_BAD_INPUT, exc
         log.info("stopped on bad input: %s", exc)  # the CLI prints it on stderr; this goes to the log file
         raise
+    except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM raised as Interrupted by the CLI
+        signum = getattr(exc, "signum", signal.SIGINT)
+        interrupted = {"signal": signal.Signals(signum).name, "stage": current}
+        status, error = 128 + int(signum), exc
+        log.warning("interrupted by %s during stage %s; finished tasks are kept", interrupted["signal"], current)
+        raise Interrupted(signum, f"during stage {current!r}; finished tasks are kept: run the same command "
+                          "again to resume") from None
     except BaseException as exc:
         status, error = EXIT_FAILURE, exc
         log.exception("pipeline failed")
         raise
     finally:
+        held = _ignore_signals()  # a second Ctrl-C must not lose the summary or leave the lock
         checks, ok = _evaluate(ctx) if status in (EXIT_PASS, EXIT_BELOW_THRESHOLD) else ([], False)
         summary = _summary(ctx, stats, checks, status, error, started, time.perf_counter() - t0, lock)
+        summary["interrupted"] = interrupted
         try:
             write_json(out / "summary.json", summary)
             log.info("summary: %s (exit %d), %.1f s", summary["status"], status, summary["seconds"])
@@ -242,13 +275,24 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
             for h, lvl in stream_levels:
                 h.setLevel(lvl)
             lock.release()
+            for signum, previous in held.items():
+                signal.signal(signum, previous)
     return status, summary
+
+
+def _ignore_signals() -> dict:
+    """Ignore SIGINT and SIGTERM (main thread only); returns the previous handlers to restore."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    return {signum: signal.signal(signum, signal.SIG_IGN) for signum in (signal.SIGINT, signal.SIGTERM)}
 
 
 def _summary(ctx, stats, checks, status, error, started, seconds, lock) -> dict:
     plan = ctx.plan
     names = {EXIT_PASS: "pass", EXIT_BELOW_THRESHOLD: "below_threshold", EXIT_BAD_INPUT: "bad_input",
-             EXIT_FAILURE: "failure"}
+             EXIT_FAILURE: "failure", 128 + signal.SIGINT: "interrupted", 128 + signal.SIGTERM: "interrupted"}
     return {
         "status": names[status],
         "exit_code": status,

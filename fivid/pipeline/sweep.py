@@ -116,24 +116,56 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
     env = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
     old = {k: os.environ.get(k) for k in env}
     os.environ.update(env)
+    cluster = None
     try:
         # silence_logs=CRITICAL: a worker's heartbeat racing the scheduler's shutdown logs a
         # CommClosedError traceback at ERROR level that means nothing to the user; task failures still
         # reach the client as exceptions, with their own traceback.
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None, silence_logs=logging.CRITICAL)
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-    log.info("dask: LocalCluster with %d worker process(es) at %s", workers, cluster.scheduler_address)
-    try:
+        with _signals_deferred():  # Ctrl-C/SIGTERM during start-up: acted on once the cluster can be closed
+            try:
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                       dashboard_address=None, silence_logs=logging.CRITICAL)
+            finally:
+                for k, v in old.items():
+                    if v is None:
+                        os.environ.pop(k, None)
+                    else:
+                        os.environ[k] = v
+        log.info("dask: LocalCluster with %d worker process(es) at %s", workers, cluster.scheduler_address)
         with Client(cluster) as client:
             yield client
     finally:
-        cluster.close()
+        if cluster is not None:
+            cluster.close()
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """Hold SIGINT and SIGTERM for the block, then act on the first one received as its handler would.
+
+    An interrupt inside ``LocalCluster(...)`` leaves a half-started cluster that cannot be closed (its
+    workers are still initialising) and whose close at exit prints a traceback. Main thread only.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = {s: signal.signal(s, lambda signum, frame: received.append(signum))
+                for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    if received:
+        handler = previous[received[0]]
+        if callable(handler):
+            handler(received[0], None)  # raises KeyboardInterrupt / Interrupted
+        elif handler == signal.SIG_DFL:
+            signal.raise_signal(received[0])
 
 
 def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = None, connect_timeout: float = 10.0):
@@ -143,7 +175,10 @@ def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = No
     """
     from distributed import as_completed
 
+    from fivid.errors import Interrupted
+
     with dask_client(workers=workers, scheduler=scheduler, connect_timeout=connect_timeout) as client:
+        Interrupted.raise_if_received()  # a signal during the cluster's start-up
         futures = {client.submit(_timed_call, func, *args, key=f"fivid-{name}-{os.getpid()}-{time.time_ns()}",
                                  pure=False): name for name, args in items.items()}
         for fut in as_completed(futures):

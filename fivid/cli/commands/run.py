@@ -10,10 +10,12 @@ Run a pipeline recipe (pipelines/*.yaml: which stages, in which order) with a ru
 The whole plan is validated before anything is computed. Each task's outputs are cached under a hash
 of its inputs and parameters: a re-run with nothing new does no work, a new CSV re-runs only what
 depends on it. One run at a time per output folder (lock). Writes <output>/summary.json,
-<output>/report.html and <output>/fivid-run.log.
+<output>/report.html and <output>/fivid-run.log, and marks the folder with <output>/.fivid-output.json:
+an existing folder holding other files is refused unless --force. Ctrl-C or SIGTERM stop the run
+cleanly: summary.json says 'interrupted' with the stage, finished tasks are kept for the next run.
 
 exit status: 0 pass, 3 scores below the configured thresholds, 2 bad input or configuration,
-1 unexpected failure."""
+1 unexpected failure, 130 interrupted (Ctrl-C), 143 terminated (SIGTERM)."""
 
 
 def register(subparsers) -> None:
@@ -29,7 +31,8 @@ def register(subparsers) -> None:
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="worker processes of the local dask cluster (default 2)")
     p.add_argument("--dry-run", action="store_true", help="validate and print what would run; compute nothing")
-    p.add_argument("--force", action="store_true", help="re-run every task, ignoring the cache")
+    p.add_argument("--force", action="store_true", help="re-run every task, ignoring the cache; also write into an existing folder "
+                                                            "that is not a fivid output")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--json", action="store_true",
                    help="print <output>/summary.json on stdout (with --dry-run: the planned lines as "
