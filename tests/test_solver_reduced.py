@@ -106,3 +106,24 @@ def test_reduced_psd_matches_the_full_run_in_band(coarse):
     steady = red.time >= red.attrs["transient_end"]
     assert float(red.friction_force.where(steady).mean()) == pytest.approx(
         float(full.friction_force.where(steady).mean()), rel=0.01)
+
+
+def test_cli_simulate_reduced_records_the_truncation_and_the_command(tmp_path, capsys):
+    import json
+
+    import xarray as xr
+
+    from fivid.cli import main
+
+    args = ["simulate", str(COARSE), "--mu", "0.3", "--velocity", "10 mm/s", "--load", "5 N", "--duration", "1 ms",
+            "--reduced", "-o", str(tmp_path / "r.nc"), "--json"]
+    assert main(args) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["reduced_modes"] >= 1 and summary["reduced_cutoff"] == pytest.approx(76800.0)
+    with xr.open_dataset(tmp_path / "r.nc") as ds:
+        assert ds.attrs["reduced"] == 1
+        assert " --reduced -o " in ds.attrs["history"].splitlines()[-1]
+    assert main(args[:-4] + ["--reduced", "8", "-o", str(tmp_path / "r8.nc")]) == 0
+    with xr.open_dataset(tmp_path / "r8.nc") as ds:
+        assert int(ds.attrs["reduced_modes"]) == 8
+        assert "--reduced 8 -o" in ds.attrs["history"].splitlines()[-1]
