@@ -347,7 +347,8 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
             a["pair_par"], a["law_tab"], a["s_area"], a["minv_c"], a["wmat"], state["seg"], state["geo"],
             state["lam"], state["cstate"], settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate),
             state["mu_now"], state["vold_c"], a["cnode_slot"], a["cnodes"], a["sens_node"], a["sens_dir"],
-            q, qd, w, vf, bufs[0], p_mom, bufs[1], bufs[2], scratch_c, cimp, acc, np.zeros(2),
+            q, qd, w, vf, bufs[0], p_mom, bufs[1], bufs[2], scratch_c, np.zeros_like(scratch_c), cimp, acc,
+            np.zeros(2),
             rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], RUNAWAY_FACTOR, diag)
         if status != K.OK:
             worst = int(diag[1])
