@@ -20,6 +20,12 @@ profiled, graded blocks in sliding contact) as ``rough_fraction_of_bare_stencil`
 rectangular stencil on a ghost-padded grid of the same node count per block (the speed the model would have
 if its blocks were uniform rectangles). ``rough_no_contact_*`` is the rough model with its contact pair removed:
 the mapped stencil's own cost, separated from the contact solve over its 481 slave nodes.
+
+Two cores: ``parallel_efficiency_2_cores = t_1 / (2 t_2)`` of the ``prange`` stencil + update kernel with numba's
+threads set to 1 and 2 in the same run. Reduced-order path (issue 17): ``reduced_speedup`` (time-loop wall time
+of the full over the Craig-Bampton reduced run, interleaved, best of; set-up time apart as ``reduced_setup_s``)
+and ``reduced_band_lsd_db`` (acceleration PSDs of the two runs, 200 Hz - 10 kHz, same damping scheme), on the
+default rig (0.05 s of sliding), or on the coarse rig with ``--quick`` (0.03 s).
 """
 
 from __future__ import annotations
@@ -214,8 +220,78 @@ def main(argv=None) -> int:
         out["wall_0p1s_coarse_s"] = cwall
     out["coarse_dofs"] = coarse.n_dofs
     out["coarse_dof_updates_per_s"] = coarse.n_dofs * csteps / cwall
+    # ---- two cores: the prange stencil with 1 and 2 threads, same run (numba.set_num_threads)
+    eff, t1, t2 = _parallel_efficiency(bare_par, steps, (dt, a, b, npd, blocks, c_uni, mb, *arrays), rounds)
+    out["parallel_efficiency_2_cores"] = eff
+    out["parallel_1thread_dof_updates_per_s"] = n_dofs * steps / t1
+    out["parallel_2thread_dof_updates_per_s"] = n_dofs * steps / t2
+    # ---- reduced-order path (Craig-Bampton) against the full model: default rig, coarse rig in --quick
+    rmodel, rpath = (coarse, "configs/models/triboair_coarse.yaml") if args.quick else \
+        (default, "configs/models/triboair.yaml")
+    out["reduced_model"] = rpath
+    out.update(_reduced_comparison(rmodel, kw, 0.03 if args.quick else 0.05, rounds))
     print(json.dumps(out))
     return 0
+
+
+def _reduced_comparison(model, kw, duration, rounds):
+    """Full vs Craig-Bampton reduced run of ``model`` (issue 17): wall times of the time loop (best of interleaved
+    rounds), the reduction's set-up time, and the log-spectral distance of the acceleration PSDs over
+    200 Hz - 10 kHz (Welch, Hann, nperseg 256, 50 % overlap, steady part)."""
+    from fivid.solver.driver import prepare_run
+    from fivid.solver.study import band_distance, steady_psds
+
+    full = prepare_run(model, duration=duration, **kw)
+    t0 = time.perf_counter()
+    red = prepare_run(model, duration=duration, reduced=True, **kw)
+    t_setup = time.perf_counter() - t0
+    red.run(progress=False)  # compile/load the reduced kernel
+    t_full = t_red = np.inf
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        ds_full = full.run(progress=False)
+        t_full = min(t_full, time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        ds_red = red.run(progress=False)
+        t_red = min(t_red, time.perf_counter() - t0)
+    f, (p_full, p_red), nperseg = steady_psds([ds_full, ds_red], nperseg=256)
+    lsd, level, _ = band_distance(f, p_full, p_red, (200.0, 10e3))
+    a = ds_red.attrs
+    return {
+        "reduced_speedup": t_full / t_red,
+        "reduced_band_lsd_db": lsd,
+        "reduced_band_level_diff_db": level,
+        "reduced_psd_nperseg": nperseg,
+        "reduced_wall_s": t_red,
+        "reduced_full_wall_s": t_full,
+        "reduced_setup_s": t_setup,
+        "reduced_simulated_s": float(full.settings.n_intervals / (full.settings.oversample * kw["sample_rate"])),
+        "reduced_size": a["reduced_size"],
+        "reduced_boundary_nodes": a["reduced_boundary_nodes"],
+        "reduced_modes": a["reduced_modes"],
+        "reduced_first_truncated_frequency_hz": a["reduced_first_truncated_frequency"],
+        "reduced_static_residual": a["reduced_static_residual"],
+        "reduced_time_step_s": a["time_step"],
+        "full_time_step_s": ds_full.attrs["time_step"],
+        "reduced_energy_balance_error_j": float(np.abs(ds_red.energy_balance_error).max()),
+    }
+
+
+def _parallel_efficiency(bare_par, steps, args, rounds):
+    """``t_1 / (2 t_2)`` of the ``prange`` stencil + update kernel with 1 and 2 numba threads (interleaved, best of)."""
+    import numba
+
+    n0 = numba.get_num_threads()
+    t1 = t2 = np.inf
+    try:
+        for _ in range(rounds):
+            numba.set_num_threads(1)
+            t1 = min(t1, _time(bare_par, steps, *args, repeat=1))
+            numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+            t2 = min(t2, _time(bare_par, steps, *args, repeat=1))
+    finally:
+        numba.set_num_threads(n0)
+    return t1 / (2.0 * t2), t1, t2
 
 
 if __name__ == "__main__":

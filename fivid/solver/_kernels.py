@@ -355,10 +355,21 @@ def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pai
 
 
 @njit(cache=True)
-def _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, fx, fy):
+def _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, fx, fy):
     """Correct position and velocity of slave ``sn`` by the contact force ``(fx, fy)`` [N] over one step and of
-    the master nodes ``a``, ``b`` by ``-N0`` and ``-N1`` times it (zero inverse mass: constrained, not moved)."""
+    the master nodes ``a``, ``b`` by ``-N0`` and ``-N1`` times it (zero inverse mass: constrained, not moved).
+
+    ``wmat`` empty: the lumped inverse mass ``minv_c`` (diagonal). Otherwise ``wmat`` is the dense inverse mass
+    of the contact dofs (a reduced system, :mod:`fivid.solver.reduced`): the force moves every dof of
+    ``u[:wmat.shape[0]]`` by ``dt^2 W G^T f``."""
     dt2 = dt * dt
+    if wmat.shape[0] > 0:
+        for i in range(wmat.shape[0]):
+            s = (wmat[sn, i] * fx + wmat[sn + npd, i] * fy - n0 * (wmat[a, i] * fx + wmat[a + npd, i] * fy)
+                 - n1 * (wmat[b, i] * fx + wmat[b + npd, i] * fy))
+            u[i] += dt2 * s
+            v[i] += dt * s
+        return
     u[sn] += dt2 * minv_c[sn] * fx
     v[sn] += dt * minv_c[sn] * fx
     u[sn + npd] += dt2 * minv_c[sn + npd] * fy
@@ -371,6 +382,28 @@ def _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, fx, fy):
     v[b] -= dt * minv_c[b] * n1 * fx
     u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
     v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+
+
+@njit(cache=True)
+def _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1):
+    """``(cxx, cxy, cyy)`` [kg-1]: the inverse mass of the relative motion ``slave - (N0 a + N1 b)`` (2x2,
+    symmetric); the lumped mass has no xy term, a reduced system's dense ``wmat`` has."""
+    if wmat.shape[0] == 0:
+        return (minv_c[sn] + n0 * n0 * minv_c[a] + n1 * n1 * minv_c[b], 0.0,
+                minv_c[sn + npd] + n0 * n0 * minv_c[a + npd] + n1 * n1 * minv_c[b + npd])
+    cxx = 0.0
+    cxy = 0.0
+    cyy = 0.0
+    for i in range(3):
+        pi = sn if i == 0 else (a if i == 1 else b)
+        ci = 1.0 if i == 0 else (-n0 if i == 1 else -n1)
+        for j in range(3):
+            pj = sn if j == 0 else (a if j == 1 else b)
+            cj = 1.0 if j == 0 else (-n0 if j == 1 else -n1)
+            cxx += ci * cj * wmat[pi, pj]
+            cxy += ci * cj * wmat[pi, pj + npd]
+            cyy += ci * cj * wmat[pi + npd, pj + npd]
+    return cxx, cxy, cyy
 
 
 @njit(cache=True)
@@ -409,8 +442,8 @@ def _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt):
 
 
 @njit(cache=True)
-def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
-                  pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol):
+def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                  pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol):
     """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
 
     On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that every active slave
@@ -422,7 +455,8 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, maste
     largest correction of a sweep moves no node pair by more than ``tol`` [m]. ``mu[k]`` is the kinetic
     coefficient of slave ``k`` now (``mu0 + mu_p(t)``); ``pair_par`` the pairs' law rows and ``law_tab`` their
     tables (:mod:`fivid.contact._kernels`); a rigid master (line, circle) moves its surface at the ramped speed at
-    ``t_new`` [s], the end of the step.
+    ``t_new`` [s], the end of the step. ``wmat`` empty: lumped inverse mass ``minv_c``; else the dense inverse
+    mass of the contact dofs of a reduced system (:func:`_apply_contact_force`).
 
     Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
     force on slave ``k`` along ``n`` and ``t``, on entry the previous step's values (warm start: applied first,
@@ -472,7 +506,7 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, maste
         sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
         n0 = geo[k, 0]
         n1 = geo[k, 1]
-        _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
+        _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
                              ln * geo[k, 3] + lt * geo[k, 5])
     sweeps = 0
     for it in range(max_iter):
@@ -490,8 +524,7 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, maste
             tx = geo[k, 4]
             ty = geo[k, 5]
             # effective inverse masses along x and y of the relative motion slave - (N0 a + N1 b)
-            wx = minv_c[sn] + n0 * n0 * minv_c[a] + n1 * n1 * minv_c[b]
-            wy = minv_c[sn + npd] + n0 * n0 * minv_c[a + npd] + n1 * n1 * minv_c[b + npd]
+            wx, wxy, wy = _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1)
             # normal: gap in the current (predicted + corrected) configuration
             if pair_par[p, 6] == MASTER_EDGE:
                 gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
@@ -502,23 +535,25 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, maste
                 g = rigid_geometry(int(pair_par[p, 6]), pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
                                    pair_par[p, 10], 0.0, 0.0, X[sn], X[sn + npd], X[sn] + u[sn],
                                    X[sn + npd] + u[sn + npd])[0]
-            wn = dt2 * (nx * nx * wx + ny * ny * wy)
+            wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
             ln = lam[k, 0]
             ln_new = _normal_update(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], law_tab[p], s_area[k], g,
                                     ln, wn)
             dn = ln_new - ln
             # tangential: relative tangential increment over the step (the master's surface velocity removed),
             # including the normal correction
-            rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx
-            ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy
+            rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx + dt * dn * ny * wxy
+            ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy + dt * dn * nx * wxy
             st = dt * (rx * tx + ry * ty - geo[k, 8])
-            wt = dt2 * (tx * tx * wx + ty * ty * wy)
+            wt = dt2 * (tx * tx * wx + ty * ty * wy + 2.0 * tx * ty * wxy)
             lt = lam[k, 1]
             lt_new, state = _tangential_update(lt, st, wt, ln_new, mu[k], pair_par[p], dt)
             if ln_new == 0.0:
                 state = 0
             dtn = lt_new - lt
-            _apply_contact_force(u, v, npd, dt, minv_c, sn, a, b, n0, n1, dn * nx + dtn * tx, dn * ny + dtn * ty)
+            if dn != 0.0 or dtn != 0.0:  # an open node far from its master (most of them) moves nothing
+                _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, dn * nx + dtn * tx,
+                                     dn * ny + dtn * ty)
             lam[k, 0] = ln_new
             lam[k, 1] = lt_new
             cstate[k] = state
@@ -530,6 +565,174 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, slave_node, slave_pair, maste
         if change <= tol:
             break
     return sweeps
+
+
+@njit(cache=True)
+def friction_now(mu_tab, mu_rate, t, mu_now):
+    """Kinetic coefficient of every slave at time ``t`` [s]: the table ``mu_tab`` (rows at ``mu_rate`` [Hz], one
+    row: constant) interpolated linearly, clipped at 0."""
+    n_mu = mu_tab.shape[0]
+    ns = mu_now.shape[0]
+    if n_mu == 1:
+        for k in range(ns):
+            mu_now[k] = mu_tab[0, k]
+    else:
+        x = t * mu_rate
+        i0 = min(int(x), n_mu - 2)
+        fr = x - i0
+        for k in range(ns):
+            mu_now[k] = max(0.0, (1.0 - fr) * mu_tab[i0, k] + fr * mu_tab[i0 + 1, k])
+
+
+@njit(cache=True)
+def contact_step(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
+                 pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_tab, mu_rate, mu_now, max_iter, tol, acc):
+    """The friction coefficients at ``t_new`` (:func:`friction_now`), the contact correction
+    (:func:`contact_solve`) and its Gauss-Seidel statistics in ``acc``."""
+    friction_now(mu_tab, mu_rate, t_new, mu_now)
+    sweeps = contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                           pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_now, max_iter, tol)
+    acc[GS_SWEEPS] += sweeps
+    acc[GS_MAX] = max(acc[GS_MAX], sweeps)
+    if sweeps >= max_iter:
+        acc[GS_CAPPED] += 1.0
+
+
+@njit(cache=True)
+def contact_work(v, npd, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par, geo, lam, cstate,
+                 cnode_slot, vold_c, rec_contact_r):
+    """Work / dt of the normal and tangential contact forces and of the rigid surfaces' drive over a step, with
+    the mid-step velocities of the contact nodes (``vold_c[:, :2]`` before the step, ``v`` after); adds each
+    pair's forces and state counts to ``rec_contact_r``. Returns ``(wcn, wct, wdr)`` [W]."""
+    wcn = 0.0
+    wct = 0.0
+    wdr = 0.0
+    for k in range(slave_node.shape[0]):
+        p = slave_pair[k]
+        if cstate[k] == 0:
+            rec_contact_r[p, 4] += 1.0
+            continue
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
+        n0 = geo[k, 0]
+        n1 = geo[k, 1]
+        qs = cnode_slot[sn]
+        qa = cnode_slot[a]
+        qb = cnode_slot[b]
+        rx = 0.5 * ((vold_c[qs, 0] + v[sn]) - n0 * (vold_c[qa, 0] + v[a]) - n1 * (vold_c[qb, 0] + v[b]))
+        ry = 0.5 * ((vold_c[qs, 1] + v[sn + npd]) - n0 * (vold_c[qa, 1] + v[a + npd])
+                    - n1 * (vold_c[qb, 1] + v[b + npd]))
+        wcn += lam[k, 0] * (rx * geo[k, 2] + ry * geo[k, 3])
+        # a rigid master's surface moves at geo[k, 8] along t: the friction dissipates on the
+        # relative slip and the drive does the rest of the work on the slave
+        wct += lam[k, 1] * (rx * geo[k, 4] + ry * geo[k, 5] - geo[k, 8])
+        wdr += lam[k, 1] * geo[k, 8]
+        rec_contact_r[p, 0] += lam[k, 0]
+        rec_contact_r[p, 1] += lam[k, 1]
+        rec_contact_r[p, 1 + cstate[k]] += 1.0
+    return wcn, wct, wdr
+
+
+@njit(cache=True)
+def finish_contact_record(slave_pair, pair_par, law_tab, s_area, geo, cstate, n_sub, rec_contact_r):
+    """Turn an interval's contact sums into averages and fractions; returns the energy stored in the compliant
+    normal laws [J]."""
+    epen = 0.0
+    for k in range(slave_pair.shape[0]):
+        p = slave_pair[k]
+        if pair_par[p, 0] != LAW_RIGID and cstate[k] != 0:
+            epen += s_area[k] * normal_energy(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], geo[k, 7],
+                                              law_tab[p])
+    for p in range(rec_contact_r.shape[0]):
+        cnt = rec_contact_r[p, 2] + rec_contact_r[p, 3] + rec_contact_r[p, 4]
+        rec_contact_r[p, 0] /= n_sub
+        rec_contact_r[p, 1] /= n_sub
+        if cnt > 0.0:
+            for c in range(2, 5):
+                rec_contact_r[p, c] /= cnt
+    return epen
+
+
+@njit(cache=True)
+def guard_status(ke, ue, acc, runaway_factor):
+    """``OK``, ``NAN`` (non-finite energy or work) or ``RUNAWAY``: the stiffness-damping loss inferred as
+    ``W_int - U`` is >= 0 for a stable step up to the shadow-energy difference of central differences,
+    O(omega dt / 2) times the energy, so below ``-runaway_factor (KE + U)`` the run is unstable."""
+    energy = ke + ue
+    if not (math.isfinite(energy) and math.isfinite(acc[W_INT]) and math.isfinite(acc[W_EXT])):
+        return NAN
+    if acc[W_INT] - ue < -runaway_factor * energy - 1e-300:
+        return RUNAWAY
+    return OK
+
+
+@njit(cache=True)
+def start_record(react_acc, rec_contact_r):
+    """Zero the interval sums of the transducer and of the contact pairs."""
+    react_acc[0] = 0.0
+    react_acc[1] = 0.0
+    for p in range(rec_contact_r.shape[0]):
+        for c in range(5):
+            rec_contact_r[p, c] = 0.0
+
+
+@njit(cache=True)
+def group_velocities(grp_par, grp_v, t, dt):
+    """Velocity of every motion group over the previous step and over ``[t, t + dt]`` into ``grp_v[:, 0:2]``."""
+    for g in range(grp_par.shape[0]):
+        kind = int(grp_par[g, 0])
+        grp_v[g, 0] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t - dt, dt)
+        grp_v[g, 1] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t, dt)
+
+
+@njit(cache=True)
+def add_step_work(acc, dt, wint, dal, wext, wld, wcn, wct, wdr):
+    """Accumulate one step's works (rates [W] times ``dt``) in ``acc``."""
+    acc[W_LOAD] += dt * wld
+    acc[W_INT] += dt * wint
+    acc[D_ALPHA] += dt * dal
+    acc[W_EXT] += dt * wext
+    acc[W_CN] += dt * wcn
+    acc[W_CT] += dt * wct
+    acc[W_DRIVE] += dt * wdr
+
+
+@njit(cache=True)
+def finish_record(rec_r, rec_sens_r, rec_contact_r, acc, react_acc, ke, ue, u, v, npd, sens_node, sens_dir,
+                  slave_pair, pair_par, law_tab, s_area, geo, cstate, n_sub, runaway_factor, diag, step_end, wrap):
+    """Write the interval-mean transducer forces, the energies ``ke``, ``ue`` [J] and the accumulated works, the
+    contact averages and the sensors' velocity and displacement of an output row; check the guards. Returns the
+    status; on failure ``diag = (step_end, index of the largest speed modulo wrap)``."""
+    rec_r[R_FT] = react_acc[0] / n_sub
+    rec_r[R_FN] = react_acc[1] / n_sub
+    rec_r[R_KE] = ke
+    rec_r[R_U] = ue
+    rec_r[R_WINT] = acc[W_INT]
+    rec_r[R_DA] = acc[D_ALPHA]
+    rec_r[R_WEXT] = acc[W_EXT]
+    rec_r[R_WCN] = acc[W_CN]
+    rec_r[R_WCT] = acc[W_CT]
+    rec_r[R_WLOAD] = acc[W_LOAD]
+    rec_r[R_WDRIVE] = acc[W_DRIVE]
+    rec_r[R_EPEN] = finish_contact_record(slave_pair, pair_par, law_tab, s_area, geo, cstate, n_sub, rec_contact_r)
+    for s in range(sens_node.shape[0]):
+        nd = sens_node[s]
+        rec_sens_r[s, 0] = v[nd] * sens_dir[s, 0] + v[nd + npd] * sens_dir[s, 1]
+        rec_sens_r[s, 1] = u[nd] * sens_dir[s, 0] + u[nd + npd] * sens_dir[s, 1]
+    status = guard_status(ke, ue, acc, runaway_factor)
+    if status != OK:
+        worst = 0
+        vmax = -1.0
+        for d in range(v.shape[0]):
+            av = abs(v[d])
+            if not math.isfinite(av):
+                worst = d
+                break
+            if av > vmax:
+                vmax = av
+                worst = d
+        diag[0] = step_end
+        diag[1] = worst % wrap
+    return status
 
 
 @njit(cache=True, fastmath={"contract", "reassoc"})
@@ -596,15 +799,10 @@ def run_steps(
     """
     n = u.shape[0]
     n_out = nsteps // n_sub
-    n_pairs = master_ptr.shape[0] - 1
     ns = slave_node.shape[0]
-    n_mu = mu_tab.shape[0]
+    no_wmat = np.zeros((0, 0))  # lumped mass: diagonal contact correction
     for r in range(n_out):
-        react_acc[0] = 0.0
-        react_acc[1] = 0.0
-        for p in range(n_pairs):
-            for c in range(5):
-                rec_contact[r, p, c] = 0.0
+        start_record(react_acc, rec_contact[r])
         for sub in range(n_sub):
             step = step0 + r * n_sub + sub
             t = step * dt
@@ -629,10 +827,7 @@ def run_steps(
             wext = 0.0
             rt = 0.0
             rn = 0.0
-            for g in range(grp_par.shape[0]):
-                kind = int(grp_par[g, 0])
-                grp_v[g, 0] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t - dt, dt)
-                grp_v[g, 1] = constrained_velocity(kind, grp_par[g, 1], grp_par[g, 2], grp_par[g, 3], t, dt)
+            group_velocities(grp_par, grp_v, t, dt)
             for c in range(con_dof.shape[0]):
                 d = con_dof[c]
                 vwrong = v[d]
@@ -659,26 +854,13 @@ def run_steps(
             wct = 0.0
             wdr = 0.0
             if ns > 0:
-                if n_mu == 1:
-                    for k in range(ns):
-                        mu_now[k] = mu_tab[0, k]
-                else:
-                    x = (t + dt) * mu_rate
-                    i0 = min(int(x), n_mu - 2)
-                    fr = x - i0
-                    for k in range(ns):
-                        mu_now[k] = max(0.0, (1.0 - fr) * mu_tab[i0, k] + fr * mu_tab[i0 + 1, k])
                 for q in range(cnodes.shape[0]):
                     nd = cnodes[q]
                     vold_c[q, 2] = v[nd]
                     vold_c[q, 3] = v[nd + npd]
-                sweeps = contact_solve(X, u, v, npd, dt, t + dt, minv_c, slave_node, slave_pair, master_ptr,
-                                       master_nodes, pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate,
-                                       mu_now, gs_max_iter, gs_tol)
-                acc[GS_SWEEPS] += sweeps
-                acc[GS_MAX] = max(acc[GS_MAX], sweeps)
-                if sweeps >= gs_max_iter:
-                    acc[GS_CAPPED] += 1.0
+                contact_step(X, u, v, npd, dt, t + dt, minv_c, no_wmat, slave_node, slave_pair, master_ptr,
+                             master_nodes, pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_tab,
+                             mu_rate, mu_now, gs_max_iter, gs_tol, acc)
                 # the contact correction changed the mid-step velocity of the contact nodes: complete the
                 # internal-force and alpha-damping work with it (f and alpha m v_old times the velocity change)
                 for q in range(cnodes.shape[0]):
@@ -687,28 +869,8 @@ def run_steps(
                     dvy = v[nd + npd] - vold_c[q, 3]
                     wint += 0.5 * (f[nd] * dvx + f[nd + npd] * dvy)
                     dal += 0.5 * alpha * (mass[nd] * vold_c[q, 0] * dvx + mass[nd + npd] * vold_c[q, 1] * dvy)
-                for k in range(ns):
-                    p = slave_pair[k]
-                    if cstate[k] == 0:
-                        rec_contact[r, p, 4] += 1.0
-                        continue
-                    sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
-                    n0 = geo[k, 0]
-                    n1 = geo[k, 1]
-                    qs = cnode_slot[sn]
-                    qa = cnode_slot[a]
-                    qb = cnode_slot[b]
-                    rx = 0.5 * ((vold_c[qs, 0] + v[sn]) - n0 * (vold_c[qa, 0] + v[a]) - n1 * (vold_c[qb, 0] + v[b]))
-                    ry = 0.5 * ((vold_c[qs, 1] + v[sn + npd]) - n0 * (vold_c[qa, 1] + v[a + npd])
-                                - n1 * (vold_c[qb, 1] + v[b + npd]))
-                    wcn += lam[k, 0] * (rx * geo[k, 2] + ry * geo[k, 3])
-                    # a rigid master's surface moves at geo[k, 8] along t: the friction dissipates on the
-                    # relative slip and the drive does the rest of the work on the slave
-                    wct += lam[k, 1] * (rx * geo[k, 4] + ry * geo[k, 5] - geo[k, 8])
-                    wdr += lam[k, 1] * geo[k, 8]
-                    rec_contact[r, p, 0] += lam[k, 0]
-                    rec_contact[r, p, 1] += lam[k, 1]
-                    rec_contact[r, p, 1 + cstate[k]] += 1.0
+                wcn, wct, wdr = contact_work(v, npd, slave_node, slave_pair, master_ptr, master_nodes, seg,
+                                             pair_par, geo, lam, cstate, cnode_slot, vold_c, rec_contact[r])
                 # w = u + beta v (or u + beta vf) where the contact correction moved nodes
                 for q in range(cnodes.shape[0]):
                     d = cnodes[q]
@@ -725,17 +887,9 @@ def run_steps(
             for q in range(ld_dof.shape[0]):
                 wld += ld_scale[ld_grp[q]] * ld_force[q] * 0.5 * (ld_vold[q] + v[ld_dof[q]])
             wint += wld
-            acc[W_LOAD] += dt * wld
-            acc[W_INT] += dt * wint
-            acc[D_ALPHA] += dt * dal
-            acc[W_EXT] += dt * wext
-            acc[W_CN] += dt * wcn
-            acc[W_CT] += dt * wct
-            acc[W_DRIVE] += dt * wdr
+            add_step_work(acc, dt, wint, dal, wext, wld, wcn, wct, wdr)
         # ---- end of an output interval: record
         step_end = step0 + (r + 1) * n_sub
-        rec[r, R_FT] = react_acc[0] / n_sub
-        rec[r, R_FN] = react_acc[1] / n_sub
         ke = 0.0
         for d in range(n):
             ke += 0.5 * mass[d] * v[d] * v[d]
@@ -744,54 +898,9 @@ def run_steps(
         ue = 0.0
         for d in range(n):
             ue += 0.5 * u[d] * scratch[d]
-        rec[r, R_KE] = ke
-        rec[r, R_U] = ue
-        rec[r, R_WINT] = acc[W_INT]
-        rec[r, R_DA] = acc[D_ALPHA]
-        rec[r, R_WEXT] = acc[W_EXT]
-        rec[r, R_WCN] = acc[W_CN]
-        rec[r, R_WCT] = acc[W_CT]
-        rec[r, R_WLOAD] = acc[W_LOAD]
-        rec[r, R_WDRIVE] = acc[W_DRIVE]
-        epen = 0.0
-        for k in range(ns):
-            p = slave_pair[k]
-            if pair_par[p, 0] != LAW_RIGID and cstate[k] != 0:
-                epen += s_area[k] * normal_energy(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], geo[k, 7],
-                                                  law_tab[p])
-        rec[r, R_EPEN] = epen
-        for s in range(sens_node.shape[0]):
-            nd = sens_node[s]
-            rec_sens[r, s, 0] = v[nd] * sens_dir[s, 0] + v[nd + npd] * sens_dir[s, 1]
-            rec_sens[r, s, 1] = u[nd] * sens_dir[s, 0] + u[nd + npd] * sens_dir[s, 1]
-        for p in range(n_pairs):
-            cnt = rec_contact[r, p, 2] + rec_contact[r, p, 3] + rec_contact[r, p, 4]
-            rec_contact[r, p, 0] /= n_sub
-            rec_contact[r, p, 1] /= n_sub
-            if cnt > 0.0:
-                for c in range(2, 5):
-                    rec_contact[r, p, c] /= cnt
-        # ---- guards
-        energy = ke + ue
-        status = OK
-        if not (math.isfinite(energy) and math.isfinite(acc[W_INT]) and math.isfinite(acc[W_EXT])):
-            status = NAN
-        elif acc[W_INT] - ue < -runaway_factor * energy - 1e-300:
-            # the stiffness-damping loss inferred as W_int - U is >= 0 for a stable step up to the
-            # shadow-energy difference of central differences, O(omega dt / 2) times the energy
-            status = RUNAWAY
+        status = finish_record(rec[r], rec_sens[r], rec_contact[r], acc, react_acc, ke, ue, u, v, npd, sens_node,
+                               sens_dir, slave_pair, pair_par, law_tab, s_area, geo, cstate, n_sub, runaway_factor,
+                               diag, step_end, npd)
         if status != OK:
-            worst = 0
-            vmax = -1.0
-            for d in range(n):
-                av = abs(v[d])
-                if not math.isfinite(av):
-                    worst = d
-                    break
-                if av > vmax:
-                    vmax = av
-                    worst = d
-            diag[0] = step_end
-            diag[1] = worst % npd
             return status, r + 1
     return OK, n_out

@@ -59,20 +59,29 @@ class PreparedRun:
     schedule: object
     preload: object
     wrap: dict
+    reduced: object = None
 
     def run(self, *, progress=None):
         """Integrate and wrap the RunDataset (see :func:`simulate`)."""
         from fivid.solver.integrate import integrate
         from fivid.solver.output import run_dataset
 
-        raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
-        return run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
+        if self.reduced is not None:
+            from fivid.solver.reduced import integrate_reduced
+
+            raw = integrate_reduced(self.model, self.reduced, self.friction, self.settings, progress=progress)
+        else:
+            raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
+        ds = run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
+        if self.reduced is not None:
+            ds.attrs.update(self.reduced.attrs())
+        return ds
 
 
 def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None,
              duration, sample_rate, seed=0, progress=None, time_step=None, safety=0.9, settle_time=1e-3,
              preload_time=None, base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100,
-             gs_tolerance=1e-10, record_state=False):
+             gs_tolerance=1e-10, record_state=False, reduced=None):
     """Simulate the rig: preload, settle, base-velocity ramp, steady sliding; return a RunDataset.
 
     Parameters
@@ -116,6 +125,10 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         fraction of the shortest master segment.
     record_state : bool
         Also return the final displacement and velocity (global dofs) in ``attrs`` -- for tests.
+    reduced : None, True, int or float
+        Run a Craig-Bampton reduced system (:mod:`fivid.solver.reduced`): ``True`` keeps the fixed-interface modes
+        up to 3 x ``sample_rate / 2``, an int that many modes. The run records the truncation (``reduced_*``
+        attrs: modes, cut-off, boundary size, first truncated frequency, static-correction residual).
 
     Returns
     -------
@@ -134,14 +147,15 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         model, law=law, mu=mu, sliding_velocity=sliding_velocity, normal_load=normal_load, roughness_ra=roughness_ra,
         duration=duration, sample_rate=sample_rate, seed=seed, time_step=time_step, safety=safety,
         settle_time=settle_time, preload_time=preload_time, base_ramp_time=base_ramp_time, oversample=oversample,
-        run_id=run_id, gs_max_iterations=gs_max_iterations, gs_tolerance=gs_tolerance, record_state=record_state)
+        run_id=run_id, gs_max_iterations=gs_max_iterations, gs_tolerance=gs_tolerance, record_state=record_state,
+        reduced=reduced)
     return prepared.run(progress=progress)
 
 
 def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None, duration,
                 sample_rate, seed=0, time_step=None, safety=0.9, settle_time=1e-3, preload_time=None,
                 base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100, gs_tolerance=1e-10,
-                record_state=False) -> PreparedRun:
+                record_state=False, reduced=None) -> PreparedRun:
     """Validate the settings and build everything :func:`simulate` integrates (same parameters)."""
     from fivid.fe.model import Model, load_model
     from fivid.solver.stencil import block_stencils
@@ -170,7 +184,33 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
 
-    stab = stable_step(model)
+    from fivid.fe.static import slave_friction
+
+    mu_slave = slave_friction(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
+    schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
+                                         settle_time, mu_slave)
+    total = schedule.transient_end + duration
+    n_out = max(1, math.ceil(total * sample_rate - 1e-9))
+    n_int = n_out * oversample
+    st = block_stencils(model)
+    from fivid.solver.setup import kernel_arrays
+
+    ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1])
+    base = model.motion("base")
+    rs = None
+    if reduced is not None and reduced is not False:
+        from fivid.solver.reduced import reduced_system
+        from fivid.solver.timestep import stable_step_of
+
+        n_modes = None if reduced is True else int(reduced)
+        if n_modes is not None and n_modes < 1:
+            raise ConfigError(f"reduced must be True or a number of modes >= 1, got {reduced!r}")
+        v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
+        rs = reduced_system(model, ka, sliding_distance=v_max * total, band_top=sample_rate / 2.0, n_modes=n_modes)
+        stab = stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
+                              float(model.damping_cutoff))
+    else:
+        stab = stable_step(model)
     dt_crit = stab.critical_time_step
     if time_step is not None:
         time_step = _positive("time_step", time_step)
@@ -188,21 +228,8 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
     dt = t_int / n_sub
 
-    from fivid.fe.static import slave_friction
-
-    mu_slave = slave_friction(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
-    schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
-                                         settle_time, mu_slave)
-    total = schedule.transient_end + duration
-    n_out = max(1, math.ceil(total * sample_rate - 1e-9))
-    n_int = n_out * oversample
-    st = block_stencils(model)
-    from fivid.solver.setup import kernel_arrays
-
-    ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1])
     from fivid.solver.friction_input import friction_table
 
-    base = model.motion("base")
     v_signed = (sliding_velocity if sliding_velocity is not None else abs(base.amplitude) if base else 0.0)
     if base is not None and base.amplitude < 0:
         v_signed = -v_signed
@@ -215,7 +242,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
                            float(gs_tolerance))
     return PreparedRun(model, st, ka, fric, settings, schedule, preload, dict(
         law=law, mu=mu, seed=seed, sliding_velocity=abs(v_signed), normal_load=normal_load,
-        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state))
+        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state), rs)
 
 
 def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["RawRecords", "integrate", "velocity_filter_gain", "RUNAWAY_FACTOR"]
+__all__ = ["RawRecords", "integrate", "velocity_filter_gain", "chunked", "shortest_master_segment", "RUNAWAY_FACTOR"]
 
 #: guard: the stiffness-damping loss inferred as W_int - U may not fall below -RUNAWAY_FACTOR x (KE + U)
 RUNAWAY_FACTOR = 2.0
@@ -45,8 +45,6 @@ def velocity_filter_gain(cutoff: float, dt: float) -> float:
 
 def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     """Run the time loop of ``settings.n_intervals`` output intervals; :class:`SimulationDiverged` on failure."""
-    from tqdm.auto import tqdm
-
     from fivid.solver import _kernels as K
     from fivid.solver.driver import SimulationDiverged
 
@@ -84,43 +82,61 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     chunk = max(1, int(3e7 // max(1, 2 * st.npd * n_sub)))
     seg = ka.seg.copy()
     # Gauss-Seidel tolerance: relative to the shortest master segment [m]
-    seg_len = np.inf
-    for p in range(ka.master_ptr.size - 1):
-        nodes = ka.master_nodes[ka.master_ptr[p]:ka.master_ptr[p + 1]]
-        if nodes.size < 2:  # a rigid master: the slave edge's spacing
-            nodes = ka.slave_node[ka.slave_pair == p]
-            if nodes.size < 2:
-                continue
-        seg_len = min(seg_len, float(np.hypot(np.diff(ka.X[nodes]), np.diff(ka.X[nodes + st.npd])).min()))
-    seg_len = seg_len if np.isfinite(seg_len) else 1.0
-    gs_tol = settings.gs_tolerance * seg_len
+    gs_tol = settings.gs_tolerance * shortest_master_segment(ka.X, st.npd, ka.master_ptr, ka.master_nodes,
+                                                             ka.slave_node, ka.slave_pair)
     mu_tab = np.ascontiguousarray(fric.mu)
-    # the bar counts output samples (n_int records at the oversampled rate are decimated to n_int / oversample)
-    with tqdm(total=n_int // settings.oversample, disable=None if progress is None else not progress, unit="sample",
+
+    def advance(r0, nr):
+        status, _ = K.run_steps(
+            r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, a_filt, n_sub, st.npd,
+            *st.kernel_args, ka.mass, ka.minv,
+            ka.spr_dof, ka.spr_kc,
+            ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
+            ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
+            ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.pair_par,
+            ka.law_tab, ka.s_area, ka.minv_c,
+            seg, geo, lam, cstate,
+            settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
+            ka.cnode_slot, ka.cnodes,
+            ka.sens_node, ka.sens_dir,
+            u, v, w, vf, f, scratch, acc, react_acc,
+            rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], RUNAWAY_FACTOR, diag,
+        )
+        if status != K.OK:
+            raise SimulationDiverged(_diagnosis(model, st, status, diag, dt, settings, u, v))
+
+    chunked(advance, n_int, chunk, progress, settings.oversample)
+    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, acc, n_int * n_sub)
+
+
+def chunked(advance, n_int, chunk, progress, oversample: int = 1):
+    """Call ``advance(r0, nr)`` over ``n_int`` output intervals in chunks of ``chunk``, with a progress bar that
+    counts output samples (the ``n_int`` records at the oversampled rate are decimated by ``oversample``)."""
+    from tqdm.auto import tqdm
+
+    q = max(1, int(oversample))
+    with tqdm(total=n_int // q, disable=None if progress is None else not progress, unit="sample",
               desc="fivid simulate", leave=False) as bar:
         r0 = 0
         while r0 < n_int:
             nr = min(chunk, n_int - r0)
-            status, done = K.run_steps(
-                r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, a_filt, n_sub, st.npd,
-                *st.kernel_args, ka.mass, ka.minv,
-                ka.spr_dof, ka.spr_kc,
-                ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
-                ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
-                ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.pair_par,
-                ka.law_tab, ka.s_area, ka.minv_c,
-                seg, geo, lam, cstate,
-                settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
-                ka.cnode_slot, ka.cnodes,
-                ka.sens_node, ka.sens_dir,
-                u, v, w, vf, f, scratch, acc, react_acc,
-                rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], RUNAWAY_FACTOR, diag,
-            )
-            if status != K.OK:
-                raise SimulationDiverged(_diagnosis(model, st, status, diag, dt, settings, u, v))
-            bar.update((r0 + nr) // settings.oversample - r0 // settings.oversample)
+            advance(r0, nr)
+            bar.update((r0 + nr) // q - r0 // q)
             r0 += nr
-    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, acc, n_int * n_sub)
+
+
+def shortest_master_segment(X, npd, master_ptr, master_nodes, slave_node, slave_pair) -> float:
+    """Shortest master segment [m] over the contact pairs (a rigid master: its slave edge's node spacing); 1 if
+    there is none. Nodes by x-index in the layout ``X`` (x part, then y part at ``+ npd``)."""
+    best = np.inf
+    for p in range(master_ptr.size - 1):
+        nodes = master_nodes[master_ptr[p]:master_ptr[p + 1]]
+        if nodes.size < 2:  # a rigid master: the slave edge's spacing
+            nodes = slave_node[slave_pair == p]
+            if nodes.size < 2:
+                continue
+        best = min(best, float(np.hypot(np.diff(X[nodes]), np.diff(X[nodes + npd])).min()))
+    return best if np.isfinite(best) else 1.0
 
 
 def _diagnosis(model, st, status, diag, dt, settings, u, v) -> str:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["time_step_study"]
+__all__ = ["time_step_study", "steady_psds", "band_distance"]
 
 
 def time_step_study(model, *, time_step=None, variable="acceleration", band=None, nperseg=1024, **simulate_kwargs):
@@ -34,8 +34,6 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
         Only the steady-sliding part (time >= ``transient_end``) is analysed.
     """
     import xarray as xr
-    from scipy.signal import welch
-
     from fivid.fe.model import Model, load_model
     from fivid.solver.driver import simulate
     from fivid.solver.timestep import stable_step
@@ -51,19 +49,10 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     n_sub = max(1, math.ceil(t_int / time_step * (1.0 - 1e-12)))
     coarse = t_int / n_sub
     runs = [simulate(model, time_step=dt, **simulate_kwargs) for dt in (coarse, t_int / (2 * n_sub))]
-    psds = []
-    for ds in runs:
-        da = ds[variable]
-        if "sensor" in da.dims:
-            da = da.isel(sensor=0)
-        x = np.asarray(da.where(ds.time >= ds.attrs["transient_end"], drop=True).values)
-        fs = float(ds.attrs["sample_rate"])
-        n = min(nperseg, x.size)
-        f, p = welch(x, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
-        psds.append(p)
+    f, psds, n = steady_psds(runs, variable=variable, nperseg=nperseg)
+    fs = float(runs[0].attrs["sample_rate"])
     lo, hi = band if band is not None else (0.0, 0.8 * fs / 2)
-    sel = (f >= lo) & (f <= hi) & (psds[0] > 0) & (psds[1] > 0)
-    ratio_db = 10.0 * np.log10(psds[1][sel] / psds[0][sel])
+    lsd, level, sel = band_distance(f, psds[0], psds[1], (lo, hi))
     units = runs[0][variable].attrs.get("units", "")
     out = xr.Dataset(
         {"psd_coarse": (("frequency",), psds[0], {"units": f"({units})2 Hz-1"}),
@@ -74,9 +63,38 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
         "variable": variable,
         "time_step_coarse": runs[0].attrs["time_step"],
         "time_step_fine": runs[1].attrs["time_step"],
-        "lsd_db": float(np.sqrt(np.mean(ratio_db ** 2))) if ratio_db.size else float("nan"),
-        "level_diff_db": float(10.0 * np.log10(psds[1][sel].sum() / psds[0][sel].sum())) if sel.any() else float("nan"),
+        "lsd_db": lsd,
+        "level_diff_db": level,
         "band": [float(lo), float(hi)],
         "welch": f"hann, nperseg {n}, noverlap {n // 2}, detrend constant, density",
     })
     return out
+
+
+def steady_psds(runs, *, variable="acceleration", nperseg=1024):
+    """Welch PSDs of ``variable`` over the steady-sliding part of each run (Hann, ``nperseg`` capped at the record,
+    50 % overlap, constant detrend, density; first sensor): ``(frequency [Hz], [psd, ...], nperseg)``."""
+    from scipy.signal import welch
+
+    psds = []
+    for ds in runs:
+        da = ds[variable]
+        if "sensor" in da.dims:
+            da = da.isel(sensor=0)
+        x = np.asarray(da.where(ds.time >= ds.attrs["transient_end"], drop=True).values)
+        n = min(nperseg, x.size)
+        f, p = welch(x, fs=float(ds.attrs["sample_rate"]), window="hann", nperseg=n, noverlap=n // 2,
+                     detrend="constant", scaling="density")
+        psds.append(p)
+    return f, psds, n
+
+
+def band_distance(f, p_ref, p, band):
+    """``(lsd_db, level_diff_db, selection)`` of ``p`` against ``p_ref`` over ``band`` [Hz]: the RMS of
+    ``10 log10(p / p_ref)`` and ``10 log10`` of the ratio of band powers [dB] (NaN on an empty band)."""
+    lo, hi = band
+    sel = (f >= lo) & (f <= hi) & (p_ref > 0) & (p > 0)
+    ratio_db = 10.0 * np.log10(p[sel] / p_ref[sel])
+    lsd = float(np.sqrt(np.mean(ratio_db ** 2))) if ratio_db.size else float("nan")
+    level = float(10.0 * np.log10(p[sel].sum() / p_ref[sel].sum())) if sel.any() else float("nan")
+    return lsd, level, sel

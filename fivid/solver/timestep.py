@@ -18,6 +18,7 @@ filtered velocity) must have spectral radius <= 1 for every ``omega`` up to ``om
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +26,8 @@ import numpy as np
 from fivid.errors import ConfigError
 from fivid.fe.damping import scheme_name
 
-__all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step", "amplification_matrix"]
+__all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step", "stable_step_of",
+           "amplification_matrix"]
 
 
 @dataclass(frozen=True)
@@ -137,19 +139,28 @@ def _largest_stable_step(omega_max: float, alpha: float, beta: float, cutoff: fl
 def stable_step(model) -> StableStep:
     """The :class:`StableStep` of ``model`` (Rayleigh ``alpha``, ``beta`` and damping cut-off from the model)."""
     omega = max_angular_frequency(model)
+    step = stable_step_of(omega, float(model.rayleigh_alpha), float(model.rayleigh_beta), float(model.damping_cutoff))
+    dashpots = _dashpot_limit(model)
+    if dashpots < step.critical_time_step:
+        step = dataclasses.replace(step, critical_time_step=dashpots)
+    return step
+
+
+def stable_step_of(omega: float, alpha: float, beta: float, cutoff: float) -> StableStep:
+    """The :class:`StableStep` of a system whose highest angular frequency is ``omega`` [rad s-1] under the
+    damping scheme ``alpha`` [s-1], ``beta`` [s], ``cutoff`` [Hz] (no dashpots): the full model's, or a reduced
+    system's (:mod:`fivid.solver.reduced`)."""
     if omega <= 0.0:
         raise ConfigError("the model has no stiffness on its free dofs (omega_max = 0): nothing to integrate")
-    xi = 0.5 * model.rayleigh_beta * omega
+    xi = 0.5 * beta * omega
     undamped = 2.0 / omega
-    cutoff = float(model.damping_cutoff)
-    scheme = scheme_name(model.rayleigh_beta, cutoff)
+    scheme = scheme_name(beta, cutoff)
     if scheme == "band_limited":
-        dt = _largest_stable_step(omega, float(model.rayleigh_alpha), float(model.rayleigh_beta), cutoff)
+        dt = _largest_stable_step(omega, alpha, beta, cutoff)
     else:
         dt = undamped * (np.sqrt(1.0 + xi * xi) - xi)
-    dt = min(dt, _dashpot_limit(model))
-    if model.rayleigh_alpha > 0.0:
-        dt = min(dt, 2.0 / model.rayleigh_alpha)
+    if alpha > 0.0:
+        dt = min(dt, 2.0 / alpha)
     return StableStep(omega_max=omega, xi=float(xi), critical_time_step=float(dt), undamped_time_step=undamped,
                       damping_scheme=scheme)
 

@@ -42,6 +42,9 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the friction-law synthesis (default 0)")
     p.add_argument("--time-step", metavar="Q", type=quantity("s", positive=True),
                    help="solver step, e.g. '50 ns'; bare number in s (default 0.9 x critical; refused above critical)")
+    p.add_argument("--reduced", nargs="?", const=True, default=None, type=int, metavar="N",
+                   help="run a Craig-Bampton reduced system (physical contact and sensor nodes, fixed-interface "
+                   "modes up to 3 x sample-rate/2, or N modes); the truncation is recorded in the output")
     p.add_argument("--run-id", metavar="ID", help="run identifier recorded in the output")
     p.add_argument("-o", "--output", metavar="SIM.nc", required=True, help="output RunDataset (netCDF)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -92,6 +95,7 @@ def run(args) -> int:
         seed=args.seed,
         time_step=time_step,
         run_id=args.run_id,
+        reduced=args.reduced,
     )
     from fivid.schema import append_history
 
@@ -109,6 +113,9 @@ def run(args) -> int:
         "max_energy_balance_error_j": float(np.abs(ds.energy_balance_error).max()),
         "friction": ds.attrs["friction"],
     }
+    summary.update({k: ds.attrs[k] for k in ("reduced_size", "reduced_modes", "reduced_cutoff",
+                                             "reduced_first_truncated_frequency", "reduced_static_residual")
+                    if k in ds.attrs})
     if args.json:
         print(dumps_json(summary))
     else:
@@ -137,7 +144,8 @@ def _load_model(path):
 # option -> attribute of the parsed arguments, in the order of the help (for the history line)
 _OPTIONS = (("--law", "law"), ("--mu", "mu"), ("--velocity", "velocity"), ("--load", "load"),
             ("--roughness", "roughness"), ("--duration", "duration"), ("--sample-rate", "sample_rate"),
-            ("--seed", "seed"), ("--time-step", "time_step"), ("--run-id", "run_id"), ("-o", "output"))
+            ("--seed", "seed"), ("--time-step", "time_step"), ("--reduced", "reduced"), ("--run-id", "run_id"),
+            ("-o", "output"))
 
 
 def _command_line(args) -> str:
@@ -150,6 +158,8 @@ def _command_line(args) -> str:
     words = ["fivid", "simulate", str(args.model)]
     for option, dest in _OPTIONS:
         value = getattr(args, dest)
-        if value is not None:
+        if value is True:  # a flag with an optional value given bare (--reduced)
+            words.append(option)
+        elif value is not None:
             words += [option, str(getattr(value, "text", value))]  # a quantity as it was written
     return shlex.join(words + (["--overwrite"] if args.overwrite else []))
