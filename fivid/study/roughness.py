@@ -55,7 +55,7 @@ def _si(ctx, value, key, units="m") -> float:
     return _quantity(ctx, value, key, units)
 
 
-def rough_pair_config(base, lower, upper, *, sensor_every: int = 1):
+def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None):
     """A rough-pair model config: ``base`` (path or mapping of a rough_pair-style config) with the profiles.
 
     Parameters
@@ -69,6 +69,9 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1):
     sensor_every : int
         A velocity sensor (direction y) on every ``sensor_every``-th node of the lower body's back face
         (``bottom`` edge), both end nodes included when the division count allows; replaces the config's sensors.
+    normal_load : float, optional
+        Dead load [N] on the upper body: its ``top``-edge pressure loads are scaled to sum to it (pressure x
+        length x thickness). None: as configured.
 
     Returns
     -------
@@ -112,6 +115,17 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1):
     for c in data["contacts"]:
         if c["slave"]["body"] == up_name:
             c["slave"] = {**c["slave"], "x": [f"{float(uc[0, 0] + h / 2)!r} m", f"{float(uc[1, 0] - h / 2)!r} m"]}
+    if normal_load is not None:
+        weights = [ld for ld in data.get("loads") or [] if ld.get("body") == up_name and ld.get("edge") == "top"]
+        if not weights:
+            from fivid.errors import ConfigError
+
+            raise ConfigError(f"{origin}: normal_load needs a pressure load on the top edge of {up_name!r}",
+                              key="loads")
+        area = (uc[1, 0] - uc[0, 0]) * _si(ctx, up["thickness"], f"bodies.{up_name}.thickness")
+        total = sum(_si(ctx, ld["pressure"], "loads.pressure", "Pa") for ld in weights)
+        for ld in weights:
+            ld["pressure"] = f"{float(_si(ctx, ld['pressure'], 'loads.pressure', 'Pa') / total * normal_load / area)!r} Pa"
     k = max(1, int(sensor_every))
     y0 = lc[0, 1]
     data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"],
@@ -209,16 +223,23 @@ def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
 
 
 def identification_run(ds):
-    """The run as ``fivid identify`` reads it: adds the carriage ``velocity`` [m s-1] (the imposed base motion:
-    0 before ``base_start``, the smooth ramp ``r(s) = s - sin(2 pi s)/(2 pi)`` to ``transient_end``, then the
-    sliding velocity) where a simulation records no encoder."""
-    t = ds["time"].values
-    t0, t1 = float(ds.attrs["base_start"]), float(ds.attrs["transient_end"])
-    s = np.clip((t - t0) / max(t1 - t0, 1e-30), 0.0, 1.0)
-    v = float(ds.attrs["sliding_velocity"]) * (s - np.sin(2 * np.pi * s) / (2 * np.pi))
-    out = ds.copy()
+    """The run as ``fivid identify`` reads it: its steady part (``time >= transient_end``) with the carriage
+    ``velocity`` [m s-1], the imposed sliding velocity, which a simulation does not record as an encoder would.
+    A model without a force transducer (a dead-loaded slider) gets the interface's ``contact_tangential_force``
+    and ``contact_normal_force`` as ``friction_force`` and ``normal_force``.
+
+    ``mu(t) = friction_force / normal_force`` of this dataset is what identify turns into mu0 and the
+    perturbation's spectrum and amplitude (docs/roughness.md, "From a profile to a friction law").
+    """
+    out = ds.isel(time=_steady(ds))
+    if not np.any(out["normal_force"].values) and "contact_normal_force" in out:  # no transducer in the model
+        out["friction_force"] = out["contact_tangential_force"].copy()
+        out["normal_force"] = out["contact_normal_force"].copy()
+        out.attrs["force_note"] = "friction_force, normal_force: the interface's contact forces (no transducer)"
+    v = np.full(out.sizes["time"], float(ds.attrs["sliding_velocity"]))
     out["velocity"] = (("time",), v, {"units": "m s-1", "long_name": "sliding velocity (encoder)",
                                       "description": "imposed carriage velocity (the simulation's base motion)"})
+    out.attrs["history"] = str(ds.attrs.get("history", "")) + "\nidentification_run: steady part, carriage velocity"
     return out
 
 
@@ -253,14 +274,13 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
     ra = float(conditions.get("roughness_ra", 0.0))
     lower, upper = synthetic_rough_profiles(ra, length, correlation_length=spec["correlation_length"],
                                             step=spec["profile_step"], seeds=spec["seeds"])
-    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"])
+    load = float(conditions["normal_load"]) if "normal_load" in conditions else None
+    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
     model = load_model(cfg)
     n_slave = int(sum(c.slave_nodes.size for c in model.contacts))
     kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
-    if "normal_load" in conditions:
-        kw["normal_load"] = float(conditions["normal_load"])
     t0 = time.perf_counter()
-    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"], progress=False,
+    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"], progress=False, roughness_ra=ra,
                   settle_time=spec["settle_time"], gs_tolerance=spec["gs_tolerance"],
                   gs_max_iterations=spec["gs_max_iterations"], **kw)
     seconds = time.perf_counter() - t0
