@@ -76,8 +76,9 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     Returns
     -------
     (dict, dict)
-        The config mapping and its record; the upper body is lifted by ``max(z_lower - z_upper)`` at the contact nodes, so the
-        highest asperity pair touches with zero gap; ``rough_pair`` records the lift [m] and the profiles' attrs.
+        The config mapping, and a record: ``lift`` [m] (the upper body is lifted by ``max(z_lower - z_upper)``
+        over the contact's slave nodes, so the highest asperity pair touches with zero gap), the bodies' names,
+        ``back_face_sensors``, ``sensor_every`` and the base config's source.
     """
     from fivid.fe.config import read_config
 
@@ -125,14 +126,15 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
         area = (uc[1, 0] - uc[0, 0]) * _si(ctx, up["thickness"], f"bodies.{up_name}.thickness")
         total = sum(_si(ctx, ld["pressure"], "loads.pressure", "Pa") for ld in weights)
         for ld in weights:
-            ld["pressure"] = f"{float(_si(ctx, ld['pressure'], 'loads.pressure', 'Pa') / total * normal_load / area)!r} Pa"
+            p = _si(ctx, ld["pressure"], "loads.pressure", "Pa") / total * normal_load / area
+            ld["pressure"] = f"{float(p)!r} Pa"
     k = max(1, int(sensor_every))
     y0 = lc[0, 1]
-    data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"],
-                        "direction": "y"} for i in range(0, nx + 1, k)]
+    data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "direction": "y",
+                        "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"]} for i in range(0, nx + 1, k)]
     data["name"] = f"{data.get('name', 'rough_pair')} (profiles: {lower.attrs.get('source', 'given')})"
-    return data, {"lift": lift, "lower_body": lo_name, "upper_body": up_name, "back_face_sensors": len(data["sensors"]),
-                  "sensor_every": k, "base": origin}
+    return data, {"lift": lift, "lower_body": lo_name, "upper_body": up_name,
+                  "back_face_sensors": len(data["sensors"]), "sensor_every": k, "base": origin}
 
 
 def _steady(ds, start=None):
@@ -236,6 +238,7 @@ def identification_run(ds):
         out["friction_force"] = out["contact_tangential_force"].copy()
         out["normal_force"] = out["contact_normal_force"].copy()
         out.attrs["force_note"] = "friction_force, normal_force: the interface's contact forces (no transducer)"
+        out.attrs["normal_load"] = float(np.mean(out["normal_force"].values))
     v = np.full(out.sizes["time"], float(ds.attrs["sliding_velocity"]))
     out["velocity"] = (("time",), v, {"units": "m s-1", "long_name": "sliding velocity (encoder)",
                                       "description": "imposed carriage velocity (the simulation's base motion)"})
