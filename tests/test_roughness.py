@@ -136,3 +136,39 @@ def test_a_rough_run_goes_through_fivid_identify(tiny_base, tmp_path):
     law = load_law(law_path)
     mu = np.abs(run.friction_force.values / run.normal_force.values)
     assert law.mu0 == pytest.approx(np.mean(mu), rel=0.05)
+
+
+def test_roughness_noise_fits_recover_known_exponents():
+    """Synthetic points with V_RMS = c Ra^0.6 V^0.9 x lognormal scatter: n and m inside their 95 % intervals;
+    Lv against log10(Rz/Rsm) (Rz = 7 Ra, Rsm fixed) has slope 20 n dB per decade."""
+    from fivid.study.fits import roughness_noise_fits
+
+    rng = np.random.default_rng(1)
+    points = []
+    for ra in (1e-6, 3e-6, 10e-6, 26e-6):
+        for v in (0.01, 0.03, 0.1):
+            vrms = 1e-5 * (ra / 1e-6) ** 0.6 * (v / 0.01) ** 0.9 * np.exp(0.05 * rng.standard_normal())
+            points.append({"status": "done", "roughness_ra": ra, "sliding_velocity": v, "velocity_rms": vrms,
+                           "vibration_level": 20 * np.log10(vrms / 1e-9), "profile_Rz": 7 * ra,
+                           "profile_Rsm": 0.3e-3, "shock_rate": 100.0 * ra / 1e-6})
+    out = roughness_noise_fits(points)
+    for key, true in (("n", 0.6), ("m", 0.9)):
+        lo, hi = out[key]["ci"]
+        assert lo < true < hi and hi - lo < 0.2
+    lv = out["fits"]["vibration_level_vs_rz_rsm"]
+    assert lv["ci"][0] < 20 * 0.6 < lv["ci"][1]
+    assert out["fits"]["shock_rate"]["exponents"]["roughness_ra"]["value"] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_roughness_study_config(root):
+    """roughness_noise.yaml validates (default and --quick); a roughness task needs a transient."""
+    from fivid.errors import ConfigError
+    from fivid.study import load_study
+
+    study = load_study(root / "configs/studies/roughness_noise.yaml")
+    assert len(study.point_table()) == 9 and study.points["roughness"]["correlation_length"] == 0.5e-3
+    quick = load_study(root / "configs/studies/roughness_noise.yaml", quick=True)
+    assert len(quick.point_table()) == 4 and quick.points["transient"]["duration"] == 3e-3
+    with pytest.raises(ConfigError, match="points.roughness"):
+        load_study({"fivid-study": 1, "system": {"model": str(root / "configs/models/rough_pair_short.yaml")},
+                    "points": {"roughness": {}}})
