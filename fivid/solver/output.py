@@ -51,6 +51,7 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     sv = np.concatenate([raw.sens_v0[None, :], raw.sens_v[:, :, 0]], axis=0)
     sens_u = raw.sens_v[::q, :, 1][:n_out]
     acc = _decimate(np.diff(sv, axis=0) / t_int, q)
+    vel = _decimate(0.5 * (sv[1:] + sv[:-1]), q)  # interval mean (trapezoid), anti-aliased like acceleration
     rec = raw.rec
     ft = _decimate(rec[:, K.R_FT], q)
     fn = _decimate(rec[:, K.R_FN], q)
@@ -84,9 +85,11 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     if len(sensors) == 1:
         data["acceleration"] = (("time",), acc[:, 0])
         data["sensor_displacement"] = (("time",), sens_u[:, 0])
+        data["sensor_velocity"] = (("time",), vel[:, 0])
     elif sensors:
         data["acceleration"] = (("time", "sensor"), acc)
         data["sensor_displacement"] = (("time", "sensor"), sens_u)
+        data["sensor_velocity"] = (("time", "sensor"), vel)
         coords["sensor"] = np.array(sensors, dtype=object)
     else:
         data["acceleration"] = (("time",), np.zeros(n_out))
@@ -106,6 +109,10 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         ds["sensor_displacement"].attrs.update(
             units="m", long_name="displacement at the sensors along their direction (diagnostic)",
             description="value at the end of the first oversampled interval of each output period")
+        ds["sensor_velocity"].attrs.update(
+            units="m s-1", long_name="velocity at the sensors along their direction",
+            description="(v(t) + v(t + T)) / 2 of the velocities at the ends of each oversampled interval T, "
+                        "decimated like acceleration")
     ds["impact_dissipation"].attrs["description"] = ("minus the work of the normal contact forces, less the energy "
                                                      "stored in the compliant contact laws (contact_energy)")
     ds["drive_work"].attrs["description"] = "work of the moving rigid contact surfaces (belt, rotating cylinder)"

@@ -52,7 +52,7 @@ AXES = {
     "time_step": ("1", "time step as a fraction of the critical step"),
 }
 _TOP = {"fivid-study", "name", "description", "system", "sweep", "cea", "points", "quick"}
-_POINT_TASKS = {"modes", "transient", "psd"}
+_POINT_TASKS = {"modes", "transient", "psd", "roughness"}
 _LUMPED = {"hoffmann": {"mass": "kg", "k1": "N m-1", "k2": "N m-1", "k3": "N m-1", "damping": "N s m-1",
                         "preload": "N", "belt_velocity": "m s-1"}}
 
@@ -325,4 +325,41 @@ def _points(ctx, spec, lumped: bool, base: Path) -> dict:
                                                    f"({out['transient']['sample_rate'] / 2:g} Hz), got {lo:g}, {hi:g}")
             psd["band"] = (lo, hi)
         out["psd"] = psd
+    if "roughness" in spec:
+        out["roughness"] = _roughness_task(ctx, spec["roughness"] or {}, lumped, out)
+    return out
+
+
+def _roughness_task(ctx, spec, lumped: bool, points: dict) -> dict:
+    """``points.roughness`` (seed 003's rough pair, :mod:`fivid.study.roughness`) in SI."""
+    key = "points.roughness"
+    if lumped:
+        raise ctx.error(key, "the rough pair is an FE model: give system.model (e.g. ../models/rough_pair_short.yaml)")
+    if "transient" not in points:
+        raise ctx.error(key, "a rough-pair point is a transient: give points.transient (duration, sample_rate)")
+    r = _mapping(ctx, spec, key, {"correlation_length", "profile_step", "seeds", "sensor_every", "gs_tolerance",
+                                  "gs_max_iterations", "settle_time"})
+    out = {}
+    for name, units in (("correlation_length", "m"), ("profile_step", "m"), ("settle_time", "s")):
+        if name in r:
+            out[name] = _quantity(ctx, r[name], f"{key}.{name}", units)
+            if not out[name] > 0:
+                raise ctx.error(f"{key}.{name}", f"expected a positive quantity, got {r[name]!r}")
+    for name in ("sensor_every", "gs_max_iterations"):
+        if name in r:
+            v = r[name]
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ctx.error(f"{key}.{name}", f"expected a whole number >= 1, got {v!r}")
+            out[name] = v
+    if "gs_tolerance" in r:
+        v = r["gs_tolerance"]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
+            raise ctx.error(f"{key}.gs_tolerance", f"expected a number in (0, 1), got {v!r}")
+        out["gs_tolerance"] = float(v)
+    if "seeds" in r:
+        v = r["seeds"]
+        if (not isinstance(v, (list, tuple)) or len(v) != 2
+                or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in v)):
+            raise ctx.error(f"{key}.seeds", f"expected two whole numbers >= 0 (lower, upper profile), got {v!r}")
+        out["seeds"] = list(v)
     return out

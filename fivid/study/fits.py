@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["POWER_LAW_AXES", "power_law_fit"]
+__all__ = ["POWER_LAW_AXES", "power_law_fit", "roughness_noise_fits"]
 
 #: condition axes a power law can use (positive physical quantities)
 POWER_LAW_AXES = ("normal_load", "sliding_velocity", "roughness_ra")
@@ -43,3 +43,40 @@ def power_law_fit(points: list[dict], response: str = "rms") -> dict | None:
         "r2": float(res.rsquared),
         "n": int(res.nobs),
     }
+
+
+def roughness_noise_fits(points: list[dict]) -> dict:
+    """Seed 003's scaling of a roughness-noise study (summary points with ``vibration_level`` etc.).
+
+    * ``n``, ``m``: ``Lv = 20 n log10 Ra + 20 m log10 V + c``, i.e. the exponents of the power law fitted to the
+      back-face ``velocity_rms`` over ``roughness_ra`` and ``sliding_velocity`` (:func:`power_law_fit`): each
+      ``{"value", "ci": [lo, hi]}`` (95 %), null when that axis does not vary;
+    * ``fits.vibration_level_vs_rz_rsm``: ``Lv = a log10(Rz / Rsm) + b`` (OLS): ``slope`` [dB per decade], ``ci``,
+      ``r2``, ``n`` (Rz, Rsm of the generated lower profiles);
+    * ``fits.shock_rate``, ``fits.shock_impulse``, ``fits.dissipated_power``: power laws over Ra and V.
+    """
+    import statsmodels.api as sm
+
+    out, fits = {"n": None, "m": None}, {}
+    lv = power_law_fit(points, "velocity_rms")
+    if lv is not None:
+        fits["velocity_rms"] = lv
+        for axis, key in (("roughness_ra", "n"), ("sliding_velocity", "m")):
+            if axis in lv["exponents"]:
+                e = lv["exponents"][axis]
+                out[key] = {"value": e["value"], "ci": e["ci"], "stderr": e["stderr"], "r2": lv["r2"], "n": lv["n"]}
+    rows = [p for p in points if p.get("status") == "done" and p.get("vibration_level") is not None
+            and (p.get("profile_Rz") or 0) > 0 and (p.get("profile_Rsm") or 0) > 0]
+    if len({round(p["profile_Rz"] / p["profile_Rsm"], 12) for p in rows}) > 1 and len(rows) >= 3:
+        x = np.log10([p["profile_Rz"] / p["profile_Rsm"] for p in rows])
+        res = sm.OLS(np.array([p["vibration_level"] for p in rows]), sm.add_constant(x)).fit()
+        ci = res.conf_int(alpha=0.05)
+        fits["vibration_level_vs_rz_rsm"] = {"slope": float(res.params[1]), "ci": [float(ci[1, 0]), float(ci[1, 1])],
+                                             "intercept": float(res.params[0]), "r2": float(res.rsquared),
+                                             "n": int(res.nobs), "units": "dB per decade of Rz/Rsm"}
+    for name in ("shock_rate", "shock_impulse", "dissipated_power"):
+        f = power_law_fit(points, name)
+        if f is not None:
+            fits[name] = f
+    out["fits"] = fits
+    return out

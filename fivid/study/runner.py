@@ -35,6 +35,11 @@ from fivid.study.config import AXES
 
 __all__ = ["run_study", "open_study", "point_key"]
 
+#: per-point results of a roughness-noise point (fivid.study.roughness) copied into summary.json
+ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impulse", "shock_count", "dissipated_power",
+                  "mean_normal_force", "mean_friction_force", "open_fraction", "profile_Ra", "profile_Rq",
+                  "profile_Rz", "profile_Rsm", "simulation_seconds", "dof_updates_per_second", "n_dof", "time_step")
+
 log = logging.getLogger("fivid")
 
 
@@ -271,7 +276,8 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
                               ("onset_time", "onset_time"), ("rms", "rms"), ("level_db", "level_db"),
                               ("stick_fraction", "stick_fraction"), ("narrowband_fraction", "narrowband_fraction"),
                               ("coupling_indicator", "coupling_indicator"), ("coupling", "coupling"),
-                              ("perturbation_gain_db", "perturbation_gain_db")):
+                              ("perturbation_gain_db", "perturbation_gain_db"),
+                              *((n, n) for n in ROUGHNESS_KEYS)):
                 val = _scalar(ds, name, i)
                 if val is not None:
                     p[key] = val
@@ -306,6 +312,14 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
     fit = power_law_fit(points, "rms")
     if fit is not None:
         out["fits"] = {"rms": fit}
+    if any("vibration_level" in p for p in points):
+        from fivid.study.fits import roughness_noise_fits
+        from fivid.study.roughness import roughness_settings
+
+        rn = roughness_noise_fits(points)
+        out.setdefault("fits", {}).update(rn.pop("fits"))
+        out.update(rn)
+        out["roughness_settings"] = roughness_settings(study)
     seconds = list(timing.values())
     out["timing"] = {"wall_s": round(wall, 3), "computed_points": len(seconds),
                      "mean_point_s": round(float(np.mean(seconds)), 3) if seconds else None}

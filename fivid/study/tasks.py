@@ -12,6 +12,8 @@ or ``{"lumped": {"kind": ..., "parameters": {...}}}``, ``tasks`` the study's per
   ``narrowband_fraction`` (share of its power in prominent peaks: tonal vs broadband); with
   ``coulomb_reference: true`` (and a law) also ``rms_coulomb`` and ``perturbation_gain_db``, the same point
   simulated with the law's mu0 alone (what the perturbation adds);
+- ``roughness`` (with ``transient`` for the duration and sample rate; replaces the other tasks): seed 003's rough
+  pair with the point's synthetic profiles, :func:`fivid.study.roughness.evaluate_roughness_point`;
 - ``psd``: ``psd(frequency)`` of the second half of the response's steady part (Welch, Hann, half overlap).
 
 The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``) and
@@ -36,6 +38,10 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
         t, x, units, state = _lumped_transient(system["lumped"], tasks, conditions) if "transient" in tasks \
             else (None, None, None, None)
     else:
+        if "roughness" in tasks:  # seed 003's rough pair: the point's profiles, Lv, shocks (fivid.study.roughness)
+            from fivid.study.roughness import evaluate_roughness_point
+
+            return xr.Dataset(evaluate_roughness_point(system["model_path"], tasks, conditions))
         model = refined_model(system["model_path"], conditions.get("mesh", 1.0), conditions.get("roughness_ra"))
         data["element_size"] = ((), _element_size(model), {"units": "m", "long_name": "largest element side"})
         if "modes" in tasks:

@@ -1,0 +1,348 @@
+"""Seed 003's rough sliding pair: a model config from two profiles, and what a run tells about roughness noise.
+
+Builder (plain data; :mod:`fivid.surface` stays below the FE layers):
+
+* :func:`synthetic_rough_profiles` -- two Gaussian profiles of a given Ra (``Rq = sqrt(pi/2) Ra``), fixed
+  correlation length and seeds (:func:`fivid.surface.gaussian_random_profile`), closed to cover the body;
+* :func:`rough_pair_config` -- a rough_pair-style model config (a mapping for :func:`fivid.fe.load_model`) with
+  the two profiles on the facing edges, the upper body lifted so that its lowest point touches the lower body's
+  highest one (zero gap at the first touching node pair), and velocity sensors on the back-face nodes.
+
+Run metrics (:func:`roughness_metrics`, over the steady part of a RunDataset):
+
+* ``vibration_level`` Lv [dB] = 20 log10(V_RMS / 1e-9 m s-1), V_RMS the RMS over time and back-face nodes of the
+  normal velocity (each node's mean removed) -- seed 003's definition;
+* shocks (:func:`detect_shocks`): closing events of the contact, with rate [s-1] and mean impulse [N s];
+* ``dissipated_power`` [W]: slope of ``friction_dissipation`` (least squares) over the steady part.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+__all__ = ["LV_REFERENCE", "synthetic_rough_profiles", "rough_pair_config", "vibration_level", "detect_shocks",
+           "dissipated_power", "roughness_metrics", "identification_run"]
+
+#: seed 003's velocity reference of the vibration level [m s-1]
+LV_REFERENCE = 1e-9
+#: Rq / Ra of a Gaussian height distribution
+RQ_PER_RA = float(np.sqrt(np.pi / 2.0))
+
+
+def synthetic_rough_profiles(ra: float, length: float, *, correlation_length: float = 1e-3, step: float = 50e-6,
+                             seeds=(3, 4), acf: str = "gaussian"):
+    """Two Gaussian random profiles (lower, upper) of expected ``Rq = sqrt(pi/2) ra`` over ``[0, length]`` [m].
+
+    The profiles are periodic (spectral synthesis); the first sample is repeated at ``x = length`` so that they
+    cover the body. ``ra = 0`` gives flat (zero) profiles.
+    """
+    from fivid.surface import gaussian_random_profile, make_profile
+
+    out = []
+    for seed in seeds:
+        p = gaussian_random_profile(RQ_PER_RA * float(ra), correlation_length, length, step, acf=acf, seed=int(seed))
+        x = np.append(p["x"].values, length)
+        z = np.append(p.values, p.values[0])
+        out.append(make_profile(x, z, attrs=dict(p.attrs), label="synthetic profile"))
+    return tuple(out)
+
+
+def _si(ctx, value, key, units="m") -> float:
+    from fivid.fe.config import _quantity
+
+    return _quantity(ctx, value, key, units)
+
+
+def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None):
+    """A rough-pair model config: ``base`` (path or mapping of a rough_pair-style config) with the profiles.
+
+    Parameters
+    ----------
+    base : path-like or mapping
+        A model config with two rectangular bodies whose facing edges carry ``profile:`` keys (the one with a
+        ``top`` profile is the lower body, the ``bottom`` one the upper body) and one contact pair.
+    lower, upper : xarray.DataArray
+        Height profiles [m] over ``x`` [m] from the bodies' left ends (a reader's or a synthesis's output),
+        covering the body length.
+    sensor_every : int
+        A velocity sensor (direction y) on every ``sensor_every``-th node of the lower body's back face
+        (``bottom`` edge), both end nodes included when the division count allows; replaces the config's sensors.
+    normal_load : float, optional
+        Dead load [N] on the upper body: its ``top``-edge pressure loads are scaled to sum to it (pressure x
+        length x thickness). None: as configured.
+
+    Returns
+    -------
+    (dict, dict)
+        The config mapping, and a record: ``lift`` [m] (the upper body is lifted by ``max(z_lower - z_upper)``
+        over the contact's slave nodes, so the highest asperity pair touches with zero gap), the bodies' names,
+        ``back_face_sensors``, ``sensor_every`` and the base config's source.
+    """
+    from fivid.fe.config import read_config
+
+    data, ctx, origin = read_config(base)
+    data = copy.deepcopy(data)
+    bodies = data["bodies"]
+    edges = {b["profile"]["edge"]: name for name, b in bodies.items() if isinstance(b.get("profile"), dict)}
+    if set(edges) != {"top", "bottom"}:
+        from fivid.errors import ConfigError
+
+        raise ConfigError(f"{origin}: a rough pair needs one body with a 'top' profile and one with a 'bottom' "
+                          f"profile; profiled edges found: {sorted(edges) or 'none'}", key="bodies")
+    lo_name, up_name = edges["top"], edges["bottom"]
+    lo, up = bodies[lo_name], bodies[up_name]
+    lc = np.array([[_si(ctx, v, f"bodies.{lo_name}.corners") for v in c] for c in lo["corners"]])
+    uc = np.array([[_si(ctx, v, f"bodies.{up_name}.corners") for v in c] for c in up["corners"]])
+    length = lc[1, 0] - lc[0, 0]
+    nx = int(lo["divisions"][0])
+    xn = np.linspace(0.0, length, nx + 1)  # back-face nodes (uniform along x; grading is through the depth)
+    nu = int(up["divisions"][0])
+    xs = np.linspace(uc[0, 0], uc[1, 0], nu + 1)[1:-1]  # the interface's slave nodes, end nodes excluded (below)
+    zl = np.interp(xs - lc[0, 0], lower["x"].values, lower.values)
+    zu = np.interp(xs - uc[0, 0], upper["x"].values, upper.values)
+    lift = float(np.max(zl - zu))
+    top = lc[2, 1]
+    depth_up = uc[2, 1] - uc[1, 1]
+    uc[:, 1] = [top + lift, top + lift, top + lift + depth_up, top + lift + depth_up]
+    for body, prof, edge in ((lo, lower, "top"), (up, upper, "bottom")):
+        body["profile"] = {"edge": edge, "x": np.asarray(prof["x"].values, float),
+                           "z": np.asarray(prof.values, float)}
+    up["corners"] = [[f"{float(x)!r} m", f"{float(y)!r} m"] for x, y in uc]
+    # the slave edge without its two end nodes: the carriage-held one (prescribed dofs) and the one facing the lower
+    # body's clamped corner would tie prescribed dofs through the rigid contact (a flat pair diverges with them)
+    h = (uc[1, 0] - uc[0, 0]) / nu
+    for c in data["contacts"]:
+        if c["slave"]["body"] == up_name:
+            c["slave"] = {**c["slave"], "x": [f"{float(uc[0, 0] + h / 2)!r} m", f"{float(uc[1, 0] - h / 2)!r} m"]}
+    if normal_load is not None:
+        weights = [ld for ld in data.get("loads") or [] if ld.get("body") == up_name and ld.get("edge") == "top"]
+        if not weights:
+            from fivid.errors import ConfigError
+
+            raise ConfigError(f"{origin}: normal_load needs a pressure load on the top edge of {up_name!r}",
+                              key="loads")
+        area = (uc[1, 0] - uc[0, 0]) * _si(ctx, up["thickness"], f"bodies.{up_name}.thickness")
+        total = sum(_si(ctx, ld["pressure"], "loads.pressure", "Pa") for ld in weights)
+        for ld in weights:
+            p = _si(ctx, ld["pressure"], "loads.pressure", "Pa") / total * normal_load / area
+            ld["pressure"] = f"{float(p)!r} Pa"
+    k = max(1, int(sensor_every))
+    y0 = lc[0, 1]
+    data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "direction": "y",
+                        "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"]} for i in range(0, nx + 1, k)]
+    data["name"] = f"{data.get('name', 'rough_pair')} (profiles: {lower.attrs.get('source', 'given')})"
+    return data, {"lift": lift, "lower_body": lo_name, "upper_body": up_name,
+                  "back_face_sensors": len(data["sensors"]), "sensor_every": k, "base": origin}
+
+
+def _steady(ds, start=None):
+    t = ds["time"].values
+    t0 = float(ds.attrs.get("transient_end", 0.0)) if start is None else float(start)
+    return t >= t0
+
+
+def vibration_level(ds, *, start=None, reference: float = LV_REFERENCE) -> tuple[float, float]:
+    """(Lv [dB], V_RMS [m s-1]): RMS over the steady time and every sensor of ``sensor_velocity``, each sensor's
+    mean removed; ``Lv = 20 log10(V_RMS / reference)`` (seed 003: reference 1e-9 m s-1, back-face nodes)."""
+    sel = _steady(ds, start)
+    v = np.asarray(ds["sensor_velocity"].values, float)[sel]
+    v = v.reshape(v.shape[0], -1)
+    v = v - v.mean(axis=0)
+    vrms = float(np.sqrt(np.mean(v * v)))
+    return (20.0 * np.log10(vrms / reference) if vrms > 0 else -np.inf), vrms
+
+
+#: shock detector defaults: closed-node rise and baseline window (docs/roughness.md)
+SHOCK_MIN_CLOSING = 0.1
+SHOCK_BASELINE = 0.5e-3
+
+
+def detect_shocks(time, contact_normal_force, open_fraction, n_slave: int, *, min_closing: float = SHOCK_MIN_CLOSING,
+                  baseline_time: float = SHOCK_BASELINE) -> dict:
+    """Closing events of a node-to-segment contact (shocks between asperities) from its per-sample records.
+
+    A shock is a run of consecutive samples over which the number of closed slave nodes,
+    ``n_closed = (1 - open_fraction) n_slave``, rises by at least ``min_closing`` nodes in total (the records
+    are averages over each output period, so one node closing mid-period shows as two partial rises). Its
+    impulse is the excess of the contact normal force over its running median (window ``baseline_time`` [s])
+    summed over the run and the sample after it, times the sample period [N s].
+
+    Returns
+    -------
+    dict
+        ``count``, ``rate`` [s-1] (count / record duration), ``mean_impulse`` [N s] (NaN without shocks),
+        ``start_times`` [s] and ``impulses`` [N s] (arrays), and the thresholds used.
+    """
+    from scipy.ndimage import median_filter
+
+    t = np.asarray(time, float)
+    fc = np.asarray(contact_normal_force, float)
+    closed = (1.0 - np.asarray(open_fraction, float)) * int(n_slave)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    w = max(3, int(round(baseline_time / dt)) | 1) if dt > 0 else 3
+    excess = fc - median_filter(fc, size=w, mode="nearest")
+    d = np.diff(closed)
+    starts, impulses = [], []
+    i = 0
+    while i < d.size:
+        if d[i] <= 0:
+            i += 1
+            continue
+        j = i
+        while j + 1 < d.size and d[j + 1] > 0:
+            j += 1
+        if closed[j + 1] - closed[i] >= min_closing:
+            starts.append(t[i + 1])
+            impulses.append(float(np.sum(np.clip(excess[i + 1:j + 3], 0.0, None)) * dt))
+        i = j + 1
+    duration = t[-1] - t[0] + dt if t.size else 0.0
+    imp = np.array(impulses)
+    return {"count": len(starts), "rate": len(starts) / duration if duration > 0 else np.nan,
+            "mean_impulse": float(imp.mean()) if imp.size else np.nan, "start_times": np.array(starts),
+            "impulses": imp, "min_closing": float(min_closing), "baseline_time": float(baseline_time)}
+
+
+def dissipated_power(ds, *, start=None) -> float:
+    """Mean friction power [W]: least-squares slope of ``friction_dissipation`` over the steady part."""
+    sel = _steady(ds, start)
+    t, e = ds["time"].values[sel], ds["friction_dissipation"].values[sel]
+    return float(np.polyfit(t - t[0], e, 1)[0]) if t.size > 1 else np.nan
+
+
+def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
+    """Lv, V_RMS, shocks, dissipated power and mean forces of a rough-pair run (steady part)."""
+    sel = _steady(ds, start)
+    lv, vrms = vibration_level(ds, start=start)
+    sh = detect_shocks(ds["time"].values[sel], ds["contact_normal_force"].values[sel], ds["open_fraction"].values[sel],
+                       n_slave, **shock_options)
+    return {"vibration_level": lv, "velocity_rms": vrms, "shock_rate": sh["rate"], "shock_impulse": sh["mean_impulse"],
+            "shock_count": sh["count"], "dissipated_power": dissipated_power(ds, start=start),
+            "mean_normal_force": float(np.mean(ds["contact_normal_force"].values[sel])),
+            "mean_friction_force": float(np.mean(ds["friction_force"].values[sel])),
+            "open_fraction": float(np.mean(ds["open_fraction"].values[sel])), "shocks": sh}
+
+
+def identification_run(ds):
+    """The run as ``fivid identify`` reads it: its steady part (``time >= transient_end``) with the carriage
+    ``velocity`` [m s-1], the imposed sliding velocity, which a simulation does not record as an encoder would.
+    A model without a force transducer (a dead-loaded slider) gets the interface's ``contact_tangential_force``
+    and ``contact_normal_force`` as ``friction_force`` and ``normal_force``.
+
+    ``mu(t) = friction_force / normal_force`` of this dataset is what identify turns into mu0 and the
+    perturbation's spectrum and amplitude (docs/roughness.md, "From a profile to a friction law").
+    """
+    out = ds.isel(time=_steady(ds))
+    if not np.any(out["normal_force"].values) and "contact_normal_force" in out:  # no transducer in the model
+        out["friction_force"] = out["contact_tangential_force"].copy()
+        out["normal_force"] = out["contact_normal_force"].copy()
+        out.attrs["force_note"] = "friction_force, normal_force: the interface's contact forces (no transducer)"
+        out.attrs["normal_load"] = float(np.mean(out["normal_force"].values))
+    v = np.full(out.sizes["time"], float(ds.attrs["sliding_velocity"]))
+    out["velocity"] = (("time",), v, {"units": "m s-1", "long_name": "sliding velocity (encoder)",
+                                      "description": "imposed carriage velocity (the simulation's base motion)"})
+    out.attrs["history"] = str(ds.attrs.get("history", "")) + "\nidentification_run: steady part, carriage velocity"
+    return out
+
+
+#: study task defaults (``points: roughness:``; docs/roughness.md)
+ROUGHNESS_TASK = {"correlation_length": 0.5e-3, "profile_step": 50e-6, "seeds": (3, 4), "sensor_every": 4,
+                  "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.1e-3}
+
+
+def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
+    """One roughness-noise study point: synthesise the point's profiles (``roughness_ra``), build the pair, run it
+    for ``tasks["transient"]`` (duration, sample rate) at the point's ``sliding_velocity``, and measure it.
+
+    Returns ``{name: (dims, value, attrs)}`` for the point Dataset: Lv, V_RMS, shock rate and impulse, dissipated
+    power, mean forces, open fraction, and the generated profiles' Ra, Rq, Rz, Rsm (lower body,
+    :func:`fivid.surface.evaluate_profile`, line form removed, no filter) with the run's cost.
+    """
+    import time
+
+    from fivid.fe import load_model
+    from fivid.solver import simulate
+    from fivid.surface import evaluate_profile
+
+    spec = {**ROUGHNESS_TASK, **tasks["roughness"]}
+    tr = tasks["transient"]
+    from fivid.fe.config import read_config
+
+    base, ctx, _ = read_config(model_path)
+    bodies = base["bodies"]  # the profiles' length: the lower (top-profiled) body's
+    corners = next(b["corners"] for b in bodies.values()
+                   if isinstance(b.get("profile"), dict) and b["profile"].get("edge") == "top")
+    length = _si(ctx, corners[1][0], "corners") - _si(ctx, corners[0][0], "corners")
+    ra = float(conditions.get("roughness_ra", 0.0))
+    lower, upper = synthetic_rough_profiles(ra, length, correlation_length=spec["correlation_length"],
+                                            step=spec["profile_step"], seeds=spec["seeds"])
+    load = float(conditions["normal_load"]) if "normal_load" in conditions else None
+    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
+    model = load_model(cfg)
+    n_slave = int(sum(c.slave_nodes.size for c in model.contacts))
+    kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
+    t0 = time.perf_counter()
+    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"], progress=False, roughness_ra=ra,
+                  settle_time=spec["settle_time"], gs_tolerance=spec["gs_tolerance"],
+                  gs_max_iterations=spec["gs_max_iterations"], **kw)
+    seconds = time.perf_counter() - t0
+    r = roughness_metrics(ds, n_slave)
+    ev = evaluate_profile(lower, form="line").parameters if ra > 0 else {}
+    sh = r["shocks"]
+    out = {
+        "vibration_level": ((), r["vibration_level"], {"units": "dB", "long_name": "vibration level Lv re 1e-9 m s-1 "
+                                                       "(RMS normal velocity over the back-face nodes)"}),
+        "velocity_rms": ((), r["velocity_rms"], {"units": "m s-1", "long_name": "RMS back-face normal velocity"}),
+        "shock_rate": ((), r["shock_rate"], {"units": "s-1", "long_name": "contact closing events per second",
+                                             "min_closing": sh["min_closing"], "baseline_time": sh["baseline_time"]}),
+        "shock_impulse": ((), r["shock_impulse"], {"units": "N s", "long_name": "mean impulse per shock"}),
+        "shock_count": ((), r["shock_count"], {"units": "1", "long_name": "shocks in the steady record"}),
+        "dissipated_power": ((), r["dissipated_power"], {"units": "W", "long_name": "friction power (slope of "
+                                                         "friction_dissipation)"}),
+        "mean_normal_force": ((), r["mean_normal_force"], {"units": "N", "long_name": "mean contact normal force"}),
+        "mean_friction_force": ((), r["mean_friction_force"], {"units": "N", "long_name": "mean friction force "
+                                                               "(transducer)"}),
+        "open_fraction": ((), r["open_fraction"], {"units": "1", "long_name": "mean share of open slave nodes"}),
+        "simulation_seconds": ((), seconds, {"units": "s", "long_name": "wall time of the simulation"}),
+        "dof_updates_per_second": ((), model.coords.size * ds.attrs["steps"] / seconds,
+                                   {"units": "s-1", "long_name": "degrees of freedom x steps / wall time"}),
+        "n_dof": ((), int(model.coords.size), {"units": "1", "long_name": "degrees of freedom"}),
+        "time_step": ((), float(ds.attrs["time_step"]), {"units": "s", "long_name": "solver time step"}),
+    }
+    for key in ("Ra", "Rq", "Rz", "Rsm"):
+        if key in ev:
+            out[f"profile_{key}"] = ((), float(ev[key]) if ev[key] is not None else np.nan,
+                                     {"units": "m", "long_name": f"{key} of the lower body's profile (line removed, "
+                                                                 "no filter, whole length)"})
+    out["upper_lift"] = ((), info["lift"], {"units": "m", "long_name": "upper body lift to first touch",
+                                            "back_face_sensors": info["back_face_sensors"],
+                                            "sensor_every": info["sensor_every"],
+                                            "correlation_length": spec["correlation_length"],
+                                            "profile_seeds": " ".join(map(str, spec["seeds"]))})
+    return out
+
+
+def roughness_settings(study) -> dict:
+    """What a roughness-noise study's numbers depend on (summary.json ``roughness_settings``): the model and
+    its mesh, the profiles' synthesis, the record and the analysis window, the detector's thresholds."""
+    from fivid.fe.config import read_config
+
+    spec = {**ROUGHNESS_TASK, **study.points["roughness"]}
+    data, _, origin = read_config(study.model_path)
+    return {
+        "model": origin,
+        "mesh": {name: {"divisions": list(b["divisions"]), "grading": b.get("grading")}
+                 for name, b in data["bodies"].items()},
+        "profiles": {"generator": "fivid.surface.gaussian_random_profile", "acf": "gaussian",
+                     "rq_per_ra": RQ_PER_RA, "correlation_length": spec["correlation_length"],
+                     "step": spec["profile_step"], "seeds": {"lower": spec["seeds"][0], "upper": spec["seeds"][1]}},
+        "record": {"duration": study.points["transient"]["duration"],
+                   "sample_rate": study.points["transient"]["sample_rate"],
+                   "window": "steady part: time >= transient_end (preload ramp, settle_time, base ramp excluded)",
+                   "settle_time": spec["settle_time"]},
+        "sensors": f"velocity (y) on every {spec['sensor_every']}th node of the lower body's back face",
+        "lv_reference": LV_REFERENCE,
+        "shock_detector": {"min_closing_nodes": SHOCK_MIN_CLOSING, "baseline_time": SHOCK_BASELINE},
+        "contact_gauss_seidel": {"tolerance": spec["gs_tolerance"], "max_iterations": spec["gs_max_iterations"]},
+    }
