@@ -173,3 +173,16 @@ def test_a_psd_keeps_the_conditions_of_its_run(written):
     with xr.open_dataset(written["pipeline psd"]) as ds:  # one test condition: its velocity, not one run's id
         assert float(ds["sliding_velocity"]) == 0.005 and "run_id" not in ds.variables
         assert list(ds["measured_run"].values) == ["T01"] and ds["psd_measured"].dims == ("measured", "frequency")
+
+
+def test_law_file_has_no_cf_error(written, table, tmp_path):
+    """law.nc (fivid identify): no error; its text dimension coordinates (coefficient, run, form) stay index
+    coordinates that the law reader and ``fivid law show`` select by, which the checker warns about (one warning
+    each, "possible incorrect declaration of a coordinate variable"); every variable has a long name."""
+    runs = sorted(written["run"].parent.glob("T0*.nc"))
+    law = tmp_path / "law.nc"
+    assert main(["identify", *map(str, runs), "-o", str(law)]) == 0
+    errors, warnings, out = cf_checks.cf_check(law, table)
+    assert errors == 0, out[-3000:]
+    assert "No standard_name or long_name" not in out, out[-3000:]
+    assert warnings <= 4, out[-3000:]

@@ -229,6 +229,9 @@ class FrictionIdentification:
             ds["form_fitted"] = ("form", np.array([f.fitted for f in self.form_fits], np.int8))
             ds["form_reason"] = ("form", np.array([f.reason for f in self.form_fits], dtype=object))
             ds["form_cv_reason"] = ("form", np.array([f.cv_reason for f in self.form_fits], dtype=object))
+        for name, long in _LONG_NAMES.items():  # CF: every variable says what it is
+            if name in ds and "long_name" not in ds[name].attrs:
+                ds[name].attrs["long_name"] = long
         return ds
 
     def write(self, path, *, overwrite: bool = False):
@@ -236,6 +239,42 @@ class FrictionIdentification:
         from fivid.friction import write_law
 
         return write_law(self.to_dataset(), path, overwrite=overwrite)
+
+
+_LONG_NAMES = {
+    "coefficient": "amplitude-law coefficient name",
+    "coefficient_b": "amplitude-law coefficient name (second index of the covariance)",
+    "amplitude_coefficient_units": "units of each amplitude-law coefficient",
+    "run": "run identifier",
+    "form": "candidate amplitude-law form",
+    "amplitude_ci_lower": "lower bound of the amplitude-law coefficient's confidence interval",
+    "amplitude_ci_upper": "upper bound of the amplitude-law coefficient's confidence interval",
+    "run_sliding_velocity": "sliding velocity of the run",
+    "run_roughness_ra": "roughness Ra of the run",
+    "run_normal_load": "normal load of the run",
+    "run_mu_mean": "mean friction coefficient of the run's steady window",
+    "run_mu_mean_ci_lower": "lower bound of the 95 % interval of the run's mean friction coefficient",
+    "run_mu_mean_ci_upper": "upper bound of the 95 % interval of the run's mean friction coefficient",
+    "run_mu_rms": "RMS of the friction perturbation in the valid band (amplitude A)",
+    "run_mu_rms_stderr": "standard error of the run's amplitude A",
+    "run_window_start": "start of the run's steady-sliding window",
+    "run_window_stop": "end of the run's steady-sliding window",
+    "run_used": "run used in the identification (1) or left out (0)",
+    "run_mains_bins_removed": "PSD bins removed around mains harmonics",
+    "run_mains_removal": "how mains harmonics were removed from the run's spectrum",
+    "run_reason": "why the run was left out (empty if used)",
+    "form_aic": "Akaike information criterion of the amplitude form",
+    "form_aicc": "small-sample corrected Akaike information criterion of the amplitude form",
+    "form_bic": "Bayesian information criterion of the amplitude form",
+    "form_loglik": "log-likelihood of the amplitude form on the amplitude scale",
+    "form_cv_error": "leave-one-condition-out cross-validation error, RMS of ln(A_pred/A)",
+    "form_delta_aicc": "AICc minus the lowest AICc of the candidate forms",
+    "form_chosen": "the chosen amplitude form (1) or not (0)",
+    "form_n_params": "number of coefficients of the amplitude form",
+    "form_fitted": "the amplitude form could be fitted (1) or not (0)",
+    "form_reason": "why the amplitude form could not be fitted (empty if fitted)",
+    "form_cv_reason": "why the form has no cross-validation error (empty if it has one)",
+}
 
 
 def _num(x):
