@@ -170,7 +170,8 @@ class FrictionIdentification:
             "shape_method": self.shape_method,
             "messages": "\n".join(self.messages),
             "source": "; ".join(f"{r.run_id}: {r.source}" for r in self.runs),
-            "history": new_history(f"identify: friction law from {len(self.used_runs)} of {len(self.runs)} runs"),
+            "history": new_history(f"identify: friction law from {len(self.used_runs)} of {len(self.runs)} runs",
+                                   timestamp=False),  # same runs, same law file bytes (issue 18)
         })
         for k, v in self.shape_test.items():
             attrs[f"shape_test_{k}"] = _attr(v)
