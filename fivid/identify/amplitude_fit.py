@@ -230,7 +230,8 @@ class _Regression:
 def _gaussian_llf(ssr_w, weights):
     """statsmodels' WLS log-likelihood at the ML variance: −n/2 (1 + ln(2π SSR_w / n)) + ½ Σ ln w."""
     n = weights.size
-    return float(-n / 2 * (1 + np.log(2 * np.pi * ssr_w / n)) + 0.5 * np.sum(np.log(weights)))
+    with np.errstate(divide="ignore"):  # an exact fit (no residual dof) has ssr 0: +inf, refused by _fit_one
+        return float(-n / 2 * (1 + np.log(2 * np.pi * ssr_w / n)) + 0.5 * np.sum(np.log(weights)))
 
 
 def _regress_linear(X, y, weights):
@@ -354,6 +355,9 @@ def _fit_one(form, velocity, roughness, load, amplitude, stderr, weighting, conf
     log_form = form in LOG_FORMS
     n, p = amplitude.size, len(names)
     fit.n_params = p
+    if n <= p:  # an exact fit: no residual to estimate a likelihood or a standard error from
+        fit.reason = f"{n} runs for {p} coefficients: at least {p + 1} are needed for a standard error"
+        return fit
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fit.diagnostics = _diagnostics(reg, "ln A" if log_form else "A")

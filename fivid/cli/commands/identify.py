@@ -41,7 +41,7 @@ def register(subparsers) -> None:
     p.add_argument("--tare", nargs=2, type=quantity("s", nonnegative=True), metavar=("T0", "T1"),
                    help="unloaded interval [s]: its mean forces are subtracted (sensor offsets) and its noise PSD "
                    "is removed from the perturbation PSD")
-    p.add_argument("--mains-frequency", type=quantity("Hz", positive=True), default=50.0,
+    p.add_argument("--mains-frequency", type=quantity("Hz", nonnegative=True), default=50.0,
                    help="mains frequency [Hz] whose harmonics are removed when they stand out (0 disables; default 50)")
     p.add_argument("--shape", choices=("smoothed", "rolloff"), default="smoothed",
                    help="spectral shape written into the law (default smoothed)")
