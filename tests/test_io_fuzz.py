@@ -11,7 +11,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import example, HealthCheck, given, settings
 from hypothesis import strategies as st
 from ingest_helpers import GOOD_META, HEADER, rig_rows, rig_text
 
@@ -112,6 +112,7 @@ def test_rig_header_grammar_gives_a_head_or_a_fivid_error(meta, header):
 
 @FUZZ
 @given(payload=st.binary(max_size=400))
+@example(payload=b"\r\x01")  # a lone carriage return in the header line: csv.Error before the fix
 def test_rig_csv_raw_bytes_give_a_fivid_error(payload):
     _read_or_clean_error(_read_rig, "p.csv", b"# fivid-rig-csv: 1\n" + payload)
 

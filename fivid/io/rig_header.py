@@ -105,8 +105,12 @@ def _head_lines(path: Path, encoding: str):
         offset = stop
 
 
-def _split(text: str, delimiter: str) -> list[str]:
-    row = next(csv.reader([text], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
+def _split(text: str, delimiter: str, path=None, line=None) -> list[str]:
+    try:
+        row = next(csv.reader([text], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
+    except csv.Error as exc:  # e.g. a lone carriage return inside a line (found by tests/test_io_fuzz.py)
+        raise SchemaError(f"the header line cannot be split into fields ({exc}); a lone carriage return or a "
+                          "broken quote? Save the file with one line ending per line", file=path, line=line) from None
     return [f.strip().strip("\ufeff").strip() for f in row]
 
 
@@ -341,11 +345,11 @@ def read_rig_head(path, profile: RigProfile | None = None) -> RigHead:
         elif profile.format == "fivid-rig-csv":
             is_header = bool(text.strip()) and not text.startswith(profile.comment)
         else:
-            is_header = time_spec.name in _split(text, profile.delimiter)
+            is_header = time_spec.name in _split(text, profile.delimiter, path, number)
         if not is_header:
             preamble.append((number, text))
             continue
-        fields = _split(text, profile.delimiter)
+        fields = _split(text, profile.delimiter, path, number)
         if profile.format == "fivid-rig-csv":
             columns, ignored = rig_csv_columns(path, fields, number)
         else:
