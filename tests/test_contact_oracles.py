@@ -82,6 +82,9 @@ def test_mass_on_rough_contact_rings_at_sqrt_k_over_m_in_the_explicit_solver():
     assert f == pytest.approx(f_ref, rel=5e-4)
     work = float(ds.load_work.max())
     assert np.abs(ds.energy_balance_error.values).max() <= 1e-9 * work
+    # the stored energy A c d^(n+1)/(n+1) at the final equilibrium; the record's last sample sits somewhere on the
+    # ringing of amplitude ~ the kick's penetration change, 1.02^(1/n) - 1 = 1.3 % of d, i.e. +-(n+1) 1.3 % = 3.3 %
+    # of the energy: 5 %
     assert float(ds.contact_energy[-1]) == pytest.approx(
         C_POW * W * T * _bar_on_spring_frequency((p + kick) * W * T)[2] ** (N_POW + 1) / (N_POW + 1), rel=0.05)
 
