@@ -33,7 +33,7 @@ from fivid.signal.levels import bin_weights, third_octave_weights
 from fivid.signal.resample import resample_to
 from fivid.signal.sampling import run_label, sample_rate_of
 from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, check_nperseg, segment_window
-from fivid.signal.steady import steady_sliding_window
+from fivid.signal.steady import steady_part
 from fivid.signal.welch import welch_psd
 
 __all__ = ["score_runs", "DEFAULT_NPERSEG"]
@@ -67,16 +67,6 @@ def _signal(ds, variable: str, sensor, label: str):
     if not isinstance(da.attrs.get("units"), str):
         raise UnitError(f"{label}: variable {variable!r} has no 'units' attribute")
     return da
-
-
-def _crop_steady(ds, label):
-    from fivid.errors import FividError
-
-    try:
-        t0, t1 = steady_sliding_window(ds)
-    except FividError as exc:
-        raise type(exc)(f"{label}: {exc.message}") from None
-    return ds.sel(time=slice(t0, t1))
 
 
 def _band(band, fs: float, nperseg: int, labels_rates) -> tuple[float, float]:
@@ -120,7 +110,8 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     sensor : str, optional
         Which sensor when ``variable`` has a ``sensor`` dimension with several.
     steady : bool, default False
-        Crop each run to its steady-sliding window (:func:`fivid.signal.steady_sliding_window`) first.
+        Crop each run to its steady part first (:func:`fivid.signal.steady_part`: a measured run to its
+        steady-sliding window, a simulated run to ``time >= transient_end``).
     confidence : float, default 0.95
         Probability that scores of two estimates of the same spectrum stay under their thresholds.
     peak_prominence_db : float, optional
@@ -154,7 +145,7 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     nperseg = check_nperseg(nperseg)
     lm, ls = _label(measured, "measured"), _label(simulated, "simulated")
     if steady:
-        measured, simulated = _crop_steady(measured, lm), _crop_steady(simulated, ls)
+        measured, simulated = steady_part(measured, label=lm), steady_part(simulated, label=ls)
     da_m, da_s = _signal(measured, variable, sensor, lm), _signal(simulated, variable, sensor, ls)
     if sensor is not None and not any("sensor" in ds[variable].dims for ds in (measured, simulated)):
         raise ConfigError(f"sensor {sensor!r} given, but {variable!r} has no 'sensor' dimension in the {lm} nor "

@@ -76,12 +76,14 @@ def steady_psds(runs, *, variable="acceleration", nperseg=1024):
     50 % overlap, constant detrend, density; first sensor): ``(frequency [Hz], [psd, ...], nperseg)``."""
     from scipy.signal import welch
 
+    from fivid.signal.steady import steady_part
+
     psds = []
     for ds in runs:
-        da = ds[variable]
+        da = steady_part(ds)[variable]
         if "sensor" in da.dims:
             da = da.isel(sensor=0)
-        x = np.asarray(da.where(ds.time >= ds.attrs["transient_end"], drop=True).values)
+        x = np.asarray(da.values)
         n = min(nperseg, x.size)
         f, p = welch(x, fs=float(ds.attrs["sample_rate"]), window="hann", nperseg=n, noverlap=n // 2,
                      detrend="constant", scaling="density")
