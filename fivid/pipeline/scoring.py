@@ -32,7 +32,7 @@ def acceleration_psd(ds, *, nperseg: int):
     return welch_psd(_acceleration(ds), nperseg=nperseg, window="hann", detrend="constant", confidence=0.95)
 
 
-def score_condition(measured: list, simulated: list, *, band, nperseg: int, settle: float = 0.0):
+def score_condition(measured: list, simulated: list, *, band, nperseg: int | None = None, settle: float = 0.0):
     """Scores of every (measured run, simulation) pair and their mean; the PSDs for the report.
 
     Parameters
@@ -41,8 +41,9 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
         RunDataset netCDF files of one test condition.
     band : (float, float)
         Scoring band [Hz].
-    nperseg : int
-        Welch segment length [samples].
+    nperseg : int, optional
+        Welch segment length [samples]; default :func:`fivid.signal.welch.default_nperseg` of the shortest steady
+        record at the lowest sample rate, one for every pair and PSD (the scores state it).
     settle : float
         Time skipped after the start of steady sliding [s] (see :func:`fivid.signal.steady_part`).
 
@@ -69,6 +70,13 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
 
     meas = {Path(p).stem: steady(p) for p in measured}
     sims = {Path(p).stem: steady(p) for p in simulated}
+    if nperseg is None:  # one segment for the whole condition, so that every PSD is on one grid
+        from fivid.signal.sampling import sample_rate_of
+        from fivid.signal.welch import default_nperseg
+
+        rates = {k: sample_rate_of(d["time"].values, label=k) for k, d in {**meas, **sims}.items()}
+        fs = min(rates.values())
+        nperseg = default_nperseg(fs, min(d.sizes["time"] * fs / rates[k] for k, d in {**meas, **sims}.items()))
     pairs = []
     for mname, m in meas.items():
         for sname, s in sims.items():
