@@ -315,7 +315,7 @@ def _significant(score: str, side: str = "above") -> dict:
 def _assemble(v: dict, *, measured, simulated, variable, units):
     import xarray as xr
 
-    from fivid.signal.unit_strings import power_units
+    from fivid.units import power_units
 
     psd_units = power_units(units)
     db = {"units": "dB"}

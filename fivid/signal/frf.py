@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError
-from fivid.signal.unit_strings import ratio_units
+from fivid.units import ratio_units
 from fivid.signal.welch import csd
 
 __all__ = ["frf", "coherence", "FRF_ESTIMATORS"]

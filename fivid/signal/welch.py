@@ -21,7 +21,7 @@ from fivid.signal.spectral import (
     equivalent_degrees_of_freedom,
     segment_window,
 )
-from fivid.signal.unit_strings import power_units, product_units
+from fivid.units import power_units, product_units
 
 __all__ = ["welch_psd", "csd", "spectral_settings", "default_nperseg", "NPERSEG_RULE"]
 

@@ -38,6 +38,7 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     from fivid.fe.model import Model, load_model
     from fivid.solver.driver import simulate
     from fivid.solver.timestep import stable_step
+    from fivid.units import power_units
 
     if not isinstance(model, Model):
         model = load_model(model)
@@ -54,10 +55,10 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     fs = float(runs[0].attrs["sample_rate"])
     lo, hi = band if band is not None else (0.0, 0.8 * fs / 2)
     lsd, level, sel = band_distance(f, psds[0], psds[1], (lo, hi))
-    units = runs[0][variable].attrs.get("units", "")
+    units = power_units(runs[0][variable].attrs.get("units", "1"))
     out = xr.Dataset(
-        {"psd_coarse": (("frequency",), psds[0], {"units": f"({units})2 Hz-1"}),
-         "psd_fine": (("frequency",), psds[1], {"units": f"({units})2 Hz-1"})},
+        {"psd_coarse": (("frequency",), psds[0], {"units": units}),
+         "psd_fine": (("frequency",), psds[1], {"units": units})},
         coords={"frequency": ("frequency", f, {"units": "Hz"})},
     )
     out.attrs.update({
