@@ -10,6 +10,12 @@ Two conventions of the field that pint does not know by itself:
   expected quantity is an acceleration, ``g`` (and ``gn``, ``g0``) mean standard gravity.
 * UDUNITS writes ``m s-2``; pint wants ``m * s ** -2``. Both are accepted.
 
+This module is the one place units are parsed and converted (layer L1): quantities with a decimal point or
+comma (:func:`parse_quantity`, :data:`NUMBER`), transducer sensitivities (:func:`sensitivity_factor`) and
+the UDUNITS strings of spectral quantities built from their signals' units (:func:`power_units`,
+:func:`product_units`, :func:`ratio_units`). :mod:`fivid.io.rig_quantities` and
+:mod:`fivid.signal.unit_strings` only call into it.
+
 pint is imported on first use, not at ``import fivid``.
 """
 
@@ -27,7 +33,16 @@ __all__ = [
     "conversion",
     "convert",
     "is_compatible",
+    "sensitivity_factor",
+    "power_units",
+    "product_units",
+    "ratio_units",
+    "NUMBER",
 ]
+
+#: A number as written in data files, with a decimal point or a decimal comma.
+NUMBER = r"[-+]?(?:\d+(?:[.,]\d*)?|[.,]\d+)(?:[eE][-+]?\d+)?"
+_NUMBER_POINT = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
 # UDUNITS-style exponents: "m s-2", "m2", "Hz-1" -> "m s**-2", "m**2", "Hz**-1"
 _EXPONENT = re.compile(r"(?<=[A-Za-zµμΩ°%])(-?\d+)(?![\d.])")
@@ -70,6 +85,9 @@ def _parse(text: str, expected: str | None):
     s = text.strip()
     if not s:
         raise UnitError("empty unit")
+    if "," in s:  # pint would read "1,5 mm" as 1 x 5 mm; no unit has a comma
+        raise UnitError(f"{text!r} has a comma, which no unit contains; a decimal comma is read only where the "
+                        "file declares it (decimal: ','); otherwise write the number with a decimal point")
     if _is_acceleration(expected):
         m = re.fullmatch(r"\s*([-+0-9.eE]*)\s*(g|gn|g0|g_n|g_0|G)\s*", s)
         if m is not None:
@@ -136,7 +154,7 @@ def convert(values, from_units: str, to_units: str):
     return values * scale + offset if offset else values * scale
 
 
-def parse_quantity(text, to_units: str, *, default_units: str | None = None) -> float:
+def parse_quantity(text, to_units: str, *, default_units: str | None = None, decimal: str = ".") -> float:
     """A quantity such as ``"10 mm/s"`` as a float in ``to_units``.
 
     Parameters
@@ -148,22 +166,31 @@ def parse_quantity(text, to_units: str, *, default_units: str | None = None) -> 
         Target unit (usually the canonical SI unit from the registry).
     default_units : str, optional
         Unit of a bare number.
+    decimal : {".", ","}, default "."
+        Decimal mark of ``text``: with ``","`` the number may be written ``"0,8 um"`` (or ``"0.8 um"``).
 
     Raises
     ------
     UnitError
         Unknown unit, incompatible dimension, or a bare number where a unit is needed.
+
+    Examples
+    --------
+    >>> parse_quantity("10 mm/s", "m s-1"), parse_quantity("0,8 um", "m", decimal=",")
+    (0.01, 8e-07)
     """
     if isinstance(text, bool):
         raise UnitError(f"expected a quantity in units compatible with {to_units!r}, got {text!r}")
+    if decimal not in (".", ","):
+        raise UnitError(f"decimal mark must be '.' or ',', got {decimal!r}")
     if isinstance(text, (int, float)):
         number, unit = float(text), None
     else:
         s = str(text).strip()
-        m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", s)
+        m = re.fullmatch(rf"({NUMBER if decimal == ',' else _NUMBER_POINT})\s*(.*)", s)
         if m is None:
             raise UnitError(f"cannot read {text!r} as a number with a unit, e.g. '10 mm/s'")
-        number, unit = float(m.group(1)), (m.group(2).strip() or None)
+        number, unit = float(m.group(1).replace(",", ".")), (m.group(2).strip() or None)
     if unit is None:
         target_dimless = _parse(to_units, None).dimensionless
         if default_units is not None:
@@ -188,3 +215,98 @@ def is_compatible(units: str, to_units: str) -> bool:
     except UnitError:
         return False
     return True
+
+
+def sensitivity_factor(column_units: str, sensitivity: str, target_units: str) -> float:
+    """Factor turning a transducer signal in ``column_units`` into ``target_units``.
+
+    Parameters
+    ----------
+    column_units : str
+        Unit of the recorded signal (``"mV"``).
+    sensitivity : str
+        ``"<number> <signal unit>/<measured unit>"``, e.g. ``"100 mV/g"`` or ``"10.2 mV/(m/s^2)"``
+        (decimal point or comma); ``g`` in the measured unit is standard gravity.
+    target_units : str
+        Canonical unit of the measured quantity (``"m s-2"``).
+
+    Returns
+    -------
+    float
+        ``si_value = factor * signal``: for 1 mV at 100 mV/g into m s-2, 9.80665e-2.
+
+    Raises
+    ------
+    UnitError
+        The sensitivity is not ``number unit/unit``, is zero, or its units do not fit.
+    """
+    m = re.fullmatch(rf"\s*({NUMBER})\s*(.+?)\s*", str(sensitivity))
+    if m is None or "/" not in m.group(2):
+        raise UnitError(
+            f"sensitivity {sensitivity!r} must be '<number> <signal unit>/<measured unit>', e.g. '100 mV/g'"
+        )
+    value = float(m.group(1).replace(",", "."))
+    if value == 0 or not math.isfinite(value):
+        raise UnitError(f"sensitivity {sensitivity!r} must be a finite, non-zero number")
+    signal_units, measured_units = (s.strip() for s in m.group(2).split("/", 1))
+    if measured_units.startswith("(") and measured_units.endswith(")"):
+        measured_units = measured_units[1:-1].strip()
+    try:
+        to_signal, off1 = conversion(column_units, signal_units)
+    except UnitError as exc:
+        raise UnitError(f"the column's unit {column_units!r} does not fit sensitivity {sensitivity!r}: {exc.message}") from None
+    try:
+        to_target, off2 = conversion(measured_units, target_units)
+    except UnitError as exc:
+        raise UnitError(f"sensitivity {sensitivity!r} does not measure a quantity in {target_units!r}: {exc.message}") from None
+    if off1 or off2:
+        raise UnitError(f"sensitivity {sensitivity!r}: affine units (with an offset) are not allowed here")
+    return to_signal / value * to_target
+
+
+# ---- UDUNITS strings of derived (spectral) quantities ------------------------------------------------------
+# ``m s-2`` -> PSD ``m2 s-4 Hz-1``; a force and an acceleration -> CSD ``N m s-2 Hz-1``, FRF ``m s-2 N-1``.
+# Strings written as a product of powers (the registry's style) are combined symbol by symbol; any other
+# form (``m/s``) is bracketed rather than guessed. Pure string algebra: pint is not needed.
+
+_TOKEN = re.compile(r"([A-Za-z%µμ]+)(-?\d+)?")
+
+
+def _exponents(units: str) -> dict[str, int] | None:
+    """``"m s-2"`` -> {"m": 1, "s": -2}; None when ``units`` is not a product of powers."""
+    out: dict[str, int] = {}
+    text = units.strip()
+    if text in ("1", ""):
+        return out
+    for token in text.split():
+        m = _TOKEN.fullmatch(token)
+        if m is None:
+            return None
+        out[m.group(1)] = out.get(m.group(1), 0) + int(m.group(2) or 1)
+    return out
+
+
+def _combine(terms: list[tuple[str, int]]) -> str:
+    total: dict[str, int] = {}
+    for units, sign in terms:
+        exps = _exponents(units)
+        if exps is None:
+            exps = {f"({units})": 1}
+        for s, e in exps.items():
+            total[s] = total.get(s, 0) + sign * e
+    return " ".join(s if e == 1 else f"{s}{e}" for s, e in total.items() if e != 0) or "1"
+
+
+def product_units(*units: str) -> str:
+    """Units of a cross-spectral density of signals in ``units``: ``("N", "m s-2")`` -> ``"N m s-2 Hz-1"``."""
+    return _combine([(u, 1) for u in units] + [("Hz", -1)])
+
+
+def power_units(units: str) -> str:
+    """Units of the spectral density of a signal in ``units``: ``"m s-2"`` -> ``"m2 s-4 Hz-1"``."""
+    return product_units(units, units)
+
+
+def ratio_units(numerator: str, denominator: str) -> str:
+    """Units of ``numerator / denominator``: ``("m s-2", "N")`` -> ``"m s-2 N-1"``."""
+    return _combine([(numerator, 1), (denominator, -1)])

@@ -3,7 +3,7 @@
 At 51.2 kHz and a ~0.4 s steady window the former default Welch segment (1024 samples, 50 Hz bins) made
 every bin "near a mains harmonic": broadband power next to a steep spectral feature was taken for hum and
 interpolated away, and A came out 4–13 % low on the twin data. The default now resolves the lines
-(bins <= mains/4, :func:`fivid.identify.runs.default_nperseg`).
+(bins <= mains/4, :func:`fivid.signal.welch.default_nperseg`).
 """
 
 import glob
@@ -16,7 +16,8 @@ from scipy import stats
 from synthetic_friction_runs import band_amplitude, edge_law, synthetic_run
 
 from fivid.identify import identify_friction_law
-from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, default_nperseg, mains_lines_resolved
+from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, mains_lines_resolved
+from fivid.signal.welch import default_nperseg
 
 FS = 51200.0  # [Hz] the twin's DAQ rate
 GRID = [(v, ra) for ra in (0.4e-6, 1.6e-6) for v in (0.005, 0.01, 0.02)]

@@ -10,7 +10,7 @@ from ingest_helpers import STANDARD_GRAVITY
 from fivid.errors import ConfigError, FividError, SchemaError, UnitError
 from fivid.io import RigProfile, load_rig_profile, read_rig_csv
 from fivid.io.rig_profile import rig_profile_from_mapping
-from fivid.io.rig_quantities import sensitivity_factor
+from fivid.units import sensitivity_factor
 
 ROOT = Path(__file__).resolve().parents[1]
 RTOL = 4 * 2.0**-52  # a few float roundings of exactly defined factors

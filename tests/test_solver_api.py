@@ -11,6 +11,7 @@ import xarray as xr
 from fivid.errors import ConfigError
 from fivid.fe import load_model
 from fivid.solver import SimulationDiverged, critical_time_step, simulate, stable_step
+from fivid.units import conversion
 from solver_models import block_on_base, cantilever
 
 
@@ -202,3 +203,7 @@ def test_time_step_study_on_a_linear_model():
     assert res.attrs["time_step_fine"] == pytest.approx(res.attrs["time_step_coarse"] / 2, rel=0.01)
     assert abs(res.attrs["level_diff_db"]) < 0.1
     assert res.psd_coarse.size == res.psd_fine.size and res.frequency.attrs["units"] == "Hz"
+    # the PSD units come from fivid.units.power_units; the old hand-built "(m s-2)2 Hz-1" read back through
+    # fivid.units as m s-2 times 2 per Hz, i.e. the wrong dimension
+    assert res.psd_coarse.attrs["units"] == "m2 s-4 Hz-1"
+    assert conversion(res.psd_fine.attrs["units"], "m2 s-4 Hz-1") == (1.0, 0.0)

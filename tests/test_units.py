@@ -73,3 +73,73 @@ def test_bare_number_with_default_units():
     assert parse_quantity("0.3", "1") == 0.3
     assert not is_compatible("kg", "m")
     assert math.isclose(parse_quantity("1e-3 m", "mm"), 1.0, rel_tol=RTOL)
+
+
+# ---- one home (issue 20 item 4): the rig readers' and the spectra's unit helpers are fivid.units' own ----
+
+def test_rig_quantities_and_unit_strings_only_call_into_units():
+    import fivid.io.rig_quantities as rq
+    import fivid.signal.unit_strings as us
+    import fivid.units as u
+
+    assert rq.sensitivity_factor is u.sensitivity_factor and rq.NUMBER is u.NUMBER
+    assert (us.power_units, us.product_units, us.ratio_units) == (u.power_units, u.product_units, u.ratio_units)
+
+
+@pytest.mark.parametrize("text, decimal, expected", [
+    ("0,8 um", ",", 0.8e-6),
+    ("0.8 um", ",", 0.8e-6),      # a point is still read in a decimal-comma file
+    ("1,5e3 mm/s", ",", 1.5),
+    ("-2,5 N", ",", -2.5),
+    (",5 s", ",", 0.5),
+])
+def test_decimal_comma(text, decimal, expected):
+    assert parse_quantity(text, _si(text), decimal=decimal) == pytest.approx(expected, rel=RTOL)
+
+
+def _si(text):
+    return {"um": "m", "mm/s": "m s-1", "N": "N", "s": "s"}[text.split()[-1]]
+
+
+def test_decimal_comma_is_refused_in_a_decimal_point_text():
+    with pytest.raises(UnitError, match="comma"):
+        parse_quantity("0,8 um", "m")  # "0" then unit ",8 um": refused (pint alone gave 0 x 8 um = 0)
+    with pytest.raises(UnitError, match="decimal mark"):
+        parse_quantity("0.8 um", "m", decimal=";")
+
+
+def test_metadata_value_reads_decimal_commas_through_units():
+    from fivid.io.rig_quantities import metadata_value
+
+    assert metadata_value("roughness_ra", "0,4 µm", decimal=",") == pytest.approx(4e-7, rel=RTOL)
+    # a bare number with the profile's unit may use either mark (file names such as 'B7_v2,5_...')
+    assert metadata_value("sliding_velocity", "2,5", default_units="mm/s") == pytest.approx(2.5e-3, rel=RTOL)
+    assert metadata_value("sliding_velocity", "2.5", default_units="mm/s", decimal=",") == pytest.approx(2.5e-3,
+                                                                                                       rel=RTOL)
+    with pytest.raises(UnitError):
+        metadata_value("roughness_ra", "0,4 µm")  # with a unit, the file's decimal point rules
+
+
+@pytest.mark.parametrize("signal, psd, csd_with_n, frf_per_n", [
+    ("m s-2", "m2 s-4 Hz-1", "m s-2 N Hz-1", "m s-2 N-1"),
+    ("1", "Hz-1", "N Hz-1", "N-1"),
+    ("m/s", "(m/s)2 Hz-1", "(m/s) N Hz-1", "(m/s) N-1"),  # not a product of powers: bracketed, not guessed
+])
+def test_spectral_unit_strings_parse_back_to_the_right_dimension(signal, psd, csd_with_n, frf_per_n):
+    from fivid.units import power_units, product_units, ratio_units
+
+    assert power_units(signal) == psd and product_units(signal, "N") == csd_with_n
+    assert ratio_units(signal, "N") == frf_per_n
+    if signal != "m/s":  # the registry's style reads back through pint with the dimension of the product
+        assert is_compatible(psd, "m2 s-4 Hz-1" if signal == "m s-2" else "s")
+        assert is_compatible(frf_per_n, "m s-2 N-1" if signal == "m s-2" else "N-1")
+
+
+@pytest.mark.parametrize("text, to", [("1,5 mm", "m"), ("2,5 mm/s", "m s-1"), ("0,8 um", "m")])
+def test_a_decimal_comma_where_none_is_declared_is_an_error_not_a_product(text, to):
+    # pint reads "1,5 mm" as 1 x (5 mm): 5 mm, silently wrong; fivid.units refuses it and says why
+    with pytest.raises(UnitError, match="comma"):
+        parse_quantity(text, to)
+    assert parse_quantity(text, to, decimal=",") == pytest.approx(float(text.split()[0].replace(",", ".")) *
+                                                                  {"mm": 1e-3, "mm/s": 1e-3, "um": 1e-6}[text.split()[1]],
+                                                                  rel=RTOL)

@@ -12,8 +12,8 @@ tolerance or the score says the difference is not significant against the PSD es
 uncertainty, or after ``max_iterations``; the result says which. Peaks are then checked without
 re-tuning (seed 001): the matched-peak scores of the last simulation are reported.
 
-The measured run is cropped to its steady-sliding window, a simulated run (measured or not) to
-``t >= transient_end``.
+Both runs are cropped to their steady part (:func:`fivid.signal.steady_part`: a measured run to its
+steady-sliding window, a simulated run to ``t >= transient_end``).
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ class InverseAmplitude:
     reason: str
     iterations: list = field(default_factory=list)
     peaks: dict = field(default_factory=dict)
+    nperseg: int = 0
 
     def to_json(self) -> dict:
         return {
@@ -55,21 +56,12 @@ class InverseAmplitude:
             "reason": self.reason,
             "iterations": self.iterations,
             "peaks": self.peaks,
+            "nperseg": self.nperseg,
         }
 
 
-def _steady_part(ds):
-    """A simulated run from its ``transient_end`` on; a measured run on its steady-sliding window."""
-    from fivid.signal import steady_sliding_window
-
-    if "transient_end" in ds.attrs:
-        return ds.sel(time=slice(float(ds.attrs["transient_end"]), None))
-    t0, t1 = steady_sliding_window(ds)
-    return ds.sel(time=slice(t0, t1))
-
-
 def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float = 0.1, seed: int = 0,
-                            nperseg: int = 512, max_iterations: int = 4, tolerance_db: float = 0.5,
+                            nperseg: int | None = None, max_iterations: int = 4, tolerance_db: float = 0.5,
                             simulator=None, progress=None) -> InverseAmplitude:
     """Amplitude scale g such that the simulated acceleration level matches ``measured`` in ``band``.
 
@@ -87,8 +79,10 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
         Steady-sliding time simulated per iteration [s].
     seed : int
         Seed of the law's synthesis (the same in every iteration: only the scale changes).
-    nperseg : int
-        Welch segment length of the scores [samples]; the simulated steady part must hold one.
+    nperseg : int, optional
+        Welch segment length of the scores [samples]; the simulated steady part must hold one. Default
+        :func:`fivid.signal.welch.default_nperseg` of the shorter record (:func:`fivid.score.score_runs`);
+        the result records the one used.
     max_iterations : int
     tolerance_db : float
         Stop when ``|level_diff_db|`` is below this [dB].
@@ -99,6 +93,7 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
         Progress bar of the simulations.
     """
     from fivid.score import score_runs
+    from fivid.signal.steady import steady_part
 
     if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
         raise ConfigError(f"max_iterations (--inverse-iterations) must be an integer >= 1, got {max_iterations!r}",
@@ -120,14 +115,15 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
     fn = float(measured.attrs["normal_load"])
     fs = float(measured.attrs["sample_rate"])
     run_id = str(measured.attrs.get("run_id", "?"))
-    meas = _steady_part(measured)
+    meas = steady_part(measured)
     a_fwd = float(law.amplitude(v, ra, fn))
     g, history = 1.0, []
-    converged, reason, peaks = False, f"not converged in {max_iterations} iterations", {}
+    converged, reason, peaks, used_nperseg = False, f"not converged in {max_iterations} iterations", {}, 0
     for it in range(int(max_iterations)):
-        sim = _steady_part(simulator(law.scaled(g), v, ra, fn, duration, fs, seed))
+        sim = steady_part(simulator(law.scaled(g), v, ra, fn, duration, fs, seed))
         scores = score_runs(meas, sim, band=band, nperseg=nperseg)
         d = float(scores["level_diff_db"])
+        used_nperseg = int(scores.attrs["nperseg"])
         significant = bool(scores["level_diff_db_significant"])
         history.append({"iteration": it, "scale": g, "level_diff_db": d, "significant": significant,
                          "lsd_db": float(scores["lsd_db"])})
@@ -145,7 +141,7 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
         g = _next_scale(history)
     return InverseAmplitude(run_id=run_id, band=tuple(band), forward_amplitude=a_fwd, scale=g,
                             inverse_amplitude=g * a_fwd, converged=converged, reason=reason, iterations=history,
-                            peaks=peaks)
+                            peaks=peaks, nperseg=used_nperseg)
 
 
 def _slope(history):

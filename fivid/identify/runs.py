@@ -29,10 +29,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
+from fivid.signal.welch import NPERSEG_RULE, default_nperseg  # the one segment rule (used by identify.friction)
 
 __all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
-           "default_nperseg", "mains_lines_resolved",
-           "NPERSEG_RULE"]
+           "mains_lines_resolved"]
 
 _log = logging.getLogger("fivid")
 
@@ -44,7 +44,7 @@ class RunSettings:
     Parameters
     ----------
     nperseg : int or None
-        Welch segment length [samples]; None: :func:`default_nperseg`.
+        Welch segment length [samples]; None: :func:`fivid.signal.welch.default_nperseg` with the mains frequency.
     tolerance : float
         Relative velocity tolerance of the steady-sliding window [-].
     min_normal_force : float
@@ -85,8 +85,6 @@ class RunSettings:
         }
 
 
-NPERSEG_RULE = ("largest power of two <= n/16 with fs/nperseg >= 2 Hz (>= 256); raised to fs/nperseg <= mains/4 "
-                "while nperseg <= n/4 (n: steady-window samples)")
 DEFAULT_BAND_LOW = 20.0  # [Hz] above drift and the loading device's rigid-body modes
 DEFAULT_BAND_HIGH = 2000.0  # [Hz] placeholder for where a TRIBOAIR-like force chain is dynamic-free
 
@@ -140,45 +138,14 @@ class RunAnalysis:
             "mains_removal": self.mains_removal,
             "glitches_replaced": self.glitches_replaced,
             "noise_fraction": self.noise_fraction,
+            "nperseg": self.psd_attrs.get("nperseg"),  # the Welch segment [samples] this run's PSD used
         }
-
-
-def default_nperseg(sample_rate: float, n_samples: int, mains_frequency: float | None = None) -> int:
-    """Default Welch segment length [samples] for a window of ``n_samples`` at ``sample_rate`` [Hz].
-
-    Two needs set it:
-
-    - **averages**: the largest power of two ``m`` with ``m <= n / 16`` (at least ~31
-      half-overlapped segments) and ``fs / m >= 2 Hz``, and at least 256;
-    - **mains lines** (``mains_frequency`` given): the line test of :func:`mains_line_bins` and the
-      interpolation over a line's ±2-bin main lobe touch only the line when the bins are narrow
-      compared with the line spacing. With ``Δf <= f_m / 4`` a harmonic's lobe spans ±f_m/2 and
-      its floor (5–15 bins away) lies 1.25–3.75 f_m away, so a line removes 5 bins of width f_m/4
-      (1.25 f_m of spectrum per harmonic, replaced by interpolation, not zeroed). At ``Δf = f_m``
-      (e.g. 1024 samples at 51.2 kHz and 50 Hz mains) the lobe is as wide as the line spacing: every
-      bin is "near a harmonic", broadband structure is taken for lines and interpolated away — on the
-      synthetic twin data this underestimated A by 10–17 %. So ``m`` is raised to the smallest power
-      of two with ``fs / m <= f_m / 4``, but not beyond ``n / 4`` (≥ 7 half-overlapped segments,
-      ν ≈ 13 χ² degrees of freedom per bin, which the line test's quantile accounts for). A window
-      too short for that resolution keeps the averages rule; :func:`analyse_run` then does not remove
-      lines (see :func:`mains_lines_resolved`).
-
-    The band power A² and its variance do not depend on ``m`` (a sum over the band of a Welch PSD
-    estimates ``(1/T) ∫ S² df`` for any resolution), so the finer segments cost no precision of A.
-    """
-    m = 256
-    while 2 * m <= n_samples / 16 and sample_rate / (2 * m) >= 2.0:
-        m *= 2
-    if mains_frequency:
-        while sample_rate / m > mains_frequency / 4 and 2 * m <= n_samples / 4:
-            m *= 2
-    return m
 
 
 def mains_lines_resolved(resolution: float, mains_frequency: float | None) -> bool:
     """True when Welch bins of width ``resolution`` [Hz] resolve mains lines: ``Δf <= f_m / 4``.
 
-    See :func:`default_nperseg`; coarser bins make :func:`mains_line_bins` take broadband power
+    See :func:`fivid.signal.welch.default_nperseg`; coarser bins make :func:`mains_line_bins` take broadband power
     for lines.
     """
     return bool(mains_frequency) and resolution <= mains_frequency / 4 * (1 + 1e-9)
@@ -487,7 +454,7 @@ def _tare_noise_psd(t, ft, fn, mu_mean, fn_mean, f, nperseg, fs, band, settings)
     v = np.asarray(p.values, float)
     nu = float(p.attrs["equivalent_degrees_of_freedom"])
     # at any resolution: interpolating over a sensor-noise floor, smooth by nature and median-smoothed
-    # below, takes no broadband structure away (unlike on the PSD of μp, see default_nperseg)
+    # below, takes no broadband structure away (unlike on the PSD of μp, see fivid.signal.welch.default_nperseg)
     mask = mains_line_bins(fq, v, nu, settings.mains_frequency, (fq[1], fq[-1]))
     v = _replace_lines(fq, v, mask)
     v[1:] = octave_median(fq[1:], v[1:], 1.0 / 3.0) * nu / stats.chi2.ppf(0.5, nu)

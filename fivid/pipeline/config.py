@@ -371,7 +371,7 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
             if not lo < hi:
                 chk.add("analysis.band", f"f_lo must be below f_hi, got {band_raw!r}")
             band = (lo, hi)
-    nperseg = chk.integer(analysis, "analysis.nperseg", "nperseg", 4096, 64, 2**22)
+    nperseg = chk.integer(analysis, "analysis.nperseg", "nperseg", 256, 64, 2**22) if "nperseg" in analysis else None
     settle = chk.quantity(analysis, "analysis.settle", "settle", "s", default="0 s", positive=False)
     if settle is not None and settle < 0:
         chk.add("analysis.settle", f"must be >= 0 s, got {analysis.get('settle')!r}")
@@ -397,6 +397,10 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
         chk.add("analysis.band", f"upper edge {band[1]:g} Hz is above {sample_rate / 2:g} Hz, the Nyquist frequency of "
                 f"simulate.sample_rate = {sim.get('sample_rate', '51.2 kHz')!r}: the simulated PSD stops there; lower "
                 "the band's upper edge or raise simulate.sample_rate")
+    if nperseg is None:  # the one default rule (fivid.signal.welch.default_nperseg) on the simulated steady part
+        from fivid.signal.welch import default_nperseg
+        nperseg = default_nperseg(sample_rate, (duration - (settle or 0.0)) * sample_rate) if duration and sample_rate \
+            else 256
     if duration is not None and nperseg and sample_rate and (duration - (settle or 0.0)) * sample_rate < nperseg:
         chk.add("simulate.duration", f"{sim.get('duration')!r} less analysis.settle at {sample_rate:g} Hz gives "
                 f"fewer samples than analysis.nperseg = {nperseg}; lengthen it or lower nperseg")

@@ -8,40 +8,14 @@ report, on one common frequency grid.
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 
 from fivid.errors import DataQualityError
 from fivid.schema import new_history
 
-__all__ = ["score_condition", "steady_part", "acceleration_psd"]
-
-log = logging.getLogger("fivid")
+__all__ = ["score_condition", "acceleration_psd"]
 
 HEADLINE = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
-
-
-def steady_part(ds, *, label: str, settle: float = 0.0):
-    """The steady-sliding part of a run, less ``settle`` [s] at its start.
-
-    A simulation says where its transient (preload, settling, base ramp) ends (attribute
-    ``transient_end`` [s]); a measured run's window is found from its encoder signal
-    (:func:`fivid.signal.steady_sliding_window`); without either the whole record is used. The same
-    ``settle`` is skipped in both, so that the ringing of lightly damped modes excited by the start
-    of sliding has decayed (it would otherwise raise the PSD at those modes in one and not the other).
-    """
-    from fivid.signal import steady_sliding_window
-
-    if "transient_end" in ds.attrs:
-        t0, t1 = float(ds.attrs["transient_end"]), None
-    else:
-        try:
-            t0, t1 = steady_sliding_window(ds)
-        except DataQualityError as exc:
-            log.info("%s: no steady-sliding window found (%s); the whole record is used", label, exc.message)
-            t0, t1 = float(ds["time"].values[0]), None
-    return ds.sel(time=slice(t0 + settle, t1))
 
 
 def _acceleration(ds):
@@ -58,7 +32,7 @@ def acceleration_psd(ds, *, nperseg: int):
     return welch_psd(_acceleration(ds), nperseg=nperseg, window="hann", detrend="constant", confidence=0.95)
 
 
-def score_condition(measured: list, simulated: list, *, band, nperseg: int, settle: float = 0.0):
+def score_condition(measured: list, simulated: list, *, band, nperseg: int | None = None, settle: float = 0.0):
     """Scores of every (measured run, simulation) pair and their mean; the PSDs for the report.
 
     Parameters
@@ -67,10 +41,11 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
         RunDataset netCDF files of one test condition.
     band : (float, float)
         Scoring band [Hz].
-    nperseg : int
-        Welch segment length [samples].
+    nperseg : int, optional
+        Welch segment length [samples]; default :func:`fivid.signal.welch.default_nperseg` of the shortest steady
+        record at the lowest sample rate, one for every pair and PSD (the scores state it).
     settle : float
-        Time skipped after the start of steady sliding [s] (see :func:`steady_part`).
+        Time skipped after the start of steady sliding [s] (see :func:`fivid.signal.steady_part`).
 
     Returns
     -------
@@ -88,9 +63,20 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int, sett
 
     from fivid.io import read_run
     from fivid.score import score_runs, scores_to_json
+    from fivid.signal.steady import steady_part
 
-    meas = {Path(p).stem: steady_part(read_run(p), label=Path(p).name, settle=settle) for p in measured}
-    sims = {Path(p).stem: steady_part(read_run(p), label=Path(p).name, settle=settle) for p in simulated}
+    def steady(p):  # a measured run without a steady-sliding window is used whole (logged)
+        return steady_part(read_run(p), label=Path(p).name, settle=settle, whole_record_if_none=True)
+
+    meas = {Path(p).stem: steady(p) for p in measured}
+    sims = {Path(p).stem: steady(p) for p in simulated}
+    if nperseg is None:  # one segment for the whole condition, so that every PSD is on one grid
+        from fivid.signal.sampling import sample_rate_of
+        from fivid.signal.welch import default_nperseg
+
+        rates = {k: sample_rate_of(d["time"].values, label=k) for k, d in {**meas, **sims}.items()}
+        fs = min(rates.values())
+        nperseg = default_nperseg(fs, min(d.sizes["time"] * fs / rates[k] for k, d in {**meas, **sims}.items()))
     pairs = []
     for mname, m in meas.items():
         for sname, s in sims.items():

@@ -52,7 +52,7 @@ def scores_to_json(scores) -> dict:
     out["variable"] = a.get("variable")
     out["units"] = a.get("variable_units")
     out["band_hz"] = [_num(a["band_lower"]), _num(a["band_upper"])]
-    out["settings"] = {k: a[k] for k in ("sample_rate", "nperseg", "noverlap", "window", "detrend", "confidence",
+    out["settings"] = {k: a[k] for k in ("sample_rate", "nperseg", "nperseg_rule", "noverlap", "window", "detrend", "confidence",
                                          "frequency_resolution", "measured_equivalent_degrees_of_freedom",
                                          "simulated_equivalent_degrees_of_freedom", "resampled", "peak_prominence_db",
                                          "peak_match_tolerance", "steady_only") if k in a}

@@ -33,12 +33,11 @@ from fivid.signal.levels import bin_weights, third_octave_weights
 from fivid.signal.resample import resample_to
 from fivid.signal.sampling import run_label, sample_rate_of
 from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, check_nperseg, segment_window
-from fivid.signal.steady import steady_sliding_window
-from fivid.signal.welch import welch_psd
+from fivid.signal.steady import steady_part
+from fivid.signal.welch import NPERSEG_RULE, default_nperseg, welch_psd
 
-__all__ = ["score_runs", "DEFAULT_NPERSEG"]
+__all__ = ["score_runs"]
 
-DEFAULT_NPERSEG = 8192
 _DB = 10.0 / np.log(10.0)
 # Default band: from 4 bins (below, the Hann leakage of the removed mean and of drifts dominates) to
 # 80 % of the lower Nyquist frequency (anti-aliasing filters of DAQs and of resample_poly roll off above).
@@ -69,16 +68,6 @@ def _signal(ds, variable: str, sensor, label: str):
     return da
 
 
-def _crop_steady(ds, label):
-    from fivid.errors import FividError
-
-    try:
-        t0, t1 = steady_sliding_window(ds)
-    except FividError as exc:
-        raise type(exc)(f"{label}: {exc.message}") from None
-    return ds.sel(time=slice(t0, t1))
-
-
 def _band(band, fs: float, nperseg: int, labels_rates) -> tuple[float, float]:
     df = fs / nperseg
     if band is None:
@@ -99,7 +88,7 @@ def _band(band, fs: float, nperseg: int, labels_rates) -> tuple[float, float]:
     return f_lo, f_hi
 
 
-def score_runs(measured, simulated, *, variable="acceleration", band=None, nperseg=DEFAULT_NPERSEG, noverlap=None,
+def score_runs(measured, simulated, *, variable="acceleration", band=None, nperseg=None, noverlap=None,
                window="hann", detrend="constant", sensor=None, steady=False, confidence=0.95,
                peak_prominence_db=None, peak_match_tolerance=0.2, max_peaks=10, backend=None):
     """PSD scores of a simulated run against a measured one over a frequency band.
@@ -113,14 +102,17 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     band : (float, float), optional
         ``(f_lo, f_hi)`` [Hz]; default from 4 PSD bins to 80 % of the lower Nyquist frequency.
         ``f_hi`` beyond either run's Nyquist frequency is an error.
-    nperseg : int, default 8192
-        Welch segment length [samples] at the common rate.
+    nperseg : int, optional
+        Welch segment length [samples] at the common rate; default
+        :func:`fivid.signal.welch.default_nperseg` of the shorter record at the common rate (the same for
+        both runs). The scores' attrs ``nperseg`` and ``nperseg_rule`` say which was used.
     noverlap, window, detrend, backend
         Welch settings (:func:`fivid.signal.welch_psd`); default 50 % overlap, Hann, constant detrend.
     sensor : str, optional
         Which sensor when ``variable`` has a ``sensor`` dimension with several.
     steady : bool, default False
-        Crop each run to its steady-sliding window (:func:`fivid.signal.steady_sliding_window`) first.
+        Crop each run to its steady part first (:func:`fivid.signal.steady_part`: a measured run to its
+        steady-sliding window, a simulated run to ``time >= transient_end``).
     confidence : float, default 0.95
         Probability that scores of two estimates of the same spectrum stay under their thresholds.
     peak_prominence_db : float, optional
@@ -151,10 +143,12 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     """
     from scipy.stats import norm
 
-    nperseg = check_nperseg(nperseg)
+    nperseg_given = nperseg is not None
+    if nperseg_given:
+        nperseg = check_nperseg(nperseg)
     lm, ls = _label(measured, "measured"), _label(simulated, "simulated")
     if steady:
-        measured, simulated = _crop_steady(measured, lm), _crop_steady(simulated, ls)
+        measured, simulated = steady_part(measured, label=lm), steady_part(simulated, label=ls)
     da_m, da_s = _signal(measured, variable, sensor, lm), _signal(simulated, variable, sensor, ls)
     if sensor is not None and not any("sensor" in ds[variable].dims for ds in (measured, simulated)):
         raise ConfigError(f"sensor {sensor!r} given, but {variable!r} has no 'sensor' dimension in the {lm} nor "
@@ -165,6 +159,8 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     fs_m = sample_rate_of(da_m["time"].values, label=lm, declared=measured.attrs.get("sample_rate"))
     fs_s = sample_rate_of(da_s["time"].values, label=ls, declared=simulated.attrs.get("sample_rate"))
     fs = min(fs_m, fs_s)
+    if not nperseg_given:  # one rule, on the shorter record at the common rate, so both PSDs share one grid
+        nperseg = default_nperseg(fs, min(da_m.sizes["time"] * fs / fs_m, da_s.sizes["time"] * fs / fs_s))
     f_lo, f_hi = _band(band, fs, int(nperseg), [(lm, fs_m), (ls, fs_s)])
     resampled = "none"
     if abs(fs_m / fs_s - 1) > 1e-9:
@@ -252,6 +248,7 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
         sensor=sensor,
         sigma=sigma,
         steady=steady,
+        nperseg_rule="given" if nperseg_given else NPERSEG_RULE,
         z2=z2,
     )
     return _assemble(results, measured=measured, simulated=simulated, variable=variable, units=da_m.attrs["units"])
@@ -318,7 +315,7 @@ def _significant(score: str, side: str = "above") -> dict:
 def _assemble(v: dict, *, measured, simulated, variable, units):
     import xarray as xr
 
-    from fivid.signal.unit_strings import power_units
+    from fivid.units import power_units
 
     psd_units = power_units(units)
     db = {"units": "dB"}
@@ -410,6 +407,7 @@ def _assemble(v: dict, *, measured, simulated, variable, units):
         "steady_only": int(bool(v["steady"])),
         "sensor": "" if v["sensor"] is None else str(v["sensor"]),
         "nperseg": psd_m.attrs["nperseg"],
+        "nperseg_rule": v["nperseg_rule"],
         "noverlap": psd_m.attrs["noverlap"],
         "window": psd_m.attrs["window"],
         "detrend": psd_m.attrs["detrend"],

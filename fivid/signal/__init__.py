@@ -10,8 +10,8 @@ wrap DataArrays/Datasets and record units and settings in attrs.
 from fivid.signal.frf import coherence, frf
 from fivid.signal.levels import band_rms, third_octave_bands, third_octave_levels, vibration_level_db
 from fivid.signal.resample import resample_to
-from fivid.signal.steady import steady_sliding_window
-from fivid.signal.unit_strings import power_units
+from fivid.signal.steady import steady_part, steady_sliding_window
+from fivid.units import power_units
 from fivid.signal.welch import csd, welch_psd
 
 __all__ = [
@@ -24,6 +24,7 @@ __all__ = [
     "third_octave_levels",
     "vibration_level_db",
     "steady_sliding_window",
+    "steady_part",
     "resample_to",
     "power_units",
 ]

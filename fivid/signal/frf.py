@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError
-from fivid.signal.unit_strings import ratio_units
+from fivid.units import ratio_units
 from fivid.signal.welch import csd
 
 __all__ = ["frf", "coherence", "FRF_ESTIMATORS"]
@@ -21,7 +21,7 @@ __all__ = ["frf", "coherence", "FRF_ESTIMATORS"]
 FRF_ESTIMATORS = ("H1", "H2")
 
 
-def frf(x, y, *, nperseg, estimator="H1", noverlap=None, window="hann", detrend="constant", fs=None, backend=None):
+def frf(x, y, *, nperseg=None, estimator="H1", noverlap=None, window="hann", detrend="constant", fs=None, backend=None):
     """Frequency-response function from input ``x`` to output ``y`` by the H1 or H2 estimator.
 
     Parameters
@@ -29,7 +29,8 @@ def frf(x, y, *, nperseg, estimator="H1", noverlap=None, window="hann", detrend=
     x, y : xarray.DataArray
         Input [u] and output [v] signals on the same uniform ``time`` [s].
     nperseg, noverlap, window, detrend, fs, backend
-        Welch settings, as in :func:`fivid.signal.welch_psd`.
+        Welch settings, as in :func:`fivid.signal.welch_psd` (default ``nperseg``:
+        :func:`fivid.signal.welch.default_nperseg`).
     estimator : {"H1", "H2"}, default "H1"
         H1 when the noise is on the output, H2 when it is on the input.
 
@@ -61,7 +62,7 @@ def frf(x, y, *, nperseg, estimator="H1", noverlap=None, window="hann", detrend=
     )
 
 
-def coherence(x, y, *, nperseg, noverlap=None, window="hann", detrend="constant", fs=None, backend=None):
+def coherence(x, y, *, nperseg=None, noverlap=None, window="hann", detrend="constant", fs=None, backend=None):
     """Magnitude-squared coherence ``|Pxy|² / (Pxx Pyy)`` [1] of two signals on the same time grid.
 
     Equals :func:`scipy.signal.coherence` for identical settings; 1 for a noise-free linear system.

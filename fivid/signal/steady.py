@@ -2,17 +2,22 @@
 
 A rig run ramps the base up, slides steadily, and ramps down; the friction law and the PSD scores
 use only the steady part (DESIGN §3: "the part where the encoder velocity is within a tolerance of
-its plateau").
+its plateau"). A simulated run says itself where its transient ends (attribute ``transient_end`` [s]).
+:func:`steady_part` is the one place that picks the steady part of any run, measured or simulated.
 """
 
 from __future__ import annotations
+
+import logging
 
 import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError
 from fivid.signal.sampling import check_finite, run_label, sample_rate_of
 
-__all__ = ["sliding_velocity_signal", "steady_sliding_window"]
+__all__ = ["sliding_velocity_signal", "steady_sliding_window", "steady_part"]
+
+log = logging.getLogger("fivid")
 
 
 def sliding_velocity_signal(ds) -> tuple[np.ndarray, np.ndarray, str]:
@@ -115,3 +120,63 @@ def steady_sliding_window(ds, *, tolerance=0.05, smoothing=0.05, central_fractio
         f"({np.mean(inside):.1%} of samples in all); at least {min_duration:.6g} s is required "
         "(raise tolerance= or lower min_duration= if this run is usable)"
     )
+
+
+def steady_part(ds, *, settle=0.0, tolerance=0.05, label=None, whole_record_if_none=False):
+    """The steady-sliding part of a run, measured or simulated, less ``settle`` [s] at its start.
+
+    - A simulated run (attribute ``transient_end`` [s]: preload, settling and base ramp end there) is
+      kept from ``transient_end`` to its end; its encoder signal is not consulted (the driver knows
+      where its transient ends, and a run whose base slides from the start would otherwise keep the
+      preload).
+    - A measured run is cropped to :func:`steady_sliding_window` (encoder velocity within
+      ``tolerance`` of its plateau).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A RunDataset on a ``time`` [s] coordinate.
+    settle : float, default 0
+        Time skipped after the start of the steady part [s], so that the ringing of lightly damped modes
+        excited by the start of sliding has decayed; skip the same in runs that are compared.
+    tolerance : float, default 0.05
+        Relative velocity tolerance of the measured window [-] (:func:`steady_sliding_window`).
+    label : str, optional
+        How to name the run in messages (default: its ``run_id``).
+    whole_record_if_none : bool, default False
+        When a measured run has no steady-sliding window (or no encoder signal), use the whole record
+        (logged) instead of raising.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` selected on ``time`` in ``[t_start + settle, t_stop]``.
+
+    Raises
+    ------
+    DataQualityError
+        No steady window (unless ``whole_record_if_none``), or nothing left after ``settle``.
+    ConfigError
+        ``settle`` negative or not finite.
+    """
+    label = label or run_label(ds, default="run")
+    settle = float(settle)
+    if not (np.isfinite(settle) and settle >= 0):
+        raise ConfigError(f"{label}: settle must be a duration >= 0 [s], got {settle!r}", key="settle")
+    if "transient_end" in ds.attrs:
+        t0, t1 = float(ds.attrs["transient_end"]), None
+    else:
+        try:
+            t0, t1 = steady_sliding_window(ds, tolerance=tolerance)
+        except DataQualityError as exc:
+            if not whole_record_if_none:
+                raise DataQualityError(exc.message if exc.message.startswith(label) else f"{label}: {exc.message}") \
+                    from None
+            log.info("%s: no steady-sliding window found (%s); the whole record is used", label, exc.message)
+            t0, t1 = float(ds["time"].values[0]), None
+    part = ds.sel(time=slice(t0 + settle, t1))
+    if part.sizes.get("time", 0) == 0:
+        end = float(ds["time"].values[-1]) if t1 is None else t1
+        raise DataQualityError(f"{label}: nothing is left of the steady part {t0:.6g}-{end:.6g} s after a settle time "
+                               f"of {settle:.6g} s; lower the settle time or record longer")
+    return part

@@ -170,7 +170,7 @@ def growth_phase(t, env, *, low: float = 0.01, high: float = 0.3, linear_until: 
     return float(t[int(below[-1])]), float(t[k1])
 
 
-def dominant_frequency_track(x, fs: float, *, nperseg: int = 1024, noverlap: int | None = None,
+def dominant_frequency_track(x, fs: float, *, nperseg: int | None = None, noverlap: int | None = None,
                              band: tuple[float, float] | None = None):
     """Frequency of the strongest spectrogram bin in each time slice.
 
@@ -180,8 +180,9 @@ def dominant_frequency_track(x, fs: float, *, nperseg: int = 1024, noverlap: int
         The record.
     fs : float
         Sample rate [Hz].
-    nperseg, noverlap : int
-        Spectrogram segment and overlap [samples] (Hann window; default overlap half a segment).
+    nperseg, noverlap : int, optional
+        Spectrogram segment and overlap [samples] (Hann window; default segment
+        :func:`fivid.signal.welch.default_nperseg` of the record, default overlap half a segment).
     band : (float, float), optional
         Only bins within this band [Hz].
 
@@ -196,7 +197,10 @@ def dominant_frequency_track(x, fs: float, *, nperseg: int = 1024, noverlap: int
     """
     from scipy.signal import spectrogram
 
+    from fivid.signal.welch import default_nperseg
+
     x = np.asarray(x, dtype=float)
+    nperseg = default_nperseg(fs, x.size) if nperseg is None else int(nperseg)
     if x.size < nperseg:
         raise DataQualityError(f"the record ({x.size} samples) is shorter than nperseg = {nperseg}")
     f, tt, S = spectrogram(x, fs=fs, window="hann", nperseg=nperseg,

@@ -7,7 +7,7 @@ import numpy as np
 __all__ = ["time_step_study", "steady_psds", "band_distance"]
 
 
-def time_step_study(model, *, time_step=None, variable="acceleration", band=None, nperseg=1024, **simulate_kwargs):
+def time_step_study(model, *, time_step=None, variable="acceleration", band=None, nperseg=None, **simulate_kwargs):
     """Run :func:`fivid.solver.simulate` at ``dt`` and ``dt/2`` and report how the PSD changes.
 
     Parameters
@@ -20,8 +20,9 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
         Variable whose PSD is compared (first sensor if it has a sensor dim).
     band : (float, float), optional
         Frequency band [Hz] of the comparison (default: 0 to 0.8 x Nyquist).
-    nperseg : int
-        Welch segment length (Hann window, 50 % overlap, constant detrend, density scaling).
+    nperseg : int, optional
+        Welch segment length [samples] (Hann window, 50 % overlap, constant detrend, density scaling); default
+        :func:`fivid.signal.welch.default_nperseg` of the steady part. The result's ``welch`` attr states it.
     **simulate_kwargs
         Passed to :func:`simulate` (``duration``, ``sample_rate``, ``mu``/``law`` ...).
 
@@ -37,6 +38,7 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     from fivid.fe.model import Model, load_model
     from fivid.solver.driver import simulate
     from fivid.solver.timestep import stable_step
+    from fivid.units import power_units
 
     if not isinstance(model, Model):
         model = load_model(model)
@@ -53,10 +55,10 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     fs = float(runs[0].attrs["sample_rate"])
     lo, hi = band if band is not None else (0.0, 0.8 * fs / 2)
     lsd, level, sel = band_distance(f, psds[0], psds[1], (lo, hi))
-    units = runs[0][variable].attrs.get("units", "")
+    units = power_units(runs[0][variable].attrs.get("units", "1"))
     out = xr.Dataset(
-        {"psd_coarse": (("frequency",), psds[0], {"units": f"({units})2 Hz-1"}),
-         "psd_fine": (("frequency",), psds[1], {"units": f"({units})2 Hz-1"})},
+        {"psd_coarse": (("frequency",), psds[0], {"units": units}),
+         "psd_fine": (("frequency",), psds[1], {"units": units})},
         coords={"frequency": ("frequency", f, {"units": "Hz"})},
     )
     out.attrs.update({
@@ -71,20 +73,29 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     return out
 
 
-def steady_psds(runs, *, variable="acceleration", nperseg=1024):
-    """Welch PSDs of ``variable`` over the steady-sliding part of each run (Hann, ``nperseg`` capped at the record,
-    50 % overlap, constant detrend, density; first sensor): ``(frequency [Hz], [psd, ...], nperseg)``."""
+def steady_psds(runs, *, variable="acceleration", nperseg=None):
+    """Welch PSDs of ``variable`` over the steady part of each run (:func:`fivid.signal.steady_part`; Hann, 50 %
+    overlap, constant detrend, density; first sensor): ``(frequency [Hz], [psd, ...], nperseg)``.
+
+    One ``nperseg`` for all runs: the one given (default :func:`fivid.signal.welch.default_nperseg` of the shortest
+    steady part), capped at the shortest steady part."""
     from scipy.signal import welch
 
-    psds = []
+    from fivid.signal.steady import steady_part
+    from fivid.signal.welch import default_nperseg
+
+    signals = []
     for ds in runs:
-        da = ds[variable]
+        da = steady_part(ds)[variable]
         if "sensor" in da.dims:
             da = da.isel(sensor=0)
-        x = np.asarray(da.where(ds.time >= ds.attrs["transient_end"], drop=True).values)
-        n = min(nperseg, x.size)
-        f, p = welch(x, fs=float(ds.attrs["sample_rate"]), window="hann", nperseg=n, noverlap=n // 2,
-                     detrend="constant", scaling="density")
+        signals.append((np.asarray(da.values), float(ds.attrs["sample_rate"])))
+    shortest = min(x.size for x, _ in signals)
+    n = default_nperseg(signals[0][1], shortest) if nperseg is None else int(nperseg)
+    n = min(n, shortest)
+    psds = []
+    for x, fs in signals:
+        f, p = welch(x, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
         psds.append(p)
     return f, psds, n
 

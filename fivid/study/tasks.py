@@ -77,7 +77,8 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
         n_nb = min(late.size, 4096)
         fb, pb = welch(late, fs=fs, window="hann", nperseg=n_nb, noverlap=n_nb // 2, detrend="constant")
         data["narrowband_fraction"] = ((), narrowband_fraction(fb, pb), {
-            "units": "1", "long_name": "share of the response power in prominent spectral peaks"})
+            "units": "1", "long_name": "share of the response power in prominent spectral peaks",
+            "nperseg": n_nb})
         data.update({
             "regime": ((), np.array(a["regime"], dtype=object), {"long_name": "regime of the transient", "allowed": " ".join(REGIMES)}),
             "growth_rate": ((), a["growth_rate"], {"units": "s-1", "long_name": "envelope growth rate"}),

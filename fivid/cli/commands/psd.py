@@ -28,8 +28,9 @@ def register(subparsers) -> None:
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("run_path", metavar="RUN.nc", help="a RunDataset netCDF file (fivid ingest / simulate)")
     parser.add_argument("--variable", default="acceleration", help="variable to analyse (default: acceleration)")
-    parser.add_argument("--nperseg", type=integer_at_least(2), default=8192, metavar="N",
-                        help="segment length [samples] (default 8192); resolution = sample rate / N")
+    parser.add_argument("--nperseg", type=integer_at_least(2), default=None, metavar="N",
+                        help="segment length [samples]; resolution = sample rate / N (default: the largest power of "
+                             "two <= n/16 with bins >= 2 Hz, at least 256; n: samples analysed)")
     parser.add_argument("--noverlap", type=int, default=None, metavar="N",
                         help="segment overlap [samples] (default N/2)")
     parser.add_argument("--window", default="hann", help="taper, a scipy.signal.get_window name (default hann)")
@@ -79,7 +80,7 @@ def run(args) -> int:
         "source": str(ds.attrs.get("source", "")),
         "steady_only": int(args.steady),
         "Conventions": "CF-1.8",
-        "history": new_history(f"fivid psd {args.run_path} --variable {args.variable} --nperseg {args.nperseg}"
+        "history": new_history(f"fivid psd {args.run_path} --variable {args.variable} --nperseg {psd.attrs['nperseg']}"
                                f"{window}"),
     }
     write_netcdf(out, args.output, overwrite=args.overwrite)
@@ -87,7 +88,8 @@ def run(args) -> int:
         print(dumps_json(_summary(args, out.attrs["run_id"], psd, steady)))
         return 0
     print(f"{args.output}: PSD of {args.variable} ({psd.attrs['units']}), {psd.sizes['frequency']} bins of "
-          f"{psd.attrs['frequency_resolution']:.6g} Hz, {psd.attrs['n_segments']} segments, "
+          f"{psd.attrs['frequency_resolution']:.6g} Hz, {psd.attrs['n_segments']} segments of "
+          f"nperseg {psd.attrs['nperseg']} samples, "
           f"{psd.attrs['equivalent_degrees_of_freedom']:.4g} degrees of freedom")
     return 0
 
@@ -105,6 +107,6 @@ def _summary(args, run_id: str, psd, steady) -> dict:
         "n_segments": int(a["n_segments"]), "equivalent_degrees_of_freedom": float(a["equivalent_degrees_of_freedom"]),
         "peak_frequency_hz": None if peak is None else float(psd.frequency[peak]),
         "steady_window_s": steady,
-        "settings": {"nperseg": args.nperseg, "noverlap": args.noverlap, "window": args.window,
+        "settings": {"nperseg": int(a["nperseg"]), "nperseg_rule": a["nperseg_rule"], "noverlap": args.noverlap, "window": args.window,
                      "detrend": args.detrend, "confidence": args.confidence},
     }

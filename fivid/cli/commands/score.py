@@ -36,7 +36,9 @@ def register(subparsers) -> None:
                         metavar=("F_LO", "F_HI"),
                         help="frequency band, e.g. '800 Hz' '5 kHz'; a bare number is in Hz (default: 4 PSD bins "
                              "to 80%% of the lower Nyquist frequency)")
-    parser.add_argument("--nperseg", type=integer_at_least(2), default=8192, metavar="N", help="Welch segment length (default 8192)")
+    parser.add_argument("--nperseg", type=integer_at_least(2), default=None, metavar="N",
+                        help="Welch segment length [samples] (default: the largest power of two <= n/16 with bins "
+                             ">= 2 Hz, at least 256; n: samples of the shorter run at the common rate)")
     parser.add_argument("--sensor", default=None, help="sensor name when the variable has several")
     parser.add_argument("--steady", action="store_true", help="score only each run's steady-sliding window")
     parser.add_argument("--confidence", type=float, default=0.95,
@@ -48,8 +50,10 @@ def register(subparsers) -> None:
 
 
 def _summary(j: dict) -> str:
+    nperseg = j.get("settings", {}).get("nperseg")
     lines = [f"scores of {j['simulated']} against {j['measured']} ({j['variable']}, "
-             f"{j['band_hz'][0]:.6g}-{j['band_hz'][1]:.6g} Hz):"]
+             f"{j['band_hz'][0]:.6g}-{j['band_hz'][1]:.6g} Hz"
+             + ("" if nperseg is None else f", Welch nperseg {nperseg}") + "):"]
     for key in ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation"):
         value, thr = j[key], j["thresholds"][key]
         if thr is None:  # e.g. shape_correlation of log-PSDs with no spread above their noise
