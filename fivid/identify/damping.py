@@ -314,6 +314,7 @@ def _response_power(units: str) -> int:
 def _spectrum_from(source, nperseg):
     """(frequency, power-like spectrum, window, nperseg, q) from runs, a PSD DataArray or a complex FRF."""
     from fivid.signal import welch_psd
+    from fivid.signal.welch import default_nperseg
 
     if hasattr(source, "dims") and "frequency" in source.dims:
         values = np.asarray(source.values)
@@ -335,7 +336,7 @@ def _spectrum_from(source, nperseg):
         if "acceleration" not in ds:
             raise DataQualityError(f"run {ds.attrs.get('run_id')!r} has no 'acceleration' to identify damping from")
         fs = float(ds.attrs["sample_rate"])
-        n = nperseg or int(2 ** np.floor(np.log2(max(256, ds.sizes["time"] // 16))))
+        n = nperseg or default_nperseg(fs, ds.sizes["time"])
         p = welch_psd(ds["acceleration"], nperseg=n, fs=fs)
         values = np.asarray(p.values, float)
         if values.ndim > 1:

@@ -38,7 +38,8 @@ def register(subparsers) -> None:
                         help="per-segment detrending (default constant)")
     parser.add_argument("--confidence", type=float, default=0.95, help="level of the χ² bounds (default 0.95)")
     parser.add_argument("--steady", action="store_true",
-                        help="analyse only the steady-sliding window (needs velocity or position)")
+                        help="analyse only the steady part: a simulated run from its transient_end, a measured run's "
+                             "steady-sliding window (needs velocity or position)")
     parser.add_argument("-o", "--output", required=True, metavar="PSD.nc", help="output netCDF file")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     parser.add_argument("--json", action="store_true",
@@ -54,7 +55,7 @@ def run(args) -> int:
     from fivid.errors import SchemaError
     from fivid.io import read_run
     from fivid.schema import new_history
-    from fivid.signal import steady_sliding_window, welch_psd
+    from fivid.signal import steady_part, welch_psd
     from fivid.signal.sampling import run_label
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
@@ -66,8 +67,8 @@ def run(args) -> int:
                           f"{', '.join(sorted(map(str, ds.data_vars)))}")
     window, steady = "", None
     if args.steady:
-        t0, t1 = steady_sliding_window(ds)
-        ds = ds.sel(time=slice(t0, t1))
+        ds = steady_part(ds, label=label)  # a simulated run from its transient_end, a measured one by its encoder
+        t0, t1 = float(ds["time"][0]), float(ds["time"][-1])
         window, steady = f", steady window [{t0:.6g}, {t1:.6g}] s", [float(t0), float(t1)]
     psd = welch_psd(ds[args.variable], nperseg=args.nperseg, noverlap=args.noverlap, window=args.window,
                     detrend=args.detrend, confidence=args.confidence, label=label,
