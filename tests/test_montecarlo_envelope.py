@@ -235,7 +235,7 @@ def test_a_run_from_the_law_lies_inside_its_envelope(tmp_path, capsys):
     write_law(law_dataset(law.scaled(3.0)), loud)
     coverage = {}
     for name, lp in (("law", law_path), ("loud", loud)):
-        meas = tmp_path / f"{name}.nc"
+        meas = tmp_path / f"measured_{name}.nc"
         assert main(["simulate", COARSE, "--law", str(lp), *cond, "--seed", "2024", "-o", str(meas)]) == 0
         ds = read_run(meas)
         steady = tmp_path / f"{name}_steady.nc"
