@@ -247,3 +247,34 @@ def test_a_run_from_the_law_lies_inside_its_envelope(tmp_path, capsys):
     print("coverage", {k: (v["coverage_percent"], v["inside_count"], len(v["bands"])) for k, v in coverage.items()})
     assert coverage["law"]["coverage_percent"] >= 90.0
     assert coverage["loud"]["coverage_percent"] < 50.0
+
+
+def test_pipeline_plans_one_envelope_per_condition_when_samples_is_set(tmp_path):
+    """``simulate.samples`` of the run configuration (read from its parsed content, default 0: off) adds one
+    envelope task per condition beside the seeds' simulations; the score stage still sees only the seeds; a bad
+    value names the key."""
+    from types import SimpleNamespace
+
+    from fivid.errors import ConfigError
+    from fivid.pipeline.stages import Simulate, envelope_samples
+
+    def config(raw):
+        return SimpleNamespace(raw=raw, path=tmp_path / "run.yaml", model=COARSE, seeds=(0, 1), duration=0.3,
+                               sample_rate=51200.0, nperseg=2048, settle=0.1)
+
+    conds = {"v10-fn5-ra1": {"sliding_velocity": 0.01, "normal_load": 5.0, "roughness_ra": 1e-6}}
+    ctx = SimpleNamespace(config=config({"simulate": {"samples": 20}}), digests={"identify": {"law": {"law": "0"}}},
+                          data={"conditions": conds}, out=tmp_path)
+    tasks = Simulate().plan(ctx)
+    names = sorted(t.name for t in tasks)
+    assert names == ["v10-fn5-ra1-envelope", "v10-fn5-ra1-seed0", "v10-fn5-ra1-seed1"]
+    env = next(t for t in tasks if t.name.endswith("envelope"))
+    assert env.params["samples"] == 20 and env.params["nperseg"] == 2048 and "envelope" in env.outputs
+    Simulate().collect(ctx, tasks)
+    assert ctx.data["envelopes"] == {"v10-fn5-ra1": env.outputs["envelope"]}
+    assert len(ctx.data["sims"]["v10-fn5-ra1"]) == 2
+    ctx.config = config({"simulate": {"duration": "0.3 s"}})
+    assert envelope_samples(ctx.config) == 0 and len(Simulate().plan(ctx)) == 2
+    for bad in (1, -3, 2.5, True, "20"):
+        with pytest.raises(ConfigError, match="simulate.samples"):
+            envelope_samples(config({"simulate": {"samples": bad}}))

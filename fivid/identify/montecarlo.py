@@ -108,7 +108,8 @@ def monte_carlo_laws(law, n: int, seed: int = 0) -> dict:
 
 
 def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration", sensor=None,
-                    nperseg: int = 8192, noverlap=None, window: str = "hann", detrend: str = "constant") -> dict:
+                    nperseg: int = 8192, noverlap=None, window: str = "hann", detrend: str = "constant",
+                    settle: float = 0.0) -> dict:
     """One Monte-Carlo sample (runs on a worker): simulate, keep the steady part, Welch PSD.
 
     Parameters
@@ -123,6 +124,8 @@ def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration",
         Which signal (as ``fivid score``: ``sensor`` when the variable has several).
     nperseg, noverlap, window, detrend
         Welch settings (:func:`fivid.signal.welch_psd`).
+    settle : float, default 0
+        Time [s] skipped after the end of the transient (as the pipeline's scores skip it).
 
     Returns
     -------
@@ -135,7 +138,7 @@ def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration",
     from fivid.solver import simulate
 
     ds = simulate(model, law=law, progress=False, **params)
-    steady = ds.sel(time=slice(float(ds.attrs["transient_end"]), None))
+    steady = ds.sel(time=slice(float(ds.attrs["transient_end"]) + float(settle), None))
     label = f"Monte-Carlo sample (seed {params.get('seed')})"
     da = _signal(steady, variable, sensor, label)
     psd = welch_psd(da, nperseg=int(nperseg), noverlap=noverlap, window=window, detrend=detrend,

@@ -28,7 +28,7 @@ def _sample_task(model, law, params, spectrum_kw):
 
 def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float, sample_rate: float,
                     sliding_velocity=None, normal_load=None, roughness_ra=None, time_step=None, reduced=None,
-                    variable: str = "acceleration", sensor=None, nperseg: int = 8192, band=None,
+                    variable: str = "acceleration", sensor=None, nperseg: int = 8192, settle: float = 0.0, band=None,
                     workers: int = 2, scheduler: str | None = None, progress=None, attrs: dict | None = None):
     """Simulate ``samples`` draws of ``law`` at one condition and return their PSD envelope (a Dataset).
 
@@ -45,7 +45,9 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
     variable, sensor
         The signal whose PSD is taken (as ``fivid score``).
     nperseg : int
-        Welch segment length [samples]; the steady record (``duration * sample_rate``) must hold one.
+        Welch segment length [samples]; the analysed record (``(duration - settle) * sample_rate``) must hold one.
+    settle : float
+        Time [s] skipped after the end of each simulation's transient before the PSD.
     band : (float, float), optional
         Band [Hz] of the stored 1/3-octave band levels (default: that of the scores).
     workers : int
@@ -62,11 +64,11 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
     from fivid.identify.montecarlo import NOT_SAMPLED, SAMPLED, monte_carlo_laws
     from fivid.score.envelope import envelope_dataset
 
-    n_steady = int(np.floor(float(duration) * float(sample_rate) + 1e-9))
+    n_steady = int(np.floor((float(duration) - float(settle)) * float(sample_rate) + 1e-9))
     if n_steady < int(nperseg):
-        raise ConfigError(f"the steady record of {duration:g} s at {sample_rate:g} Hz has {n_steady} samples, fewer "
-                          f"than one Welch segment (nperseg {int(nperseg)}); lengthen --duration or lower --nperseg",
-                          key="nperseg")
+        raise ConfigError(f"the analysed record of {duration:g} s (less {settle:g} s settling) at {sample_rate:g} Hz has "
+                          f"{n_steady} samples, fewer than one Welch segment (nperseg {int(nperseg)}); lengthen the "
+                          "duration or lower nperseg", key="nperseg")
     if scheduler is not None:
         from fivid.pipeline.sweep import check_scheduler_address
 
@@ -74,7 +76,7 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
     draws = monte_carlo_laws(law, samples, seed)
     base = dict(duration=float(duration), sample_rate=float(sample_rate), sliding_velocity=sliding_velocity,
                 normal_load=normal_load, roughness_ra=roughness_ra, time_step=time_step, reduced=reduced)
-    spectrum_kw = dict(variable=variable, sensor=sensor, nperseg=int(nperseg))
+    spectrum_kw = dict(variable=variable, sensor=sensor, nperseg=int(nperseg), settle=float(settle))
     items = {f"mc{i:04d}": (model, draws["laws"][i], {**base, "seed": int(draws["seeds"][i])}, spectrum_kw)
              for i in range(int(samples))}
     results = {}
@@ -113,7 +115,10 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
         "sample_rate": float(sample_rate),
         "sample_rate_units": "Hz",
         "scaling": "density",
-        "steady_part": "each sample from its simulation's transient_end (after preload, settling and base ramp)",
+        "steady_part": f"each sample from its simulation's transient_end (after preload, settling and base ramp) "
+                       f"+ {float(settle):g} s",
+        "settle": float(settle),
+        "settle_units": "s",
         **{k: v for k, v in settings.items() if k != "equivalent_degrees_of_freedom"},
         "sample_equivalent_degrees_of_freedom": float(settings.get("equivalent_degrees_of_freedom", np.nan)),
     }
