@@ -187,6 +187,8 @@ def test_envelope_cli_end_to_end_small(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     env = read_envelope(env_path)
     assert summary["samples"] == 3 and env.attrs["n_samples"] == 3 and env.attrs["seed"] == 4
+    assert summary["law_domain"] == {"checked": True, "inside": True, "warnings": []}
+    assert env.attrs["law_domain_check"] == "inside the identified domain"
     assert env["sample_seed"].values.tolist() == summary["seeds"] == sample_seeds(4, 3).tolist()
     import hashlib
 

@@ -101,6 +101,7 @@ def run(args) -> int:
     model = _load_model(args.model)
     if args.law:
         law, law_file = _law_checked(args, model)
+        args.law_domain = law_file.pop("domain")
     duration, sample_rate, time_step = si(args.duration), si(args.sample_rate), si(args.time_step)
     size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
     check_simulation_memory(size)  # before any allocation: a year of records fails here, not in the kernel
@@ -139,6 +140,8 @@ def run(args) -> int:
         "max_energy_balance_error_j": float(np.abs(ds.energy_balance_error).max()),
         "friction": ds.attrs["friction"],
     }
+    if getattr(args, "law_domain", None) is not None:
+        summary["law_domain"] = args.law_domain
     summary.update({k: ds.attrs[k] for k in ("reduced_size", "reduced_modes", "reduced_cutoff",
                                              "reduced_first_truncated_frequency", "reduced_static_residual")
                     if k in ds.attrs})
@@ -161,12 +164,15 @@ def _law_checked(args, model):
     from fivid.friction import PerturbedCoulombLaw
 
     _, law, domain = open_law_file(args.law)
-    record = {"law_file": str(args.law), "law_file_sha256": hashlib.sha256(Path(args.law).read_bytes()).hexdigest()}
+    record = {"law_file": str(args.law), "law_file_sha256": hashlib.sha256(Path(args.law).read_bytes()).hexdigest(),
+              "domain": None}
     if isinstance(law, PerturbedCoulombLaw):  # a Coulomb law has no amplitude, hence no domain to leave
         base = model.motion("base")
         velocity = float(args.velocity) if args.velocity is not None else abs(base.amplitude) if base else None
-        check_law_condition(law, domain, velocity, None if args.roughness is None else float(args.roughness),
-                            None if args.load is None else float(args.load), strict=args.strict, command="simulate")
+        pred = check_law_condition(law, domain, velocity, None if args.roughness is None else float(args.roughness),
+                                   None if args.load is None else float(args.load), strict=args.strict,
+                                   command="simulate")
+        record["domain"] = {"checked": domain is not None, "inside": bool(pred.inside[0]), "warnings": pred.messages}
     return law, record
 
 
@@ -184,11 +190,13 @@ def _run_samples(args, model, law, law_file) -> int:
         sliding_velocity=si(args.velocity), normal_load=si(args.load), roughness_ra=si(args.roughness),
         time_step=si(args.time_step), reduced=args.reduced, variable=args.variable, sensor=args.sensor,
         nperseg=args.nperseg, workers=args.workers, scheduler=args.scheduler, progress=args.progress,
-        attrs={**law_file, "model": str(args.model), "model_description": model.describe(),
+        attrs={**law_file, "law_domain_check": _domain_text(args.law_domain), "model": str(args.model),
+               "model_description": model.describe(),
                "history": new_history(_command_line(args))},
     )
     write_netcdf(env, args.output, overwrite=args.overwrite)
     summary = {"output": str(args.output), "samples": int(env.sizes["sample"]), "seed": int(args.seed),
+               "law_domain": args.law_domain,
                "seeds": env["sample_seed"].values.tolist(), "law_file_sha256": law_file["law_file_sha256"],
                "coefficient_covariance_sampled": bool(env.attrs["coefficient_covariance_sampled"]),
                "amplitude": {"median": float(env["sample_amplitude"].median()),
@@ -209,6 +217,13 @@ def _run_samples(args, model, law, law_file) -> int:
                   f"{max(widths):.3g} dB")
         print(f"written {args.output}", file=sys.stderr)
     return 0
+
+
+def _domain_text(domain) -> str:
+    """One line for the envelope file: whether the condition was inside the law's identified domain."""
+    if domain is None or not domain["checked"]:
+        return "not checked (the law file records no domain)"
+    return "inside the identified domain" if domain["inside"] else "outside: " + " | ".join(domain["warnings"])
 
 
 def _load_model(path):
