@@ -72,7 +72,8 @@ def register(subparsers) -> None:
     mc.add_argument("--scheduler", metavar="ADDRESS", help="tcp://host:port of a running dask scheduler")
     mc.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                     help="progress bar over the samples (default: when stderr is a terminal)")
-    p.add_argument("-o", "--output", metavar="SIM.nc", required=True, help="output RunDataset (netCDF)")
+    p.add_argument("-o", "--output", metavar="SIM.nc", required=True,
+                   help="output RunDataset (netCDF); with --samples the PSD envelope (netCDF)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     p.add_argument("--dry-run", action="store_true",
