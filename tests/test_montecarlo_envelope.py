@@ -280,3 +280,21 @@ def test_pipeline_plans_one_envelope_per_condition_when_samples_is_set(tmp_path)
     for bad in (1, -3, 2.5, True, "20"):
         with pytest.raises(ConfigError, match="simulate.samples"):
             envelope_samples(config({"simulate": {"samples": bad}}))
+
+
+def test_envelope_file_passes_the_cf_checker(tmp_path, request):
+    """cfchecks: no errors; the one warning allowed is the string coordinate of the coefficient names (the
+    law file has the same)."""
+    import cf_checks
+
+    from fivid.storage import write_netcdf
+
+    table = cf_checks.table_or_skip(request.config)
+    f, samples = _white_psds(5, seed=1)
+    env = envelope_dataset(f, samples, "m s-2", seeds=sample_seeds(0, 5), coefficients=np.zeros((5, 2)),
+                           coefficient_names=["log_prefactor", "velocity_exponent"], amplitudes=np.ones(5),
+                           attrs={"variable": "acceleration"})
+    path = write_netcdf(env, tmp_path / "env.nc")
+    errors, warnings, out = cf_checks.cf_check(path, table)
+    assert errors == 0, out
+    assert warnings <= 1, out

@@ -115,7 +115,7 @@ def envelope_dataset(frequency, psd_samples, units: str, *, band=None, seeds=Non
                                     {"units": "1", "long_name": "RMS of mu_p of the sample's law at the condition"})
     coords = {
         "frequency": ("frequency", f, {"units": "Hz", "long_name": "frequency"}),
-        "sample": ("sample", np.arange(n), {"long_name": "Monte-Carlo sample index"}),
+        "sample": ("sample", np.arange(n), {"units": "1", "long_name": "Monte-Carlo sample index"}),
         "band_centre": ("band_centre", bands["centre"], {"units": "Hz", "long_name": "IEC 61260-1 base-10 exact "
                                                          "mid-band frequency"}),
         "band_lower": ("band_centre", bands["lower"], {"units": "Hz", "long_name": "lower band-edge frequency"}),
@@ -126,8 +126,10 @@ def envelope_dataset(frequency, psd_samples, units: str, *, band=None, seeds=Non
 
         data["sample_coefficient"] = (("sample", "coefficient"), np.asarray(coefficients, float).reshape(n, len(names)),
                                       {"long_name": "amplitude-law coefficients drawn for the sample"})
-        data["coefficient_units"] = ("coefficient", np.array([coefficient_units(c) for c in names], dtype=object))
-        coords["coefficient"] = ("coefficient", np.array(names, dtype=object))
+        data["coefficient_units"] = ("coefficient", np.array([coefficient_units(c) for c in names], dtype=object),
+                                     {"long_name": "CF units of each amplitude-law coefficient"})
+        coords["coefficient"] = ("coefficient", np.array(names, dtype=object),
+                                 {"long_name": "amplitude-law coefficient name"})
     ds = xr.Dataset(data, coords=coords)
     ds.attrs = {
         "title": ENVELOPE_TITLE,
