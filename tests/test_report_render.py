@@ -200,3 +200,36 @@ def test_browser_check_detects_a_broken_figure_and_a_script_error(tmp_path):
                    "<script>undefined_function()</script></body></html>")
     res = browser_check(bad, tmp_path / "chromium-profile")
     assert res["errors"] and not res["images"][0]["ok"]
+
+
+def test_report_draws_the_monte_carlo_envelope_and_its_coverage(tmp_path, report_inputs):
+    """An envelope of 19 PSDs of the same SYNTHETIC signal (other seeds) for condition c0: one more figure, and
+    the coverage table; the same envelope 20 dB up leaves every band outside (0 %)."""
+    import xarray as xr
+
+    from fivid.report import render_report
+    from fivid.score.envelope import envelope_dataset
+    from fivid.signal import welch_psd
+
+    fs, n = 51200.0, 2**16
+    psds = []
+    for seed in range(100, 119):
+        t, x = _signal(fs, n, [850.0, 2300.0, 5000.0], seed)
+        psds.append(welch_psd(xr.DataArray(x, dims="time", coords={"time": t}, attrs={"units": "m s-2"}),
+                              nperseg=4096))
+    f = psds[0]["frequency"].values
+    texts = {}
+    for name, gain in (("same", 1.0), ("loud", 100.0)):
+        env = envelope_dataset(f, gain * np.stack([p.values for p in psds]), "m s-2",
+                               attrs={"variable": "acceleration", "not_sampled": "mu0"})
+        path = tmp_path / f"{name}.nc"
+        env.to_netcdf(path)
+        inputs = {**report_inputs, "envelope_files": {"c0": path}}
+        texts[name] = render_report(tmp_path / f"{name}.html", inputs).read_text(encoding="utf-8")
+    srcs = re.findall(r'(?:src|href)="([^"]*)"', texts["same"])
+    assert len(srcs) == EXPECTED_FIGURES + 1 and "Monte-Carlo envelope" in texts["same"]
+    assert "bands inside the 5-95 % envelope" in texts["same"]
+    row = re.search(r"<td>measured R0</td><td>(\d+) of (\d+)</td>", texts["same"])
+    assert row and int(row.group(1)) >= 0.7 * int(row.group(2))  # 18/20 expected inside; 0.7 leaves 3 sd
+    loud = re.search(r"<td>measured R0</td><td>(\d+) of (\d+)</td>", texts["loud"])
+    assert loud and int(loud.group(1)) == 0

@@ -189,8 +189,23 @@ class Modal:
         ctx.data["modal_paths"] = {t.params["normal_load"]: t.outputs["modes"] for t in tasks}
 
 
+def envelope_samples(config) -> int:
+    """``simulate.samples`` of the run configuration: Monte-Carlo samples of the law's uncertainty per test
+    condition (0, the default: no envelope)."""
+    node = config.raw.get("simulate") or {}
+    value = node.get("samples", 0) if isinstance(node, dict) else 0
+    if isinstance(value, bool) or not isinstance(value, int) or not (value == 0 or 2 <= value <= 10000):
+        from fivid.errors import ConfigError
+
+        raise ConfigError(f"simulate.samples must be 0 (off) or an integer in [2, 10000], got {value!r}",
+                          file=getattr(config, "path", None), key="simulate.samples")
+    return value
+
+
 class Simulate:
-    """One simulation per test condition and Monte-Carlo seed, spread over dask workers."""
+    """One simulation per test condition and Monte-Carlo seed, spread over dask workers; with
+    ``simulate.samples`` N > 0 also one Monte-Carlo envelope per condition (N draws of the law's uncertainty,
+    :func:`fivid.pipeline.montecarlo.run_monte_carlo`)."""
 
     name = "simulate"
 
@@ -206,20 +221,57 @@ class Simulate:
                           "sample_rate": cfg.sample_rate, "run_id": f"{cond}-seed{seed}"}
                 tasks.append(Task("simulate", f"{cond}-seed{seed}", params, {"model": model_sha, "law": law_sha},
                                   {"sim": str(ctx.out / "sims" / f"{cond}-seed{seed}.nc")}))
+            samples = envelope_samples(cfg)
+            if samples:
+                params = {"sliding_velocity": c["sliding_velocity"], "normal_load": c["normal_load"],
+                          "roughness_ra": c["roughness_ra"], "samples": samples, "seed": cfg.seeds[0],
+                          "duration": cfg.duration, "sample_rate": cfg.sample_rate, "nperseg": cfg.nperseg,
+                          "settle": cfg.settle}
+                tasks.append(Task("simulate", f"{cond}-envelope", params, {"model": model_sha, "law": law_sha},
+                                  {"envelope": str(ctx.out / "sims" / f"{cond}-envelope.nc")}))
         return tasks
 
     def execute(self, ctx, tasks) -> None:
         from fivid.pipeline.sweep import run_simulations
 
         (ctx.out / "sims").mkdir(parents=True, exist_ok=True)
-        run_simulations(ctx, tasks)
+        sims = [t for t in tasks if "sim" in t.outputs]
+        if sims:
+            run_simulations(ctx, sims)
+        for task in [t for t in tasks if "envelope" in t.outputs]:
+            _timed(ctx, task, lambda task=task: _envelope(ctx, task))
 
     def collect(self, ctx, tasks) -> None:
         sims: dict[str, list[str]] = {}
+        envelopes: dict[str, str] = {}
         for task in tasks:
+            if "envelope" in task.outputs:
+                envelopes[task.name.rsplit("-envelope", 1)[0]] = task.outputs["envelope"]
+                continue
             cond = task.name.rsplit("-seed", 1)[0]
             sims.setdefault(cond, []).append(task.outputs["sim"])
         ctx.data["sims"] = sims
+        ctx.data["envelopes"] = envelopes
+
+
+def _envelope(ctx, task) -> None:
+    """One condition's Monte-Carlo envelope, written to the task's output."""
+    from fivid.fe import load_model
+    from fivid.friction import load_law
+    from fivid.pipeline.montecarlo import run_monte_carlo
+    from fivid.schema import new_history
+    from fivid.storage import write_netcdf
+
+    p = dict(task.params)
+    law_path = ctx.data["law_path"]
+    env = run_monte_carlo(load_model(ctx.config.model), load_law(law_path), samples=p["samples"], seed=p["seed"],
+                          duration=p["duration"], sample_rate=p["sample_rate"], sliding_velocity=p["sliding_velocity"],
+                          normal_load=p["normal_load"], roughness_ra=p["roughness_ra"], nperseg=p["nperseg"],
+                          settle=p["settle"], workers=ctx.workers, scheduler=ctx.scheduler, progress=ctx.progress,
+                          attrs={"law_file": str(law_path), "law_file_sha256": file_sha256(law_path),
+                                 "model": str(ctx.config.model), "history": new_history(
+                                     f"fivid pipeline: Monte-Carlo envelope {task.name}, {p['samples']} samples")})
+    write_netcdf(env, task.outputs["envelope"], overwrite=True)
 
 
 class Score:
@@ -310,6 +362,7 @@ def ctx_to_report_inputs(ctx, checks) -> dict:
         "scores": ctx.data.get("scores", {}),
         "score_files": {t.name: t.outputs["scores"] for t in ctx.tasks.get("score", {}).values()},
         "psd_files": {t.name: t.outputs["psd"] for t in ctx.tasks.get("score", {}).values()},
+        "envelope_files": ctx.data.get("envelopes", {}),
         "band": cfg.band,
         "nperseg": cfg.nperseg,
         "checks": checks,

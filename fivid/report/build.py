@@ -16,7 +16,13 @@ from pathlib import Path
 import numpy as np
 
 from fivid import __version__
-from fivid.report.figures import amplitude_figure, law_shape_figure, modal_figure, psd_overlay_figure
+from fivid.report.figures import (
+    amplitude_figure,
+    law_shape_figure,
+    modal_figure,
+    psd_envelope_figure,
+    psd_overlay_figure,
+)
 from fivid.report.html import Page, table
 from fivid.storage import write_text
 
@@ -209,6 +215,9 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
                         f"PSD overlay {cond}")
             all_f = f
             all_psd.extend(m["psd"] for m in meas)
+            env_file = inputs.get("envelope_files", {}).get(cond)
+            if env_file and Path(env_file).is_file():
+                _envelope_figure(page, cond, env_file, f, meas, band, units)
         score_file = inputs.get("score_files", {}).get(cond)
         if score_file and Path(score_file).is_file():
             sc = json.loads(Path(score_file).read_text(encoding="utf-8"))
@@ -222,6 +231,33 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
                            [[SCORE_NAMES.get(k["score"], k["score"]), k["value"], k["threshold"], bool(k["pass"])]
                             for k in mine]))
     return all_f, all_psd, units
+
+
+def _envelope_figure(page: Page, cond: str, path, frequency, measured: list[dict], band, units: str) -> None:
+    """The condition's Monte-Carlo envelope with its measured PSDs, and per 1/3-octave band whether each
+    measured level is inside the samples' 5-95 % band levels (:func:`fivid.score.envelope.envelope_coverage`)."""
+    from fivid.score.envelope import band_levels_of_samples, envelope_coverage, read_envelope
+
+    env = read_envelope(path).load()
+    n = int(env.sizes["sample"])
+    page.figure(psd_envelope_figure(env["frequency"].values, env["psd_p05"].values, env["psd_median"].values,
+                                    env["psd_p95"].values, n, frequency, measured, band, units),
+                f"Monte-Carlo envelope of the simulated acceleration PSD: {n} simulations, each with amplitude-law "
+                f"coefficients drawn from the law's covariance and its own seed ({env.attrs.get('not_sampled', '')} "
+                f"not sampled). Shaded 5-95 % per frequency, line the median; black the measured PSDs.",
+                f"PSD envelope {cond}")
+    lo, hi = env["band_lower"].values, env["band_upper"].values
+    keep = (lo >= band[0]) & (hi <= band[1])
+    if not np.any(keep):
+        return
+    rows = []
+    for m in measured:
+        level = band_levels_of_samples(frequency, np.asarray(m["psd"])[None, :], lo[keep], hi[keep])[0]
+        cov = envelope_coverage(env, lo[keep], hi[keep], level)
+        outside = [f"{c:.4g}" for c, ok in zip(env["band_centre"].values[keep], cov["inside"]) if not ok]
+        rows.append([m["label"], f"{int(cov['inside'].sum())} of {cov['inside'].size}", cov["coverage"],
+                     ", ".join(outside) or "-"])
+    page.raw(table(["measured run", "bands inside the 5-95 % envelope", "coverage [%]", "outside [Hz]"], rows))
 
 
 _SCORE_COLUMNS = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
@@ -309,7 +345,8 @@ def render_report(path: str | os.PathLike, inputs: dict) -> Path:
     inputs : dict
         ``title``; ``provenance`` (pipeline/config/model path+sha256, config content, input sha256s);
         ``runs`` and ``conditions`` (as built by the pipeline's ingest stage); ``law_path``;
-        ``modal_path``; ``psd_files`` and ``score_files`` per condition; ``band`` [Hz];
+        ``modal_path``; ``psd_files`` and ``score_files`` per condition; optional ``envelope_files`` per
+        condition (Monte-Carlo envelopes, drawn over the measured PSDs); ``band`` [Hz];
         ``checks`` (threshold checks); optional ``synthetic_note`` (the run's description, shown
         highlighted: say there when the inputs are synthetic); optional ``provenance["settings"]``
         (the effective settings, shown above the configuration as written); optional ``generated``

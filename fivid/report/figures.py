@@ -10,8 +10,8 @@ import numpy as np
 
 from fivid.report.html import figure_data_uri
 
-__all__ = ["law_shape_figure", "amplitude_figure", "psd_overlay_figure", "modal_figure", "psd_axis_limits",
-           "PSD_DYNAMIC_RANGE_DB"]
+__all__ = ["law_shape_figure", "amplitude_figure", "psd_overlay_figure", "psd_envelope_figure", "modal_figure",
+           "psd_axis_limits", "PSD_DYNAMIC_RANGE_DB"]
 
 
 def _figure(width: float = 7.0, height: float = 4.0):
@@ -114,6 +114,23 @@ def psd_overlay_figure(frequency, measured: list[dict], simulated: list[dict], b
         ax.semilogy(f, s["psd"], color=color, lw=1.0, label=s["label"])
     ax.axvspan(band[0], band[1], color="C2", alpha=0.05)
     return _finish_psd(fig, ax, f, band, units, [c["psd"] for c in measured + simulated])
+
+
+def psd_envelope_figure(env_frequency, p05, median, p95, n_samples: int, frequency, measured: list[dict], band,
+                        units: str) -> str:
+    """The Monte-Carlo envelope of the simulated PSD (5-95 % shaded, median line) with the measured PSDs.
+
+    ``env_frequency`` [Hz] and ``p05``, ``median``, ``p95`` [units] are the envelope's; ``measured``: dicts with
+    ``label, psd`` on ``frequency`` [Hz].
+    """
+    fig, ax = _figure(7.5, 4.2)
+    fe = np.asarray(env_frequency)
+    ax.fill_between(fe, p05, p95, color="C0", alpha=0.25, lw=0, label=f"simulated 5-95 % ({n_samples} samples)")
+    ax.semilogy(fe, median, color="C0", lw=1.2, label="simulated median")
+    for i, m in enumerate(measured):
+        ax.semilogy(frequency, m["psd"], color="k", lw=0.9, label=m["label"] if i < 3 else None)
+    ax.axvspan(band[0], band[1], color="C2", alpha=0.05)
+    return _finish_psd(fig, ax, fe, band, units, [np.asarray(p95)] + [m["psd"] for m in measured])
 
 
 def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, units: str) -> str:

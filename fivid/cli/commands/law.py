@@ -49,17 +49,6 @@ def register(subparsers) -> None:
     ev.set_defaults(func=_eval)
 
 
-def _open(path):
-    from pathlib import Path
-
-    from fivid.friction import domain_from_dataset, law_from_dataset
-    from fivid.io.netcdf import read_run
-
-    ds = read_run(Path(path), validate=False)
-    law = law_from_dataset(ds, source=str(path), file=path)
-    return ds, law, domain_from_dataset(ds)
-
-
 def law_summary(ds, law, domain) -> dict:
     """The content ``fivid law show`` prints (plain Python)."""
     from fivid.friction import coefficient_units
@@ -116,9 +105,10 @@ def _plain(v):
 
 
 def _show(args) -> int:
+    from fivid.cli.law_domain import open_law_file
     from fivid.storage import dumps_json
 
-    ds, law, domain = _open(args.law_path)
+    ds, law, domain = open_law_file(args.law_path)
     info = law_summary(ds, law, domain)
     if args.json:
         print(dumps_json(info))
@@ -162,17 +152,15 @@ def _g(x, spec):
 
 
 def _eval(args) -> int:
-    import warnings
-
     import numpy as np
 
+    from fivid.cli.law_domain import check_law_condition, open_law_file
     from fivid.errors import FividError
-    from fivid.friction import ExtrapolationWarning, predict_amplitude
     from fivid.storage import dumps_json
 
     v, ra = float(args.velocity), float(args.roughness)
     fn = float(args.load) if args.load is not None else None
-    ds, law, domain = _open(args.law_path)
+    ds, law, domain = open_law_file(args.law_path)
     if not 0 < args.confidence < 1:
         raise FividError(f"--confidence {args.confidence!r}; it must be in (0, 1)")
     if ds.attrs.get("law") != "perturbed_coulomb":
@@ -180,16 +168,7 @@ def _eval(args) -> int:
     m = law.amplitude_model
     if fn is None and ("normal_load" in m.terms or m.form in ("power_law_load", "linear_velocity_load")):
         raise FividError(f"{args.law_path}: the amplitude law depends on the normal load: pass --load (e.g. '5 N')")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ExtrapolationWarning)
-        pred = predict_amplitude(m, v, ra, fn, domain=domain, confidence=args.confidence, strict=args.strict)
-    import sys
-
-    for w in caught:
-        if issubclass(w.category, ExtrapolationWarning):
-            print(f"fivid law: warning: {w.message}", file=sys.stderr)
-    if domain is None:
-        print("fivid law: warning: the law file records no domain: extrapolation cannot be checked", file=sys.stderr)
+    pred = check_law_condition(law, domain, v, ra, fn, strict=args.strict, confidence=args.confidence)
     out = {"law": str(args.law_path), "amplitude_form": m.form, "sliding_velocity": v, "roughness_ra": ra,
            "normal_load": fn, "amplitude": float(pred.amplitude[0]), "lower": float(pred.lower[0]),
            "upper": float(pred.upper[0]), "confidence": pred.confidence, "interval": pred.kind,

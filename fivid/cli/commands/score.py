@@ -14,12 +14,15 @@ distance lsd_db, band level difference level_diff_db, 1/3-octave band level erro
 matched peaks (relative frequency error, level difference) and the shape correlation of the
 log-PSDs. Each score is flagged 'significant' when it exceeds what two Welch estimates of one
 spectrum reach with probability --confidence. Runs at different sample rates are resampled
-(polyphase) to the lower rate. See docs/spectra.md."""
+(polyphase) to the lower rate. With --envelope ENV.nc (from 'fivid simulate --law LAW.nc --samples N'),
+each 1/3-octave band also says whether the measured band level lies inside the 5-95 % Monte-Carlo
+envelope, and the coverage (% of bands inside) is reported. See docs/spectra.md, docs/uncertainty.md."""
 
 _EPILOG = """\
 examples:
   fivid score runs/R012.nc sim/R012_sim.nc --band 100 20000 --json
   fivid score runs/R012.nc sim/R012_sim.nc --nperseg 16384 -o R012_scores.nc
+  fivid score runs/R012.nc sim/R012_sim.nc --envelope sim/R012_env.nc --json
 
 exit status: 0 scored; 2 bad input (the message names the run and the value); 1 unexpected failure."""
 
@@ -43,6 +46,9 @@ def register(subparsers) -> None:
     parser.add_argument("--steady", action="store_true", help="score only each run's steady-sliding window")
     parser.add_argument("--confidence", type=float, default=0.95,
                         help="confidence of the significance judgement (default 0.95)")
+    parser.add_argument("--envelope", default=None, metavar="ENV.nc",
+                        help="Monte-Carlo PSD envelope ('fivid simulate --samples'): per band, is the measured level "
+                             "inside its 5-95 %% band levels; coverage in %%")
     parser.add_argument("-o", "--output", default=None, metavar="SCORES.nc", help="write the scores to netCDF")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     parser.add_argument("--json", action="store_true", help="print the scores as JSON on stdout")
@@ -62,6 +68,14 @@ def _summary(j: dict) -> str:
             mark = "significant" if j["significant"][key] else "within uncertainty"
         fmt = (lambda v: "n/a" if v is None else f"{v:.4g}")
         lines.append(f"  {key:26s} {fmt(value):>10s}  (threshold {fmt(thr)}: {mark})")
+    env = j.get("envelope")
+    if env is not None:
+        lines.append(f"  envelope coverage: {env['inside_count']} of {len(env['bands'])} 1/3-octave bands inside the "
+                     f"5-95 % Monte-Carlo envelope ({env['n_samples']} samples): "
+                     + ("n/a" if env["coverage_percent"] is None else f"{env['coverage_percent']:.0f} %"))
+        out = [f"{b['centre_hz']:.4g} Hz" for b in env["bands"] if not b["inside"]]
+        if out:
+            lines.append(f"    outside: {', '.join(out)}")
     for p in j["peaks"]:
         fs = "unmatched" if p["frequency_simulated_hz"] is None else f"{p['frequency_simulated_hz']:.6g} Hz"
         lines.append(f"  peak {p['frequency_measured_hz']:.6g} Hz -> {fs}")
@@ -76,12 +90,21 @@ def run(args) -> int:
 
     if args.output is not None:
         check_writable(args.output, overwrite=args.overwrite)
+    envelope = None
+    if args.envelope is not None:
+        from fivid.score.envelope import read_envelope
+
+        envelope = read_envelope(args.envelope)  # before the work: a wrong file fails fast
     measured = read_run(args.measured)
     simulated = read_run(args.simulated)
     scores = score_runs(measured, simulated, variable=args.variable, band=args.band, nperseg=args.nperseg,
                         sensor=args.sensor, steady=args.steady, confidence=args.confidence)
     scores.attrs["measured_file"] = str(args.measured)
     scores.attrs["simulated_file"] = str(args.simulated)
+    if envelope is not None:
+        from fivid.score.envelope import add_envelope_coverage
+
+        scores = add_envelope_coverage(scores, envelope, envelope_file=str(args.envelope))
     if args.output is not None:
         write_netcdf(scores, args.output, overwrite=args.overwrite)
     result = scores_to_json(scores)

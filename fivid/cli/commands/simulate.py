@@ -1,10 +1,14 @@
-"""``fivid simulate MODEL.yaml [--law LAW.nc | --mu MU] ... -o SIM.nc``: explicit contact simulation of a rig."""
+"""``fivid simulate MODEL.yaml [--law LAW.nc [--samples N] | --mu MU] ... -o SIM.nc``: explicit contact simulation.
+
+With ``--samples N`` the output is a Monte-Carlo PSD envelope instead of one run (issue 16 item 3).
+"""
 
 from __future__ import annotations
 
+import argparse
 import sys
 
-from fivid.cli import quantity
+from fivid.cli import integer_at_least, quantity
 
 __all__ = ["register"]
 
@@ -20,7 +24,13 @@ def register(subparsers) -> None:
         "The output has the variable names of a measured run (acceleration, friction_force, normal_force), so "
         "'fivid score' compares them directly, plus contact diagnostics and the energy balance. "
         "Quantities take units, e.g. --velocity '10 mm/s' --load '5 N' --duration '0.1 s'; a bare number is in "
-        "SI units (m/s, N, m, s, Hz).",
+        "SI units (m/s, N, m, s, Hz). "
+        "With --law, the condition is checked against the law's identified domain: outside it a warning names the "
+        "variable and the identified range (--strict: refused, exit 2). "
+        "--samples N: a Monte-Carlo over the law's uncertainty (amplitude-law coefficients drawn from their "
+        "covariance, an independent seed per sample; mu0 and the spectral shape kept), run on dask; -o is then the "
+        "PSD envelope (netCDF: psd_median, psd_p05, psd_p95, every sample's PSD and 1/3-octave band levels) for "
+        "'fivid score --envelope'. See docs/uncertainty.md.",
     )
     p.add_argument("model", metavar="MODEL.yaml",
                    help="model config (see docs/model-config.md), or the name of a built-in model such as "
@@ -46,7 +56,24 @@ def register(subparsers) -> None:
                    help="run a Craig-Bampton reduced system (physical contact and sensor nodes, fixed-interface "
                    "modes up to 3 x sample-rate/2, or N modes); the truncation is recorded in the output")
     p.add_argument("--run-id", metavar="ID", help="run identifier recorded in the output")
-    p.add_argument("-o", "--output", metavar="SIM.nc", required=True, help="output RunDataset (netCDF)")
+    p.add_argument("--strict", action="store_true",
+                   help="refuse a condition outside the law's identified domain (exit 2) instead of warning")
+    mc = p.add_argument_group("Monte-Carlo envelope (--law with --samples)")
+    mc.add_argument("--samples", type=integer_at_least(2), metavar="N",
+                    help="simulate N draws of the law's uncertainty (seeds derived from --seed) and write their PSD "
+                         "envelope to -o instead of one run")
+    mc.add_argument("--nperseg", type=integer_at_least(2), default=8192, metavar="N",
+                    help="Welch segment length of the samples' PSDs (default 8192, as 'fivid score'); the steady "
+                         "record (--duration x --sample-rate) must hold one")
+    mc.add_argument("--variable", default="acceleration", help="variable whose PSD is taken (default acceleration)")
+    mc.add_argument("--sensor", default=None, help="sensor name when the variable has several")
+    mc.add_argument("--workers", type=integer_at_least(0), default=2, metavar="N",
+                    help="dask worker processes (default 2; 0 runs the samples in this process)")
+    mc.add_argument("--scheduler", metavar="ADDRESS", help="tcp://host:port of a running dask scheduler")
+    mc.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                    help="progress bar over the samples (default: when stderr is a terminal)")
+    p.add_argument("-o", "--output", metavar="SIM.nc", required=True,
+                   help="output RunDataset (netCDF); with --samples the PSD envelope (netCDF)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     p.add_argument("--dry-run", action="store_true",
@@ -67,22 +94,23 @@ def run(args) -> int:
     def si(value):  # a parsed Quantity -> plain float (None stays None)
         return None if value is None else float(value)
 
+    if args.samples is not None and not args.law:
+        raise FividError("--samples needs --law LAW.nc: the Monte-Carlo samples the law's uncertainty")
     if not args.dry_run:
         check_writable(args.output, overwrite=args.overwrite)
-    law = None
-    if args.law:
-        try:
-            from fivid.friction import load_law
-        except ImportError:
-            raise FividError("--law needs fivid.friction (friction laws), which this installation lacks") from None
-        law = load_law(args.law)
+    law = law_file = None
     model = _load_model(args.model)
+    if args.law:
+        law, law_file = _law_checked(args, model)
+        args.law_domain = law_file.pop("domain")
     duration, sample_rate, time_step = si(args.duration), si(args.sample_rate), si(args.time_step)
     size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
     check_simulation_memory(size)  # before any allocation: a year of records fails here, not in the kernel
     if args.dry_run:
         print(f"{model.describe()}: {size.describe()}")
         return 0
+    if args.samples is not None:
+        return _run_samples(args, model, law, law_file)
     ds = simulate(
         model,
         law=law,
@@ -113,6 +141,8 @@ def run(args) -> int:
         "max_energy_balance_error_j": float(np.abs(ds.energy_balance_error).max()),
         "friction": ds.attrs["friction"],
     }
+    if getattr(args, "law_domain", None) is not None:
+        summary["law_domain"] = args.law_domain
     summary.update({k: ds.attrs[k] for k in ("reduced_size", "reduced_modes", "reduced_cutoff",
                                              "reduced_first_truncated_frequency", "reduced_static_residual")
                     if k in ds.attrs})
@@ -124,6 +154,77 @@ def run(args) -> int:
               f"{summary['mean_normal_force_n']:.4g} N, friction force {summary['mean_friction_force_n']:.4g} N")
         print(f"written {args.output} ({summary['samples']} samples)", file=sys.stderr)
     return 0
+
+
+def _law_checked(args, model):
+    """The law of ``--law`` and its file record, the condition checked against its identified domain."""
+    import hashlib
+    from pathlib import Path
+
+    from fivid.cli.law_domain import check_law_condition, open_law_file
+    from fivid.friction import PerturbedCoulombLaw
+
+    _, law, domain = open_law_file(args.law)
+    record = {"law_file": str(args.law), "law_file_sha256": hashlib.sha256(Path(args.law).read_bytes()).hexdigest(),
+              "domain": None}
+    if isinstance(law, PerturbedCoulombLaw):  # a Coulomb law has no amplitude, hence no domain to leave
+        base = model.motion("base")
+        velocity = float(args.velocity) if args.velocity is not None else abs(base.amplitude) if base else None
+        pred = check_law_condition(law, domain, velocity, None if args.roughness is None else float(args.roughness),
+                                   None if args.load is None else float(args.load), strict=args.strict,
+                                   command="simulate")
+        record["domain"] = {"checked": domain is not None, "inside": bool(pred.inside[0]), "warnings": pred.messages}
+    return law, record
+
+
+def _run_samples(args, model, law, law_file) -> int:
+    """``--samples N``: the Monte-Carlo envelope of the law at the condition, written to ``-o``."""
+    from fivid.pipeline.montecarlo import run_monte_carlo
+    from fivid.schema import new_history
+    from fivid.storage import dumps_json, write_netcdf
+
+    def si(value):
+        return None if value is None else float(value)
+
+    env = run_monte_carlo(
+        model, law, samples=args.samples, seed=args.seed, duration=si(args.duration), sample_rate=si(args.sample_rate),
+        sliding_velocity=si(args.velocity), normal_load=si(args.load), roughness_ra=si(args.roughness),
+        time_step=si(args.time_step), reduced=args.reduced, variable=args.variable, sensor=args.sensor,
+        nperseg=args.nperseg, workers=args.workers, scheduler=args.scheduler, progress=args.progress,
+        attrs={**law_file, "law_domain_check": _domain_text(args.law_domain), "model": str(args.model),
+               "model_description": model.describe(),
+               "history": new_history(_command_line(args))},
+    )
+    write_netcdf(env, args.output, overwrite=args.overwrite)
+    summary = {"output": str(args.output), "samples": int(env.sizes["sample"]), "seed": int(args.seed),
+               "law_domain": args.law_domain,
+               "seeds": env["sample_seed"].values.tolist(), "law_file_sha256": law_file["law_file_sha256"],
+               "coefficient_covariance_sampled": bool(env.attrs["coefficient_covariance_sampled"]),
+               "amplitude": {"median": float(env["sample_amplitude"].median()),
+                             "min": float(env["sample_amplitude"].min()), "max": float(env["sample_amplitude"].max())},
+               "frequency_resolution_hz": env.attrs["frequency_resolution"],
+               "bands": [{"centre_hz": float(c), "p05_db": float(a), "median_db": float(b), "p95_db": float(d)}
+                         for c, a, b, d in zip(env["band_centre"].values, env["band_level_p05"].values,
+                                               env["band_level_median"].values, env["band_level_p95"].values)]}
+    if args.json:
+        print(dumps_json(summary))
+    else:
+        widths = [b["p95_db"] - b["p05_db"] for b in summary["bands"]]
+        print(f"{model.describe()}; {summary['samples']} Monte-Carlo samples, amplitude A from "
+              f"{summary['amplitude']['min']:.4g} to {summary['amplitude']['max']:.4g} (median "
+              f"{summary['amplitude']['median']:.4g})")
+        if widths:
+            print(f"5-95 % envelope width over {len(widths)} 1/3-octave bands: {min(widths):.3g} to "
+                  f"{max(widths):.3g} dB")
+        print(f"written {args.output}", file=sys.stderr)
+    return 0
+
+
+def _domain_text(domain) -> str:
+    """One line for the envelope file: whether the condition was inside the law's identified domain."""
+    if domain is None or not domain["checked"]:
+        return "not checked (the law file records no domain)"
+    return "inside the identified domain" if domain["inside"] else "outside: " + " | ".join(domain["warnings"])
 
 
 def _load_model(path):
@@ -145,7 +246,7 @@ def _load_model(path):
 _OPTIONS = (("--law", "law"), ("--mu", "mu"), ("--velocity", "velocity"), ("--load", "load"),
             ("--roughness", "roughness"), ("--duration", "duration"), ("--sample-rate", "sample_rate"),
             ("--seed", "seed"), ("--time-step", "time_step"), ("--reduced", "reduced"), ("--run-id", "run_id"),
-            ("-o", "output"))
+            ("--samples", "samples"), ("-o", "output"))
 
 
 def _command_line(args) -> str:
@@ -162,4 +263,8 @@ def _command_line(args) -> str:
             words.append(option)
         elif value is not None:
             words += [option, str(getattr(value, "text", value))]  # a quantity as it was written
+    if getattr(args, "samples", None) is not None:
+        words += ["--nperseg", str(args.nperseg), "--variable", args.variable]
+        words += ["--sensor", args.sensor] if args.sensor is not None else []
+    words += ["--strict"] if getattr(args, "strict", False) else []
     return shlex.join(words + (["--overwrite"] if args.overwrite else []))

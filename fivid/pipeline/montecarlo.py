@@ -1,0 +1,133 @@
+"""Run a Monte-Carlo over a friction law's uncertainty on dask → the PSD envelope (issue 16 item 3).
+
+The samples (:func:`fivid.identify.montecarlo.monte_carlo_laws`) are simulated with
+:func:`fivid.identify.montecarlo.sample_spectrum` as tasks of :func:`fivid.pipeline.sweep.map_tasks`
+(the LocalCluster or the scheduler of the sweeps and studies), or in this process with ``workers=0``;
+their PSDs become the envelope (:func:`fivid.score.envelope.envelope_dataset`). The result does not
+depend on the number of workers nor on the order in which the samples finish.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from fivid.errors import ConfigError, FividError
+
+__all__ = ["run_monte_carlo"]
+
+log = logging.getLogger("fivid")
+
+
+def _sample_task(model, law, params, spectrum_kw):
+    from fivid.identify.montecarlo import sample_spectrum
+
+    return sample_spectrum(model, law, params, **spectrum_kw)
+
+
+def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float, sample_rate: float,
+                    sliding_velocity=None, normal_load=None, roughness_ra=None, time_step=None, reduced=None,
+                    variable: str = "acceleration", sensor=None, nperseg: int = 8192, settle: float = 0.0, band=None,
+                    workers: int = 2, scheduler: str | None = None, progress=None, attrs: dict | None = None):
+    """Simulate ``samples`` draws of ``law`` at one condition and return their PSD envelope (a Dataset).
+
+    Parameters
+    ----------
+    model : Model
+    law : PerturbedCoulombLaw
+    samples : int
+        Number of Monte-Carlo samples (>= 2).
+    seed : int
+        Seed of the whole Monte-Carlo (coefficient draws and every sample's synthesis seed).
+    duration, sample_rate, sliding_velocity, normal_load, roughness_ra, time_step, reduced
+        As :func:`fivid.solver.simulate` [s, Hz, m s-1, N, m, s].
+    variable, sensor
+        The signal whose PSD is taken (as ``fivid score``).
+    nperseg : int
+        Welch segment length [samples]; the analysed record (``(duration - settle) * sample_rate``) must hold one.
+    settle : float
+        Time [s] skipped after the end of each simulation's transient before the PSD.
+    band : (float, float), optional
+        Band [Hz] of the stored 1/3-octave band levels (default: that of the scores).
+    workers : int
+        dask worker processes; 0 runs the samples in this process.
+    scheduler : str, optional
+        ``tcp://host:port`` of a running dask scheduler.
+    progress : bool, optional
+        Progress bar over the samples (default: when the terminal is interactive).
+    attrs : dict, optional
+        More provenance for the file (law file name and sha256, model, command line).
+    """
+    from tqdm.auto import tqdm
+
+    from fivid.identify.montecarlo import NOT_SAMPLED, SAMPLED, monte_carlo_laws
+    from fivid.score.envelope import envelope_dataset
+
+    n_steady = int(np.floor((float(duration) - float(settle)) * float(sample_rate) + 1e-9))
+    if n_steady < int(nperseg):
+        raise ConfigError(f"the analysed record of {duration:g} s (less {settle:g} s settling) at {sample_rate:g} Hz has "
+                          f"{n_steady} samples, fewer than one Welch segment (nperseg {int(nperseg)}); lengthen the "
+                          "duration or lower nperseg", key="nperseg")
+    if scheduler is not None:
+        from fivid.pipeline.sweep import check_scheduler_address
+
+        check_scheduler_address(scheduler)
+    draws = monte_carlo_laws(law, samples, seed)
+    base = dict(duration=float(duration), sample_rate=float(sample_rate), sliding_velocity=sliding_velocity,
+                normal_load=normal_load, roughness_ra=roughness_ra, time_step=time_step, reduced=reduced)
+    spectrum_kw = dict(variable=variable, sensor=sensor, nperseg=int(nperseg), settle=float(settle))
+    items = {f"mc{i:04d}": (model, draws["laws"][i], {**base, "seed": int(draws["seeds"][i])}, spectrum_kw)
+             for i in range(int(samples))}
+    results = {}
+    bar = tqdm(total=len(items), desc="Monte-Carlo", unit="sample", leave=False, disable=None if progress is None
+               else not progress)
+    try:
+        if workers == 0 and scheduler is None:
+            for name, args in items.items():
+                results[name] = _sample_task(*args)
+                bar.update(1)
+        else:
+            from fivid.pipeline.sweep import map_tasks
+
+            for name, out, seconds, pid in map_tasks(_sample_task, items, workers=max(int(workers), 1),
+                                                     scheduler=scheduler):
+                log.info("Monte-Carlo %s: %.3g s on worker pid %d", name, seconds, pid)
+                results[name] = out
+                bar.update(1)
+    finally:
+        bar.close()
+    ordered = [results[name] for name in items]  # sample order, whatever the finishing order
+    freq = ordered[0]["frequency"]
+    if any(r["frequency"].shape != freq.shape for r in ordered):
+        raise FividError("the Monte-Carlo samples' PSDs are on different frequency grids")
+    settings = ordered[0]["settings"]
+    meta = {
+        "seed": int(seed),
+        "sampled": SAMPLED,
+        "not_sampled": NOT_SAMPLED,
+        "coefficient_covariance_sampled": int(draws["covariance_sampled"]),
+        "law_sha256": str(law.sha256),
+        "variable": variable,
+        "sensor": "" if sensor is None else str(sensor),
+        "duration": float(duration),
+        "duration_units": "s",
+        "sample_rate": float(sample_rate),
+        "sample_rate_units": "Hz",
+        "scaling": "density",
+        "steady_part": f"each sample from its simulation's transient_end (after preload, settling and base ramp) "
+                       f"+ {float(settle):g} s",
+        "settle": float(settle),
+        "settle_units": "s",
+        **{k: v for k, v in settings.items() if k != "equivalent_degrees_of_freedom"},
+        "sample_equivalent_degrees_of_freedom": float(settings.get("equivalent_degrees_of_freedom", np.nan)),
+    }
+    for name, value in (("sliding_velocity", sliding_velocity), ("normal_load", normal_load),
+                        ("roughness_ra", roughness_ra)):
+        if value is not None:
+            meta[name] = float(value)
+    meta.update(attrs or {})
+    return envelope_dataset(freq, np.stack([r["psd"] for r in ordered]), ordered[0]["units"], band=band,
+                            seeds=draws["seeds"], coefficients=draws["coefficients"],
+                            coefficient_names=draws["names"], amplitudes=[r["amplitude"] for r in ordered],
+                            attrs=meta)
