@@ -186,3 +186,26 @@ def test_mass_scaled_reduced_system_keeps_the_first_ten_frequencies_and_closes_i
     assert float(ds.contact_normal_force.max()) > 0.0
     assert float(np.abs(ds.energy_balance_error).max()) < 1e-10 * scale
     assert ds.attrs["reduced_mass_scaling"] == 153600.0 and ds.attrs["reduced_mass_scaled_modes"] >= 1
+
+
+@pytest.mark.slow
+def test_mass_scaled_reduction_matches_the_full_run_in_band_at_a_longer_step(coarse):
+    """Issue 17's acceptance on the coarse rig: modes and selective mass scaling at 6 x the band top (153.6 kHz),
+    Coulomb sliding, 50 ms: the acceleration PSD over 200 Hz - 10 kHz within the issue's 1 dB RMS of the full run
+    (measured 0.62 dB; the full run against itself at 0.97 x its step: 0.003 dB, so this is the reduction's own
+    error), at a step 8x the full model's, mean friction within 1 %."""
+    from fivid.solver.driver import prepare_run
+    from fivid.solver.reduced import prepare_reduced
+    from fivid.solver.study import band_distance, steady_psds
+
+    full = prepare_run(coarse, duration=0.05, **RUN)
+    fast = prepare_reduced(full, cutoff=153600.0, mass_scaling=153600.0)
+    assert fast.settings.time_step >= 6 * full.settings.time_step
+    ds_full, ds_fast = full.run(progress=False), fast.run(progress=False)
+    f, (p_full, p_fast), _ = steady_psds([ds_full, ds_fast], nperseg=256)
+    lsd, level, _ = band_distance(f, p_full, p_fast, (200.0, 10e3))
+    assert lsd < 1.0
+    assert abs(level) < 0.5
+    steady = ds_full.time >= ds_full.attrs["transient_end"]
+    assert float(ds_fast.friction_force.where(steady).mean()) == pytest.approx(
+        float(ds_full.friction_force.where(steady).mean()), rel=0.01)
