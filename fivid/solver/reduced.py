@@ -236,7 +236,9 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
         freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
         if n_modes is not None or freq[-1] > f_cut or k >= interior.size - 1:
             break
-        k *= 2
+        # next batch from the mode count of a 2-D continuum, N(f) ~ f^2 (Weyl), 15 % over: usually the last one
+        # (doubling from 40 to the 176 modes below 460.8 kHz on the default rig computed 600 eigenpairs)
+        k = max(2 * k, int(math.ceil(1.15 * k * (f_cut / max(float(freq[-1]), 1e-300)) ** 2)) + 2)
     keep = int(min(n_modes, k - 1)) if n_modes is not None else int(np.sum(freq <= f_cut))
     phi = phi[:, :keep]
     first_truncated = float(freq[keep]) if keep < freq.size else math.inf
