@@ -69,6 +69,8 @@ class ReducedSystem:
         (``K_II^-1 M_II Psi_I``) that the kept modes miss [-]: the error of leaving out the higher modes.
     kernel : dict
         Arrays of :func:`fivid.solver._reduced_kernels.run_reduced_steps`.
+    mass_scaling : MassScaling or None
+        The selective mass scaling applied to ``M`` (:func:`scale_high_modes`).
     """
 
     nodes: np.ndarray
@@ -307,7 +309,8 @@ def scale_high_modes(k, m, target):
     modes (``X_H^T M X_L = 0``), so ``K X_L = M' X_L Omega_L^2``, and ``M' X_H = M X_H diag(s)``. ``M'`` stays
     symmetric positive definite and ``K`` is untouched: the static compliance is exact, and the receptance of a
     scaled mode at a frequency ``f`` below the target is off by a factor ``(1 - (f/f_i)^2) / (1 - (f/f_t)^2)``
-    (a few per cent at a third of the target). The stable step then follows from ``omega_t`` instead of the
+    (the scaled modes' share of the receptance: 0.05 % off at 10 kHz for a 460.8 kHz target, 12 % at a third of
+    the target). The stable step then follows from ``omega_t`` instead of the
     stiff, local constraint modes of single contact nodes (issue 17: these set the reduced ``omega_max`` near
     the mesh's own).
 
