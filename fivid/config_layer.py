@@ -32,7 +32,7 @@ from os import PathLike
 from pathlib import Path
 from typing import Annotated, Any, Mapping
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError, WithJsonSchema
+from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
 from fivid.errors import ConfigError, UnitError
@@ -45,6 +45,7 @@ __all__ = [
     "Quantity",
     "Number",
     "Name",
+    "none_as",
     "quantity_parser",
     "fail",
     "read_yaml",
@@ -53,6 +54,9 @@ __all__ = [
     "load_config",
     "json_schema",
     "key_path",
+    "key_loc",
+    "unknown_key_message",
+    "MISSING",
 ]
 
 
@@ -268,11 +272,22 @@ Name = Annotated[str, BeforeValidator(_name), WithJsonSchema({"type": "string"})
 Number = Annotated[float, BeforeValidator(_number), WithJsonSchema({"type": "number"})]
 
 
+def none_as(empty):
+    """A validator reading an empty YAML value (``key:`` with nothing after it) as ``empty()`` ({} or [])."""
+    return BeforeValidator(lambda value: empty() if value is None else value)
+
+
 class ConfigModel(BaseModel):
-    """Base of fivid's config models: unknown keys are errors; no silent coercion ("5" is no integer)."""
+    """Base of fivid's config models: unknown keys are errors; no silent coercion ("5" is no integer);
+    an empty section (``csv:`` with nothing under it) is the section with its defaults."""
 
     model_config = ConfigDict(extra="forbid", strict=True, frozen=True, populate_by_name=True,
                               arbitrary_types_allowed=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _empty_section(cls, data):
+        return {} if data is None else data
 
 
 # ---------------------------------------------------------------------------------------------- errors
@@ -287,6 +302,22 @@ def key_path(loc) -> str:
         else:
             out += f".{part}" if out else str(part)
     return out
+
+
+def key_loc(key: str) -> tuple:
+    """``columns.acceleration[1]`` -> ``("columns", "acceleration", 1)`` (the inverse of :func:`key_path`)."""
+    return tuple(int(part[1:-1]) if part.startswith("[") else part for part in re.findall(r"[^.\[\]]+|\[\d+\]", key))
+
+
+def unknown_key_message(key, allowed) -> str:
+    """The one message of an unknown key: the allowed keys, and the closest one when it looks like a typo."""
+    allowed = sorted(str(a) for a in allowed)
+    close = difflib.get_close_matches(str(key), allowed, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    return f"unknown key; allowed: {', '.join(allowed)}{hint}"
+
+
+MISSING = "is required (missing)"
 
 
 def _unwrap(tp):
@@ -336,12 +367,9 @@ def _describe(err: dict, model) -> tuple[str, str]:
         return key_path(loc + tuple(ctx.get("at", ()))), ctx["message"]
     if kind == "extra_forbidden":
         parent = _model_at(model, loc[:-1])
-        allowed = allowed_keys(parent) if parent is not None else []
-        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else ""
-        return key_path(loc), f"unknown key; allowed: {', '.join(allowed)}{hint}"
+        return key_path(loc), unknown_key_message(loc[-1], allowed_keys(parent) if parent is not None else [])
     if kind == "missing":
-        return key_path(loc), "is required (missing)"
+        return key_path(loc), MISSING
     expected = {
         "int_type": "an integer", "int_from_float": "an integer", "float_type": "a number", "bool_type": "true or false",
         "string_type": "a string", "list_type": "a list", "dict_type": "a mapping", "model_type": "a mapping",
@@ -365,10 +393,6 @@ class Problems:
 
     def add(self, key: str, message: str) -> None:
         self.items.append((key, message))
-
-    def add_validation_error(self, exc: ValidationError, model) -> None:
-        for err in exc.errors(include_url=False):
-            self.add(*_describe(err, model))
 
     def __bool__(self) -> bool:
         return bool(self.items)
@@ -397,7 +421,8 @@ def validate(model, source: ConfigSource, problems: Problems | None = None, *, d
     try:
         result = model.model_validate(source.data if data is None else data)
     except ValidationError as exc:
-        for err in exc.errors(include_url=False):
+        # an unknown key first: a misspelt key is the likely cause of a "missing" one beside it
+        for err in sorted(exc.errors(include_url=False), key=lambda e: e["type"] != "extra_forbidden"):
             err = dict(err, loc=tuple(prefix) + tuple(err["loc"]))
             key, message = _describe(err, _Prefixed.wrap(model, prefix))
             problems.add(key, message)

@@ -7,27 +7,22 @@ file, the line (when read from a file) and the key path, e.g. ``bodies.upper.mat
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from os import PathLike
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Annotated, Any, Literal, Mapping
 
 import numpy as np
+from pydantic import BeforeValidator, Field, model_validator
+from pydantic_core import PydanticCustomError
 
-from fivid.errors import ConfigError, UnitError
 import fivid.fe.model as fm
-from fivid.units import parse_quantity
+from fivid.config_layer import (MISSING, ConfigModel, ConfigSource, Name, Quantity, fail, from_mapping, key_loc,
+                                none_as, quantity_parser, read_yaml, unknown_key_message, validate)
+from fivid.errors import ConfigError
 
-__all__ = ["build_model", "read_config"]
+__all__ = ["build_model", "read_config", "ModelConfig"]
 
-_TOP_KEYS = {
-    "name": "optional", "description": "optional", "plane": "optional", "materials": "optional",
-    "bodies": "required", "damping": "optional", "contacts": "optional", "motions": "optional",
-    "point_masses": "optional", "springs": "optional", "sensors": "optional", "reactions": "optional",
-    "loads": "optional",
-}
 _BODY_KEYS = {"corners": "optional", "annulus": "optional", "profile": "optional", "grading": "optional",
               "divisions": "required", "material": "required", "thickness": "required",
               "clamp": "optional", "initial_velocity": "optional"}
@@ -35,69 +30,95 @@ _ANNULUS_KEYS = {"center": "required", "inner_radius": "required", "outer_radius
 _PROFILE_KEYS = {"edge": "required", "x": "optional", "z": "optional", "file": "optional", "units": "optional",
                  "sine": "optional", "gaussian": "optional"}
 _GRADING_KEYS = {"edge": "optional", "ratio": "required"}
-_MATERIAL_KEYS = {"E": "required", "nu": "required", "rho": "required"}
 _COMPONENTS = {"x": 0, "y": 1}
 
 
-class _Context:
-    """Where the config came from, and the line of every key path (from the YAML node marks)."""
-
-    def __init__(self, file: str | None, lines: dict[str, int]):
-        self.file = file
-        self.lines = lines
-
-    def error(self, key: str, message: str) -> ConfigError:
-        line = None
-        k = key
-        while k and line is None:  # the line of the key, or of its nearest parent
-            line = self.lines.get(k)
-            k = k.rsplit(".", 1)[0] if "." in k else (k.split("[")[0] if "[" in k else "")
-        return ConfigError(message, file=self.file, line=line, key=key)
-
-
-def _compose_lines(node, path: str, lines: dict[str, int]) -> None:
-    import yaml
-
-    lines.setdefault(path, node.start_mark.line + 1)
-    if isinstance(node, yaml.MappingNode):
-        for k, v in node.value:
-            sub = f"{path}.{k.value}" if path else str(k.value)
-            lines[sub] = k.start_mark.line + 1
-            _compose_lines(v, sub, lines)
-    elif isinstance(node, yaml.SequenceNode):
-        for i, v in enumerate(node.value):
-            _compose_lines(v, f"{path}[{i}]", lines)
-
-
-def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, _Context, str]:
-    """Parse a config file (or take a mapping): ``(mapping, context, source string with sha256)``."""
-    import yaml
-
+def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, ConfigSource, str]:
+    """Parse a config file (:func:`fivid.config_layer.read_yaml`) or take a mapping:
+    ``(mapping, source with the key lines, provenance string with sha256)``."""
     if isinstance(source, Mapping):
-        text = json.dumps(source, sort_keys=True, default=str)
-        digest = hashlib.sha256(text.encode()).hexdigest()
-        return dict(source), _Context(None, {}), f"<mapping> sha256:{digest}"
-    path = Path(source)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(f"cannot read the model config: {exc.strerror}", file=str(path)) from None
-    text = raw.decode("utf-8", errors="replace")
-    try:
-        data = yaml.safe_load(text)
-        root = yaml.compose(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise ConfigError(
-            f"not valid YAML: {getattr(exc, 'problem', exc)}", file=str(path),
-            line=None if mark is None else mark.line + 1,
-        ) from None
-    if not isinstance(data, dict):
-        raise ConfigError("a model config is a mapping with at least 'bodies'", file=str(path))
-    lines: dict[str, int] = {}
-    if root is not None:
-        _compose_lines(root, "", lines)
-    return data, _Context(str(path), lines), f"{path} sha256:{hashlib.sha256(raw).hexdigest()}"
+        src = from_mapping(source)
+    else:
+        src = read_yaml(source, "model config")
+    return src.data, src, src.origin
+
+
+# ---------------------------------------------------------------------------------------------- typed sections
+
+
+def _inf_or_frequency(value):
+    if value in (None, "none", "inf"):
+        return math.inf
+    return quantity_parser("Hz", positive=True, bare="Hz")(value)
+
+
+class _Material(ConfigModel):
+    """Linear elastic isotropic material."""
+
+    E: Quantity("Pa", positive=True, bare_is_si=True) = Field(description="Young's modulus")
+    nu: Quantity("dimensionless", bare_is_si=True) = Field(description="Poisson's ratio, -1 < nu < 0.5")
+    rho: Quantity("kg m-3", positive=True, bare_is_si=True) = Field(description="density")
+
+    @model_validator(mode="after")
+    def _poisson(self):
+        if not -1.0 < self.nu < 0.5:
+            raise fail(f"expected Poisson's ratio -1 < nu < 0.5 (nu >= 0.5 is incompressible: the elasticity matrix is "
+                       f"singular), found {self.nu!r}", at=("nu",))
+        return self
+
+
+class _Ratio(ConfigModel):
+    frequency: Quantity("Hz", positive=True, bare_is_si=True)
+    ratio: Quantity("dimensionless", nonnegative=True, bare_is_si=True)
+
+
+class _Damping(ConfigModel):
+    """Rayleigh damping: ``alpha`` and ``beta`` given, or fitted through two modal damping ``ratios``."""
+
+    alpha: Quantity("s-1", nonnegative=True, bare_is_si=True) = 0.0
+    beta: Quantity("s", nonnegative=True, bare_is_si=True) = 0.0
+    ratios: Annotated[list[_Ratio], Field(min_length=2, max_length=2)] | None = None
+    cutoff: Annotated[float, BeforeValidator(_inf_or_frequency)] = Field(
+        math.inf, description="frequency above which beta stops acting ('inf' or 'none': classic Rayleigh)")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_way(cls, data):
+        if isinstance(data, Mapping) and "ratios" in data and ("alpha" in data or "beta" in data):
+            raise fail("give either {alpha, beta} or ratios, not both")
+        return data
+
+    @model_validator(mode="after")
+    def _distinct(self):
+        if self.ratios is not None and self.ratios[0].frequency == self.ratios[1].frequency:
+            raise fail("expected two different frequencies", at=("ratios",))
+        return self
+
+
+_Items = Annotated[list[dict[str, Any]], none_as(list)]
+
+
+class ModelConfig(ConfigModel):
+    """A finite-element model config (``configs/models/*.yaml``, ``docs/model-config.md``).
+
+    The top-level keys, materials and damping are typed here; bodies, contacts, motions, loads and the
+    other item lists are checked item by item by :func:`build_model` (same error format).
+    """
+
+    name: Name = ""
+    description: str = ""
+    plane: Literal["stress", "strain"] = "stress"
+    materials: Annotated[dict[str, _Material], none_as(dict)] = {}
+    bodies: Annotated[dict[str, Any], Field(min_length=1, description="body name -> {corners | annulus, divisions, "
+                                                                      "material, thickness, ...}")]
+    damping: _Damping | None = None
+    contacts: _Items = []
+    motions: _Items = []
+    point_masses: _Items = []
+    springs: _Items = []
+    sensors: _Items = []
+    reactions: _Items = []
+    loads: _Items = []
 
 
 # ---------------------------------------------------------------------------------------------- readers
@@ -105,30 +126,23 @@ def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, _Cont
 
 def _mapping(ctx, value, key, allowed: dict[str, str]) -> dict:
     if not isinstance(value, Mapping):
-        raise ctx.error(key, f"expected a mapping with keys {sorted(allowed)}, got {type(value).__name__} {value!r}")
+        raise ctx.error(key, f"expected a mapping with keys {sorted(allowed)}, found {type(value).__name__} {value!r}")
     unknown = [k for k in value if k not in allowed]
     if unknown:
-        raise ctx.error(f"{key}.{unknown[0]}" if key else str(unknown[0]),
-                        f"unknown key {unknown[0]!r}; allowed here: {', '.join(sorted(allowed))}")
+        raise ctx.error(f"{key}.{unknown[0]}" if key else str(unknown[0]), unknown_key_message(unknown[0], allowed))
     missing = [k for k, need in allowed.items() if need == "required" and k not in value]
     if missing:
-        raise ctx.error(key, f"missing required key {missing[0]!r} (required here: "
-                             f"{', '.join(k for k, n in allowed.items() if n == 'required')})")
+        raise ctx.error(f"{key}.{missing[0]}" if key else missing[0],
+                        f"{MISSING}; required here: {', '.join(k for k, n in allowed.items() if n == 'required')}")
     return dict(value)
 
 
 def _quantity(ctx, value, key, units: str, *, positive=False, nonnegative=False) -> float:
+    """``value`` in SI ``units`` (a bare number is SI): the config layer's quantity check, at ``key``."""
     try:
-        q = parse_quantity(value, units, default_units=units)
-    except UnitError as exc:
-        raise ctx.error(key, f"{exc.message} (expected a quantity in {units!r})") from None
-    if not np.isfinite(q):
-        raise ctx.error(key, f"{value!r} is not finite")
-    if positive and not q > 0:
-        raise ctx.error(key, f"must be > 0, got {value!r}")
-    if nonnegative and not q >= 0:
-        raise ctx.error(key, f"must be >= 0, got {value!r}")
-    return float(q)
+        return quantity_parser(units, positive, nonnegative, bare=units)(value)
+    except PydanticCustomError as exc:
+        raise ctx.error(key, exc.context["message"]) from None
 
 
 def _list(ctx, value, key, length=None) -> list:
@@ -151,22 +165,16 @@ def _name(ctx, value, key) -> str:
     return value
 
 
-def _material(ctx, value, key, materials: dict) -> Material:
+def _material(ctx, value, key, materials: dict) -> fm.Material:
     if isinstance(value, str):
         if value not in materials:
             raise ctx.error(key, f"material {value!r} is not defined under 'materials' "
                                  f"(defined: {', '.join(materials) or 'none'})")
         return materials[value]
     if value is None:
-        raise ctx.error(key, "missing material: give {E, nu, rho} or the name of an entry of 'materials'")
-    m = _mapping(ctx, value, key, _MATERIAL_KEYS)
-    E = _quantity(ctx, m["E"], f"{key}.E", "Pa", positive=True)
-    nu = _quantity(ctx, m["nu"], f"{key}.nu", "dimensionless")
-    if not -1.0 < nu < 0.5:
-        raise ctx.error(f"{key}.nu", f"Poisson's ratio {nu!r} is not allowed; need -1 < nu < 0.5 "
-                                     "(nu >= 0.5 is incompressible: the elasticity matrix is singular)")
-    rho = _quantity(ctx, m["rho"], f"{key}.rho", "kg m-3", positive=True)
-    return fm.Material(E, nu, rho)
+        raise ctx.error(key, f"{MISSING}: give {{E, nu, rho}} or the name of an entry of 'materials'")
+    m = validate(_Material, ctx, data=value, prefix=key_loc(key))
+    return fm.Material(m.E, m.nu, m.rho)
 
 
 def _check_corners(ctx, corners: np.ndarray, key: str) -> None:
@@ -400,7 +408,7 @@ def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ..
     return tuple(blocks), clamps
 
 
-def _block_ref(ctx, blocks, value, key) -> Block:
+def _block_ref(ctx, blocks, value, key) -> fm.Block:
     for b in blocks:
         if b.name == value:
             return b
@@ -610,14 +618,12 @@ def _items(ctx, data, section) -> list:
     return _list(ctx, value, section)
 
 
-def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
+def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     """Validate a config (path or mapping) and build the :class:`Model` (see :func:`fivid.fe.load_model`)."""
     data, ctx, origin = read_config(source)
-    _mapping(ctx, data, "", _TOP_KEYS)
-    plane = _choice(ctx, data.get("plane", "stress"), "plane", ("stress", "strain"))
-    materials = {}
-    for name, spec in (data.get("materials") or {}).items():
-        materials[name] = _material(ctx, spec, f"materials.{name}", {})
+    top = validate(ModelConfig, ctx)
+    plane = top.plane
+    materials = {name: fm.Material(m.E, m.nu, m.rho) for name, m in top.materials.items()}
     blocks, clamps = _bodies(ctx, data, plane, materials)
     n_nodes = sum(b.n_nodes for b in blocks)
     coords = np.concatenate([b.coords.reshape(-1, 2) for b in blocks])
@@ -720,7 +726,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                                                nonnegative=True),
                                      _quantity(ctx, m.get("start", 0.0), f"{key}.start", "s", nonnegative=True)))
 
-    alpha, beta, cutoff = _damping(ctx, data.get("damping"))
+    alpha, beta, cutoff = _damping(ctx, top.damping)
     for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),
                            ("contacts", contacts), ("sensors", sensors), ("reactions", reactions),
                            ("loads", loads)):
@@ -734,34 +740,17 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                  rayleigh_alpha=alpha, rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data)
 
 
-def _damping(ctx, spec) -> tuple[float, float, float]:
+def _damping(ctx, spec: _Damping | None) -> tuple[float, float, float]:
     """``(alpha [s-1], beta [s], cutoff [Hz])`` of the ``damping`` section (cutoff inf: classic Rayleigh)."""
     from fivid.fe.damping import fit_rayleigh
 
     if spec is None:
         return 0.0, 0.0, math.inf
-    m = _mapping(ctx, spec, "damping", {"alpha": "optional", "beta": "optional", "ratios": "optional",
-                                        "cutoff": "optional"})
-    cutoff = math.inf
-    if "cutoff" in m and m["cutoff"] not in (None, "none", "inf"):
-        cutoff = _quantity(ctx, m["cutoff"], "damping.cutoff", "Hz", positive=True)
-    if "ratios" in m:
-        if "alpha" in m or "beta" in m:
-            raise ctx.error("damping", "give either {alpha, beta} or ratios, not both")
-        pts = _list(ctx, m["ratios"], "damping.ratios", 2)
-        fz = []
-        for i, p in enumerate(pts):
-            k = f"damping.ratios[{i}]"
-            q = _mapping(ctx, p, k, {"frequency": "required", "ratio": "required"})
-            fz += [_quantity(ctx, q["frequency"], f"{k}.frequency", "Hz", positive=True),
-                   _quantity(ctx, q["ratio"], f"{k}.ratio", "dimensionless", nonnegative=True)]
-        if fz[0] == fz[2]:
-            raise ctx.error("damping.ratios", "the two frequencies must differ")
-        alpha, beta = fit_rayleigh(*fz, cutoff=cutoff)
-        if alpha < 0 or beta < 0:
-            raise ctx.error("damping.ratios", f"these ratios need a negative Rayleigh coefficient (alpha {alpha:.4g} "
-                                              f"s-1, beta {beta:.4g} s): no Rayleigh curve passes through both points")
-        return alpha, beta, cutoff
-    alpha = _quantity(ctx, m.get("alpha", 0.0), "damping.alpha", "s-1", nonnegative=True)
-    beta = _quantity(ctx, m.get("beta", 0.0), "damping.beta", "s", nonnegative=True)
-    return alpha, beta, cutoff
+    if spec.ratios is None:
+        return spec.alpha, spec.beta, spec.cutoff
+    (f1, z1), (f2, z2) = ((r.frequency, r.ratio) for r in spec.ratios)
+    alpha, beta = fit_rayleigh(f1, z1, f2, z2, cutoff=spec.cutoff)
+    if alpha < 0 or beta < 0:
+        raise ctx.error("damping.ratios", f"these ratios need a negative Rayleigh coefficient (alpha {alpha:.4g} "
+                                          f"s-1, beta {beta:.4g} s): no Rayleigh curve passes through both points")
+    return alpha, beta, spec.cutoff

@@ -32,7 +32,8 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BeforeValidator, Field, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
-from fivid.config_layer import ConfigModel, ConfigSource, Name, Number, Problems, fail, read_yaml, validate
+from fivid.config_layer import (ConfigModel, ConfigSource, Name, Number, Problems, fail, key_loc, read_yaml,
+                                validate)
 from fivid.errors import ConfigError, FividError, UnitError
 from fivid.io.rig_quantities import attribute_units, metadata_value, sensitivity_factor
 from fivid.schema import registry
@@ -389,7 +390,7 @@ def _column_spec(variable: str, raw, key: str, source: ConfigSource, problems: P
         problems.add(f"{key}.sensor", f"unknown key: {variable!r} has no sensor dimension; allowed: name, units, "
                                       "sensitivity, scale")
         return None
-    spec = validate(_Column, source, problems, data=raw, prefix=_loc(key))
+    spec = validate(_Column, source, problems, data=raw, prefix=key_loc(key))
     if spec is None:
         return None
     target = registry().variables[variable].units
@@ -416,14 +417,6 @@ def _column_spec(variable: str, raw, key: str, source: ConfigSource, problems: P
         return None
     return ColumnSpec(variable, spec.name.strip(), spec.units, spec.sensitivity, spec.scale, factor * spec.scale,
                       offset * spec.scale, spec.sensor)
-
-
-def _loc(key: str) -> tuple:
-    """``columns.acceleration[1]`` -> ``("columns", "acceleration", 1)``."""
-    out: list = []
-    for part in re.findall(r"[^.\[\]]+|\[\d+\]", key):
-        out.append(int(part[1:-1]) if part.startswith("[") else part)
-    return tuple(out)
 
 
 def _column_specs(columns: dict, source: ConfigSource, problems: Problems) -> tuple[ColumnSpec, ...]:
