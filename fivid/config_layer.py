@@ -162,7 +162,7 @@ def read_yaml(path: str | PathLike, what: str = "config", *, mapping: bool = Tru
     try:
         raw = path.read_bytes()
     except FileNotFoundError:
-        raise ConfigError(f"{what} {str(path)!r} does not exist", file=path) from None
+        raise ConfigError(f"cannot read the {what} {str(path)!r}: it does not exist", file=path) from None
     except OSError as exc:
         raise ConfigError(f"cannot read the {what}: {exc.strerror}", file=path) from None
     try:
