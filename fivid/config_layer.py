@@ -47,6 +47,7 @@ __all__ = [
     "Name",
     "none_as",
     "quantity_parser",
+    "quantity_schema",
     "fail",
     "read_yaml",
     "from_mapping",
@@ -228,6 +229,19 @@ def quantity_parser(units: str, positive: bool = False, nonnegative: bool = Fals
     return parse
 
 
+def quantity_schema(units: str, *, positive: bool = False, nonnegative: bool = False, bare_is_si: bool = False,
+                    also: tuple = ()) -> dict:
+    """The JSON Schema of a quantity: a number, or a string with a unit; ``also``: other accepted constants."""
+    number = {"type": "number"} | ({"exclusiveMinimum": 0} if positive else {"minimum": 0} if nonnegative else {})
+    text = {"type": "string", "pattern": r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*\S.*$"}
+    return {
+        "anyOf": [number, text] + [{"const": c} for c in also],
+        "description": f"a quantity with units compatible with {units!r}, e.g. '1 {units}'"
+                       + ("; a bare number is in these units" if bare_is_si else ""),
+        "x-fivid-units": units,
+    }
+
+
 def Quantity(units: str, *, positive: bool = False, nonnegative: bool = False, bare_is_si: bool = False):
     """Field type of a physical quantity: ``"10 mm/s"`` -> SI float (units checked, dimension compatible).
 
@@ -241,13 +255,7 @@ def Quantity(units: str, *, positive: bool = False, nonnegative: bool = False, b
         A bare number is taken in ``units`` (model configs); otherwise a bare number needs a unit unless
         the quantity is dimensionless.
     """
-    schema = {
-        "anyOf": [{"type": "number"} | ({"exclusiveMinimum": 0} if positive else {"minimum": 0} if nonnegative else {}),
-                  {"type": "string", "pattern": r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*\S.*$"}],
-        "description": f"a quantity with units compatible with {units!r}, e.g. '1 {units}'"
-                       + ("; a bare number is in these units" if bare_is_si else ""),
-        "x-fivid-units": units,
-    }
+    schema = quantity_schema(units, positive=positive, nonnegative=nonnegative, bare_is_si=bare_is_si)
     return Annotated[float, BeforeValidator(quantity_parser(units, positive, nonnegative,
                                                              units if bare_is_si else None)),
                      WithJsonSchema(schema)]
@@ -448,9 +456,20 @@ def load_config(path: str | PathLike, model, what: str = "config"):
     return validate(model, source), source
 
 
+def _json_safe(obj):
+    """JSON has no infinity: an infinite default is written as the config spelling ``"inf"``."""
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, float) and obj in (float("inf"), float("-inf")):
+        return "inf" if obj > 0 else "-inf"
+    return obj
+
+
 def json_schema(model, title: str | None = None) -> dict:
     """The JSON Schema (draft 2020-12) of a config model, as published in ``docs/schema/``."""
-    schema = model.model_json_schema(by_alias=True)
+    schema = _json_safe(model.model_json_schema(by_alias=True))
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     if title:
         schema["title"] = title

@@ -22,8 +22,8 @@ from typing import Annotated
 from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
 
 from fivid.damper.modal import ModalModel, modal_model_from_matrices
-from fivid.config_layer import (ConfigModel, Name, Quantity, fail, from_mapping, quantity_parser, read_yaml,
-                                validate)
+from fivid.config_layer import (ConfigModel, Name, Quantity, fail, from_mapping, quantity_parser, quantity_schema,
+                                read_yaml, validate)
 from fivid.errors import ConfigError
 from fivid.fe.beam import cantilever_beam
 
@@ -97,8 +97,7 @@ class _Beam(ConfigModel):
     n_elements: Annotated[int, Field(ge=2)] = 20
     modal_damping_ratio: Quantity("1", nonnegative=True) = 0.005
     clamp_rotational_stiffness: Annotated[float, BeforeValidator(_stiffness_or_inf),
-                                          WithJsonSchema({"anyOf": [{"const": "inf"}, {"type": "string"}],
-                                                          "description": "'inf' (clamped) or a quantity in 'N m'"})
+                                          WithJsonSchema(quantity_schema("N m", positive=True, also=("inf",)))
                                           ] = math.inf
 
 

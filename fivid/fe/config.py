@@ -13,12 +13,13 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
 
 import numpy as np
-from pydantic import BeforeValidator, Field, model_validator
+from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
 import fivid.fe.model as fm
 from fivid.config_layer import (MISSING, ConfigModel, ConfigSource, Name, Quantity, fail, from_mapping, key_loc,
-                                none_as, quantity_parser, read_yaml, unknown_key_message, validate)
+                                none_as, quantity_parser, quantity_schema, read_yaml, unknown_key_message,
+                                validate)
 from fivid.errors import ConfigError
 
 __all__ = ["build_model", "read_config", "ModelConfig"]
@@ -78,8 +79,10 @@ class _Damping(ConfigModel):
     alpha: Quantity("s-1", nonnegative=True, bare_is_si=True) = 0.0
     beta: Quantity("s", nonnegative=True, bare_is_si=True) = 0.0
     ratios: Annotated[list[_Ratio], Field(min_length=2, max_length=2)] | None = None
-    cutoff: Annotated[float, BeforeValidator(_inf_or_frequency)] = Field(
-        math.inf, description="frequency above which beta stops acting ('inf' or 'none': classic Rayleigh)")
+    cutoff: Annotated[float, BeforeValidator(_inf_or_frequency),
+                      WithJsonSchema(quantity_schema("Hz", positive=True, bare_is_si=True, also=("inf", "none", None)))
+                      ] = Field(math.inf, description="frequency above which beta stops acting ('inf' or 'none': "
+                                                      "classic Rayleigh)")
 
     @model_validator(mode="before")
     @classmethod
