@@ -50,6 +50,7 @@ __all__ = [
     "quantity_schema",
     "fail",
     "read_yaml",
+    "parse_yaml_text",
     "from_mapping",
     "validate",
     "load_config",
@@ -432,7 +433,7 @@ def validate(model, source: ConfigSource, problems: Problems | None = None, *, d
         # an unknown key first: a misspelt key is the likely cause of a "missing" one beside it
         for err in sorted(exc.errors(include_url=False), key=lambda e: e["type"] != "extra_forbidden"):
             err = dict(err, loc=tuple(prefix) + tuple(err["loc"]))
-            key, message = _describe(err, _Prefixed.wrap(model, prefix))
+            key, message = _describe(err, _rooted(model, prefix))
             problems.add(key, message)
         result = None
     if own:
@@ -440,14 +441,11 @@ def validate(model, source: ConfigSource, problems: Problems | None = None, *, d
     return result
 
 
-class _Prefixed:
-    """A stand-in root for :func:`_model_at` when a model validates a sub-tree (``prefix``)."""
-
-    @staticmethod
-    def wrap(model, prefix):
-        for part in reversed(prefix):
-            model = dict[str, model] if isinstance(part, str) else list[model]
-        return model
+def _rooted(model, prefix: tuple):
+    """A stand-in root type for :func:`_model_at` when ``model`` validates the sub-tree at ``prefix``."""
+    for part in reversed(prefix):
+        model = dict[str, model] if isinstance(part, str) else list[model]
+    return model
 
 
 def load_config(path: str | PathLike, model, what: str = "config"):

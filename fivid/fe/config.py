@@ -129,7 +129,8 @@ class ModelConfig(ConfigModel):
 
 def _mapping(ctx, value, key, allowed: dict[str, str]) -> dict:
     if not isinstance(value, Mapping):
-        raise ctx.error(key, f"expected a mapping with keys {sorted(allowed)}, found {type(value).__name__} {value!r}")
+        raise ctx.error(key, f"expected a mapping with keys {', '.join(sorted(allowed))}, found {type(value).__name__} "
+                             f"{value!r}")
     unknown = [k for k in value if k not in allowed]
     if unknown:
         raise ctx.error(f"{key}.{unknown[0]}" if key else str(unknown[0]), unknown_key_message(unknown[0], allowed))
@@ -150,21 +151,21 @@ def _quantity(ctx, value, key, units: str, *, positive=False, nonnegative=False)
 
 def _list(ctx, value, key, length=None) -> list:
     if not isinstance(value, (list, tuple)):
-        raise ctx.error(key, f"expected a list, got {value!r}")
+        raise ctx.error(key, f"expected a list, found {value!r}")
     if length is not None and len(value) != length:
-        raise ctx.error(key, f"expected a list of {length} items, got {len(value)}: {value!r}")
+        raise ctx.error(key, f"expected a list of {length} items, found {len(value)}: {value!r}")
     return list(value)
 
 
 def _choice(ctx, value, key, choices):
     if value not in choices:
-        raise ctx.error(key, f"{value!r} is not allowed; choose one of {', '.join(map(str, choices))}")
+        raise ctx.error(key, f"expected one of {', '.join(map(str, choices))}, found {value!r}")
     return value
 
 
 def _name(ctx, value, key) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise ctx.error(key, f"expected a non-empty name, got {value!r}")
+        raise ctx.error(key, f"expected a non-empty name, found {value!r}")
     return value
 
 
@@ -236,11 +237,11 @@ def _annulus(ctx, spec, key, nx: int, t: np.ndarray) -> tuple[np.ndarray, bool]:
         a0, a1 = 0.0, 2.0 * np.pi
     span = a1 - a0
     if not 0.0 < span <= 2.0 * np.pi * (1.0 + 1e-12):
-        raise ctx.error(f"{key}.angles", f"need start < end <= start + 360 deg (counter-clockwise), got "
+        raise ctx.error(f"{key}.angles", f"expected start < end <= start + 360 deg (counter-clockwise), found "
                                          f"[{np.degrees(a0):.6g} deg, {np.degrees(a1):.6g} deg]")
     periodic = abs(span - 2.0 * np.pi) <= 1e-12 * 2.0 * np.pi
     if periodic and nx < 3:
-        raise ctx.error(f"{key}", f"a full ring needs at least 3 divisions around, got {nx}")
+        raise ctx.error(f"{key}", f"a full ring needs at least 3 divisions around, found {nx}")
     if not periodic and span / nx > np.pi / 2:
         raise ctx.error(f"{key}", f"{nx} divisions over {np.degrees(span):.6g} deg: an element may span at most 90 deg")
     return annulus_coords(center, r_in, r_out, a0, a0 + 2.0 * np.pi if periodic else a1, nx, t,
@@ -290,7 +291,7 @@ def _profile_table(ctx, p: dict, key) -> tuple[np.ndarray, np.ndarray]:
             raise ctx.error(key, "a measured profile needs both 'x' and 'z' (or 'file', 'sine' or 'gaussian')")
         x, z = _float_array(ctx, p["x"], f"{key}.x"), _float_array(ctx, p["z"], f"{key}.z")
         if x.size != z.size or x.size < 2:
-            raise ctx.error(f"{key}.z", f"x and z need the same length >= 2, got {x.size} and {z.size}")
+            raise ctx.error(f"{key}.z", f"expected x and z of the same length >= 2, found {x.size} and {z.size}")
     if not np.all(np.diff(x) > 0):
         raise ctx.error(f"{key}.x", "profile x must increase strictly")
     return x * scale[0], z * scale[1]
@@ -312,7 +313,7 @@ def _profile(ctx, spec, key, corners: np.ndarray, s: np.ndarray, t: np.ndarray) 
     edge = _choice(ctx, p["edge"], f"{key}.edge", ("bottom", "top"))
     c = corners
     if not (c[0, 1] == c[1, 1] and c[2, 1] == c[3, 1] and c[0, 0] == c[3, 0] and c[1, 0] == c[2, 0]):
-        raise ctx.error(f"{key}", f"a profiled body needs axis-aligned rectangular corners, got {c.tolist()}")
+        raise ctx.error(f"{key}", f"a profiled body needs axis-aligned rectangular corners, found {c.tolist()}")
     length = c[1, 0] - c[0, 0]
     xs = length * s  # node x measured from the left end
     kinds = [k for k in ("sine", "gaussian", "file", "x") if k in p]
@@ -389,7 +390,7 @@ def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ..
         div = _list(ctx, b["divisions"], f"{key}.divisions", 2)
         for i, d in enumerate(div):
             if isinstance(d, bool) or not isinstance(d, int) or d < 1:
-                raise ctx.error(f"{key}.divisions[{i}]", f"divisions must be integers >= 1, got {d!r}")
+                raise ctx.error(f"{key}.divisions[{i}]", f"expected divisions as integers >= 1, found {d!r}")
         nx, ny = div
         coords, shape, periodic = _block_geometry(ctx, b, key, nx, ny)
         material = _material(ctx, b["material"], f"{key}.material", materials)
