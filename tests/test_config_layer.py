@@ -239,3 +239,25 @@ def test_infinite_defaults_are_written_as_inf():
 
     cfg = validate(DamperConfig, read_yaml(ROOT / "configs/dampers/seed004_model1.yaml"))
     assert cfg.beam.clamp_rotational_stiffness == math.inf
+
+
+@pytest.mark.parametrize("edit", [
+    lambda c: c["bodies"]["upper"].update(thicknes="10 mm"),
+    lambda c: c["contacts"][0].update(mu_k=0.3),
+    lambda c: c["motions"][0].pop("kind"),
+    lambda c: c["sensors"][0].update(body_name="upper"),
+])
+def test_the_model_schema_describes_the_item_sections(edit):
+    """The FE model's inner sections are checked by build_model; their schema (for editors) agrees on keys."""
+    import copy
+
+    jsonschema = pytest.importorskip("jsonschema")
+    from fivid.fe import load_model
+
+    schema = json.loads((SCHEMA_DIR / "model.schema.json").read_text(encoding="utf-8"))
+    cfg = copy.deepcopy(read_yaml(ROOT / "configs/models/triboair_coarse.yaml").data)
+    assert jsonschema.Draft202012Validator(schema).is_valid(cfg)
+    edit(cfg)
+    assert not jsonschema.Draft202012Validator(schema).is_valid(cfg)
+    with pytest.raises(ConfigError):
+        load_model(cfg)

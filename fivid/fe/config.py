@@ -31,6 +31,29 @@ _ANNULUS_KEYS = {"center": "required", "inner_radius": "required", "outer_radius
 _PROFILE_KEYS = {"edge": "required", "x": "optional", "z": "optional", "file": "optional", "units": "optional",
                  "sine": "optional", "gaussian": "optional"}
 _GRADING_KEYS = {"edge": "optional", "ratio": "required"}
+_PROFILE_UNITS_KEYS = {"x": "optional", "z": "optional"}
+_SINE_KEYS = {"amplitude": "required", "wavelength": "required", "phase": "optional"}
+_GAUSSIAN_KEYS = {"amplitude": "required", "width": "required", "center": "required"}
+_EDGE_REF_KEYS = {"body": "required", "edge": "required", "x": "optional", "y": "optional"}
+_POINT_REF_KEYS = {"body": "required", "at": "required"}
+_MOTION_KEYS = {"name": "required", "component": "required", "kind": "required", "amplitude": "required",
+                "ramp_time": "optional", "role": "optional"}
+_POINT_MASS_KEYS = {"name": "required", "mass": "required"}
+_SPRING_KEYS = {"name": "required", "a": "required", "b": "required", "component": "required",
+                "stiffness": "required", "damping": "optional"}
+_SENSOR_KEYS = {"name": "required", "direction": "required", "quantity": "optional"}
+_REACTION_KEYS = {"name": "required", "tangential": "required", "normal": "required"}
+_LOAD_KEYS = {"name": "required", "pressure": "required", "ramp_time": "optional", "start": "optional"}
+_CONTACT_KEYS = {"name": "required", "slave": "required", "master": "optional", "rigid": "optional", "mu": "required",
+                 "mu_static": "optional", "stribeck_velocity": "optional", "viscous": "optional",
+                 "normal": "optional", "normal_stiffness": "optional"}
+_NORMAL_LAW_KEYS = {"law": "required", "stiffness": "optional", "coefficient": "optional", "exponent": "optional",
+                    "sigma": "optional", "asperity_radius": "optional", "asperity_density": "optional",
+                    "e_star": "optional", "pressure_range": "optional", "max_pressure": "optional", "fit": "optional"}
+_RIGID_KEYS = {"line": "optional", "circle": "optional", "velocity": "optional", "speed": "optional",
+               "start": "optional", "ramp_time": "optional"}
+_RIGID_LINE_KEYS = {"point": "required", "normal": "required"}
+_RIGID_CIRCLE_KEYS = {"center": "required", "radius": "required", "side": "optional"}
 _COMPONENTS = {"x": 0, "y": 1}
 
 
@@ -98,7 +121,53 @@ class _Damping(ConfigModel):
         return self
 
 
-_Items = Annotated[list[dict[str, Any]], none_as(list)]
+def _keys_schema(keys: dict[str, str], properties: dict | None = None, **more) -> dict:
+    """The JSON Schema of a hand-checked mapping: its allowed and required keys (what :func:`_mapping` checks)."""
+    properties = properties or {}
+    schema = {"type": "object", "properties": {k: properties.get(k, {}) for k in keys},
+              "additionalProperties": False, **more}
+    required = [k for k, need in keys.items() if need == "required"]
+    return schema | ({"required": required} if required else {})
+
+
+def _item_schemas() -> dict:
+    """JSON Schemas of the sections :func:`build_model` checks item by item (for editors; the checks are the code's)."""
+    material = {"anyOf": [{"type": "string", "description": "an entry of 'materials'"},
+                          _keys_schema({"E": "required", "nu": "required", "rho": "required"})]}
+    edge_ref, point_ref = _keys_schema(_EDGE_REF_KEYS), _keys_schema(_POINT_REF_KEYS)
+    profile = _keys_schema(_PROFILE_KEYS, {"units": _keys_schema(_PROFILE_UNITS_KEYS), "sine": _keys_schema(_SINE_KEYS),
+                                           "gaussian": _keys_schema(_GAUSSIAN_KEYS)})
+    body = _keys_schema(_BODY_KEYS, {"annulus": _keys_schema(_ANNULUS_KEYS), "profile": profile,
+                                     "grading": _keys_schema(_GRADING_KEYS), "material": material,
+                                     "divisions": {"type": "array", "items": {"type": "integer", "minimum": 1},
+                                                   "minItems": 2, "maxItems": 2}})
+    rigid = _keys_schema(_RIGID_KEYS, {"line": _keys_schema(_RIGID_LINE_KEYS),
+                                       "circle": _keys_schema(_RIGID_CIRCLE_KEYS)})
+    contact = _keys_schema(_CONTACT_KEYS, {"slave": edge_ref, "master": edge_ref, "rigid": rigid,
+                                           "normal": {"anyOf": [{"type": "string"}, _keys_schema(_NORMAL_LAW_KEYS)]}})
+    spring = _keys_schema(_SPRING_KEYS, {"a": point_ref, "b": {"anyOf": [{"const": "ground"}, point_ref]}})
+
+    def items(schema):
+        return {"type": "array", "items": schema}
+
+    return {
+        "bodies": {"type": "object", "minProperties": 1, "additionalProperties": body,
+                   "description": "body name -> {corners | annulus, divisions, material, thickness, ...}"},
+        "contacts": items(contact),
+        "motions": items(_keys_schema({**_EDGE_REF_KEYS, **_MOTION_KEYS})),
+        "point_masses": items(_keys_schema({**_POINT_REF_KEYS, **_POINT_MASS_KEYS})),
+        "springs": items(spring),
+        "sensors": items(_keys_schema({**_POINT_REF_KEYS, **_SENSOR_KEYS})),
+        "reactions": items(_keys_schema({**_EDGE_REF_KEYS, **_REACTION_KEYS})),
+        "loads": items(_keys_schema({**_EDGE_REF_KEYS, **_LOAD_KEYS})),
+    }
+
+
+_SCHEMAS = _item_schemas()
+
+
+def _items_of(section: str):
+    return Annotated[list[dict[str, Any]], none_as(list), WithJsonSchema(_SCHEMAS[section])]
 
 
 class ModelConfig(ConfigModel):
@@ -112,16 +181,15 @@ class ModelConfig(ConfigModel):
     description: str = ""
     plane: Literal["stress", "strain"] = "stress"
     materials: Annotated[dict[str, _Material], none_as(dict)] = {}
-    bodies: Annotated[dict[str, Any], Field(min_length=1, description="body name -> {corners | annulus, divisions, "
-                                                                      "material, thickness, ...}")]
+    bodies: Annotated[dict[str, Any], Field(min_length=1), WithJsonSchema(_SCHEMAS["bodies"])]
     damping: _Damping | None = None
-    contacts: _Items = []
-    motions: _Items = []
-    point_masses: _Items = []
-    springs: _Items = []
-    sensors: _Items = []
-    reactions: _Items = []
-    loads: _Items = []
+    contacts: _items_of("contacts") = []
+    motions: _items_of("motions") = []
+    point_masses: _items_of("point_masses") = []
+    springs: _items_of("springs") = []
+    sensors: _items_of("sensors") = []
+    reactions: _items_of("reactions") = []
+    loads: _items_of("loads") = []
 
 
 # ---------------------------------------------------------------------------------------------- readers
@@ -264,7 +332,7 @@ def _float_array(ctx, value, key) -> np.ndarray:
 
 def _profile_table(ctx, p: dict, key) -> tuple[np.ndarray, np.ndarray]:
     """The (x, z) points of a measured profile [m], from arrays or a two-column file, with ``units: {x, z}``."""
-    units = _mapping(ctx, p.get("units", {}), f"{key}.units", {"x": "optional", "z": "optional"})
+    units = _mapping(ctx, p.get("units", {}), f"{key}.units", _PROFILE_UNITS_KEYS)
     scale = [_quantity(ctx, f"1 {units[c]}" if c in units else 1.0, f"{key}.units.{c}", "m") for c in ("x", "z")]
     if "file" in p:
         if "x" in p or "z" in p:
@@ -320,14 +388,12 @@ def _profile(ctx, spec, key, corners: np.ndarray, s: np.ndarray, t: np.ndarray) 
     if len(kinds) != 1 and not (kinds == ["file", "x"]):
         raise ctx.error(key, "give exactly one profile: 'sine', 'gaussian', 'file', or 'x' and 'z' arrays")
     if "sine" in p:
-        q = _mapping(ctx, p["sine"], f"{key}.sine", {"amplitude": "required", "wavelength": "required",
-                                                       "phase": "optional"})
+        q = _mapping(ctx, p["sine"], f"{key}.sine", _SINE_KEYS)
         h = sine_profile(xs, _quantity(ctx, q["amplitude"], f"{key}.sine.amplitude", "m"),
                          _quantity(ctx, q["wavelength"], f"{key}.sine.wavelength", "m", positive=True),
                          _quantity(ctx, q.get("phase", 0.0), f"{key}.sine.phase", "rad"))
     elif "gaussian" in p:
-        q = _mapping(ctx, p["gaussian"], f"{key}.gaussian", {"amplitude": "required", "width": "required",
-                                                               "center": "required"})
+        q = _mapping(ctx, p["gaussian"], f"{key}.gaussian", _GAUSSIAN_KEYS)
         h = gaussian_profile(xs, _quantity(ctx, q["amplitude"], f"{key}.gaussian.amplitude", "m"),
                              _quantity(ctx, q["width"], f"{key}.gaussian.width", "m", positive=True),
                              _quantity(ctx, q["center"], f"{key}.gaussian.center", "m"))
@@ -421,7 +487,7 @@ def _block_ref(ctx, blocks, value, key) -> fm.Block:
 
 def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[fm.Block, np.ndarray, dict]:
     """``{body, edge, x: [lo, hi] | y: [lo, hi]}`` -> (block, nodes in edge order, the other keys)."""
-    allowed = {"body": "required", "edge": "required", "x": "optional", "y": "optional", **extra}
+    allowed = {**_EDGE_REF_KEYS, **extra}
     m = _mapping(ctx, spec, key, allowed)
     block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
     _choice(ctx, m["edge"], f"{key}.edge", block.edge_names)
@@ -442,7 +508,7 @@ def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[fm.Block, 
 
 def _point_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[int, dict]:
     """``{body, at: [x, y]}`` -> the nearest node of the body (must lie within one element of the point)."""
-    m = _mapping(ctx, spec, key, {"body": "required", "at": "required", **extra})
+    m = _mapping(ctx, spec, key, {**_POINT_REF_KEYS, **extra})
     block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
     at = np.array([_quantity(ctx, v, f"{key}.at[{i}]", "m") for i, v in
                    enumerate(_list(ctx, m["at"], f"{key}.at", 2))])
@@ -465,10 +531,7 @@ def _contact(ctx, spec, key, blocks):
     """One ``contacts`` item: slave edge against a master edge or a rigid surface, with its laws."""
     from fivid.contact import TangentialLaw
 
-    m = _mapping(ctx, spec, key, {"name": "required", "slave": "required", "master": "optional",
-                                  "rigid": "optional", "mu": "required", "mu_static": "optional",
-                                  "stribeck_velocity": "optional", "viscous": "optional",
-                                  "normal": "optional", "normal_stiffness": "optional"})
+    m = _mapping(ctx, spec, key, _CONTACT_KEYS)
     sb, snodes, _ = _edge_ref(ctx, blocks, m["slave"], f"{key}.slave", {})
     if ("master" in m) == ("rigid" in m):
         raise ctx.error(key, "give either 'master' (an edge of another body) or 'rigid' (a rigid line or circle)")
@@ -522,10 +585,7 @@ def _normal_law(ctx, spec, key, slave_block, master_block):
         return NormalLaw()
     if isinstance(spec, str):
         spec = {"law": spec}
-    m = _mapping(ctx, spec, key, {"law": "required", "stiffness": "optional", "coefficient": "optional",
-                                  "exponent": "optional", "sigma": "optional", "asperity_radius": "optional",
-                                  "asperity_density": "optional", "e_star": "optional", "pressure_range": "optional",
-                                  "max_pressure": "optional", "fit": "optional"})
+    m = _mapping(ctx, spec, key, _NORMAL_LAW_KEYS)
     kind = _choice(ctx, m["law"], f"{key}.law", ("rigid", "linear", "power", "greenwood-williamson"))
     need = {"rigid": (), "linear": ("stiffness",), "power": ("coefficient", "exponent"),
             "greenwood-williamson": ("sigma", "asperity_radius", "asperity_density")}[kind]
@@ -579,8 +639,7 @@ def _rigid_surface(ctx, spec, key):
     """``rigid: {line: {point, normal} | circle: {center, radius, side}, velocity | speed, start, ramp_time}``."""
     from fivid.contact import RigidSurface
 
-    m = _mapping(ctx, spec, key, {"line": "optional", "circle": "optional", "velocity": "optional",
-                                  "speed": "optional", "start": "optional", "ramp_time": "optional"})
+    m = _mapping(ctx, spec, key, _RIGID_KEYS)
     if ("line" in m) == ("circle" in m):
         raise ctx.error(key, "give either 'line: {point, normal}' or 'circle: {center, radius, side}'")
     start = _quantity(ctx, m.get("start", 0.0), f"{key}.start", "s", nonnegative=True)
@@ -589,7 +648,7 @@ def _rigid_surface(ctx, spec, key):
         if "speed" in m:
             raise ctx.error(f"{key}.speed", "a rigid line moves with 'velocity: [vx, vy]' (along itself); 'speed' "
                                             "is a circle's rotation (e.g. 10 rpm)")
-        q = _mapping(ctx, m["line"], f"{key}.line", {"point": "required", "normal": "required"})
+        q = _mapping(ctx, m["line"], f"{key}.line", _RIGID_LINE_KEYS)
         point = _point(ctx, q["point"], f"{key}.line.point")
         normal = np.array([_quantity(ctx, v, f"{key}.line.normal[{j}]", "dimensionless")
                            for j, v in enumerate(_list(ctx, q["normal"], f"{key}.line.normal", 2))])
@@ -609,7 +668,7 @@ def _rigid_surface(ctx, spec, key):
     if "velocity" in m:
         raise ctx.error(f"{key}.velocity", "a rigid circle turns with 'speed' (e.g. 10 rpm or 1.05 rad/s, "
                                            "counter-clockwise positive)")
-    q = _mapping(ctx, m["circle"], f"{key}.circle", {"center": "required", "radius": "required", "side": "optional"})
+    q = _mapping(ctx, m["circle"], f"{key}.circle", _RIGID_CIRCLE_KEYS)
     side = _choice(ctx, q.get("side", "outside"), f"{key}.circle.side", ("outside", "inside"))
     omega = _quantity(ctx, m.get("speed", 0.0), f"{key}.speed", "rad s-1")
     return RigidSurface("circle", _point(ctx, q["center"], f"{key}.circle.center"),
@@ -641,9 +700,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     motions = []
     for i, spec in enumerate(_items(ctx, data, "motions")):
         key = f"motions[{i}]"
-        extra = {"name": "required", "component": "required", "kind": "required", "amplitude": "required",
-                 "ramp_time": "optional", "role": "optional"}
-        block, nodes, m = _edge_ref(ctx, blocks, spec, key, extra)
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, _MOTION_KEYS)
         kind = _choice(ctx, m["kind"], f"{key}.kind", ("velocity", "displacement"))
         comp = _COMPONENTS[_choice(ctx, m["component"], f"{key}.component", tuple(_COMPONENTS))]
         amp = _quantity(ctx, m["amplitude"], f"{key}.amplitude", "m s-1" if kind == "velocity" else "m")
@@ -660,15 +717,14 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     point_masses = []
     for i, spec in enumerate(_items(ctx, data, "point_masses")):
         key = f"point_masses[{i}]"
-        node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "mass": "required"})
+        node, m = _point_ref(ctx, blocks, spec, key, _POINT_MASS_KEYS)
         point_masses.append(fm.PointMass(_name(ctx, m["name"], f"{key}.name"), node,
                                       _quantity(ctx, m["mass"], f"{key}.mass", "kg", positive=True)))
 
     springs = []
     for i, spec in enumerate(_items(ctx, data, "springs")):
         key = f"springs[{i}]"
-        m = _mapping(ctx, spec, key, {"name": "required", "a": "required", "b": "required", "component": "required",
-                                      "stiffness": "required", "damping": "optional"})
+        m = _mapping(ctx, spec, key, _SPRING_KEYS)
         a, _ = _point_ref(ctx, blocks, m["a"], f"{key}.a", {})
         b = -1 if m["b"] == "ground" else _point_ref(ctx, blocks, m["b"], f"{key}.b", {})[0]
         if a == b:
@@ -683,8 +739,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     sensors = []
     for i, spec in enumerate(_items(ctx, data, "sensors")):
         key = f"sensors[{i}]"
-        node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "direction": "required",
-                                                      "quantity": "optional"})
+        node, m = _point_ref(ctx, blocks, spec, key, _SENSOR_KEYS)
         d = m["direction"]
         if isinstance(d, str):
             sign = -1.0 if d.startswith("-") else 1.0
@@ -704,8 +759,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     reactions = []
     for i, spec in enumerate(_items(ctx, data, "reactions")):
         key = f"reactions[{i}]"
-        block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "tangential": "required",
-                                                               "normal": "required"})
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, _REACTION_KEYS)
         t = _COMPONENTS[_choice(ctx, m["tangential"], f"{key}.tangential", tuple(_COMPONENTS))]
         n = _COMPONENTS[_choice(ctx, m["normal"], f"{key}.normal", tuple(_COMPONENTS))]
         if t == n:
@@ -719,8 +773,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     loads = []
     for i, spec in enumerate(_items(ctx, data, "loads")):
         key = f"loads[{i}]"
-        block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "pressure": "required",
-                                                               "ramp_time": "optional", "start": "optional"})
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, _LOAD_KEYS)
         if nodes.size < 2:
             raise ctx.error(key, "a pressure load needs at least 2 nodes of the edge (one segment)")
         loads.append(fm.PressureLoad(_name(ctx, m["name"], f"{key}.name"), block.name,
