@@ -1,6 +1,6 @@
-"""Build hook: ship the built-in rig profiles and example models as package data.
+"""Build hook: ship the built-in rig profiles, example models and damper models as package data.
 
-The files live once, in ``configs/rigs/`` and ``configs/models/`` (the paths the docs, tests and run
+The files live once, in ``configs/rigs/``, ``configs/models/`` and ``configs/dampers/`` (the paths the docs, tests and run
 configs use). Building a wheel copies them into ``fivid/data/configs/`` inside the wheel, where
 :mod:`fivid.builtin` finds them by name (``fivid ingest --rig labdaq``, ``fivid modes triboair_coarse``)
 when fivid runs outside a checkout. All metadata is in pyproject.toml.
@@ -13,11 +13,11 @@ from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
 # folder under configs/ -> file patterns shipped (model profile data sits in configs/models/profiles/)
-SHIPPED = {"rigs": ("*.yaml",), "models": ("*.yaml", "profiles/*.csv")}
+SHIPPED = {"rigs": ("*.yaml",), "models": ("*.yaml", "profiles/*.csv"), "dampers": ("*.yaml",)}
 
 
 class build_py_with_configs(build_py):
-    """``build_py`` that also copies configs/{rigs,models} into ``<build>/fivid/data/configs/``."""
+    """``build_py`` that also copies configs/{rigs,models,dampers} into ``<build>/fivid/data/configs/``."""
 
     def run(self):
         super().run()

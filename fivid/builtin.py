@@ -1,6 +1,7 @@
-"""Built-in configs looked up by name: rig profiles (``--rig labdaq``) and example models (``triboair_coarse``).
+"""Built-in configs looked up by name: rig profiles (``--rig labdaq``), example models (``triboair_coarse``) and
+friction-damper models (``fivid damper frf seed004_model1``).
 
-The files live once, in the repository's ``configs/rigs/`` and ``configs/models/`` (with the models'
+The files live once, in the repository's ``configs/rigs/``, ``configs/models/`` and ``configs/dampers/`` (with the models'
 profile data in ``configs/models/profiles/``). A wheel ships a copy of them as package data in
 ``fivid/data/configs/`` (copied at build time by ``setup.py``), so a name works outside a checkout too.
 A name is looked up in the checkout first (the files a developer edits), then in the installed copy.
@@ -13,13 +14,13 @@ from pathlib import Path
 __all__ = ["KINDS", "builtin_folders", "find_builtin", "builtin_names"]
 
 #: kinds of built-in config: folder name under ``configs/`` -> what one file is
-KINDS = {"rigs": "rig profile", "models": "model config"}
+KINDS = {"rigs": "rig profile", "models": "model config", "dampers": "damper model"}
 
 _PACKAGE = Path(__file__).resolve().parent
 
 
 def builtin_folders(kind: str) -> list[Path]:
-    """Existing folders holding built-in configs of ``kind`` (``"rigs"`` or ``"models"``), searched in order:
+    """Existing folders holding built-in configs of ``kind`` (a key of :data:`KINDS`), searched in order:
     the checkout's ``configs/<kind>`` then the installed ``fivid/data/configs/<kind>``."""
     if kind not in KINDS:
         raise ValueError(f"unknown kind of built-in config {kind!r}; known: {', '.join(KINDS)}")

@@ -71,39 +71,65 @@ class Registry:
     conditions: tuple[str, ...] = ()
 
 
+def _registry_models():
+    """The pydantic models of the registry file (built on first use: pydantic is not imported by ``import fivid``)."""
+    from typing import Literal
+
+    from pydantic import Field, model_validator
+
+    from fivid.config_layer import ConfigModel, fail
+
+    class VariableSpec(ConfigModel):
+        units: str
+        long_name: str
+        dims: list[list[str]] = Field(min_length=1)
+        required: bool = False
+        dtype: Literal["str"] | None = None
+
+    class AttributeSpec(ConfigModel):
+        type: Literal["str", "float", "int"]
+        long_name: str
+        required: bool = False
+        units: str | None = None
+
+    class RegistryConfig(ConfigModel):
+        """The variable registry (``fivid/data/variables.yaml``)."""
+
+        schema_version: int
+        coordinates: dict[str, VariableSpec]
+        variables: dict[str, VariableSpec]
+        attributes: dict[str, AttributeSpec]
+        condition_coordinates: list[str] = []
+
+        @model_validator(mode="after")
+        def _conditions_are_attributes(self):
+            unknown = [c for c in self.condition_coordinates if c not in self.attributes]
+            if unknown:
+                raise fail(f"expected attributes of the registry, found {unknown}", at=("condition_coordinates",))
+            return self
+
+    return RegistryConfig
+
+
 @functools.lru_cache(maxsize=None)
 def registry() -> Registry:
-    """The parsed registry (read once from the package data file)."""
-    import yaml
+    """The parsed registry (read once from the package data file, through :mod:`fivid.config_layer`)."""
+    from fivid.config_layer import ConfigSource, parse_yaml_text, validate
 
     text = resources.files("fivid").joinpath("data/variables.yaml").read_text(encoding="utf-8")
-    raw = yaml.safe_load(text)
+    name = "fivid/data/variables.yaml"
+    data, lines = parse_yaml_text(text, name)
+    raw = validate(_registry_models(), ConfigSource(data, name, lines))
     variables = {}
     for section, is_coord in (("coordinates", True), ("variables", False)):
-        for name, spec in raw[section].items():
-            variables[name] = Variable(
-                name=name,
-                units=str(spec["units"]),
-                long_name=spec["long_name"],
-                dims=tuple(tuple(d) for d in spec["dims"]),
-                required=bool(spec.get("required", False)),
-                coordinate=is_coord,
-            )
-    attributes = {
-        name: Attribute(
-            name=name,
-            type=spec["type"],
-            long_name=spec["long_name"],
-            required=bool(spec.get("required", False)),
-            units=spec.get("units"),
-        )
-        for name, spec in raw["attributes"].items()
-    }
-    conditions = tuple(raw.get("condition_coordinates", ()))
-    unknown = [c for c in conditions if c not in attributes]
-    if unknown:
-        raise SchemaError(f"condition_coordinates {unknown} are not attributes of the registry")
-    return Registry(int(raw["schema_version"]), variables, attributes, conditions)
+        for var_name, spec in getattr(raw, section).items():
+            variables[var_name] = Variable(name=var_name, units=str(spec.units), long_name=spec.long_name,
+                                           dims=tuple(tuple(d) for d in spec.dims), required=spec.required,
+                                           coordinate=is_coord)
+    attributes = {attr: Attribute(name=attr, type=spec.type, long_name=spec.long_name, required=spec.required,
+                                  units=spec.units)
+                  for attr, spec in raw.attributes.items()}
+    return Registry(raw.schema_version, variables, attributes, tuple(raw.condition_coordinates))
 
 
 SCHEMA_VERSION = 1

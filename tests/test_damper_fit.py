@@ -116,7 +116,8 @@ def test_unknown_units(tmp_path):
 @pytest.mark.parametrize("text, error, match, line", [
     ("time,displacement [m],force [N]\n0,0,0\n", UnitError, "has no unit", 1),
     ("time [s],force [N]\n0,0\n", SchemaError, "missing columns", 1),
-    ("time [s],displacement [m],force [N]\n0,0,0\n1,x,0\n", SchemaError, "not numeric", 3),
+    ("time [s],displacement [m],force [N]\n0,0,0\n1,x,0\n", SchemaError, "cannot read 'x' as a number", 3),
+    ("time [s],displacement [m],force [N]\n0,0,0\n\n1,0\n", SchemaError, "the row has 2 field", 4),
     # a repeated column would silently replace the first one
     ("time [s],displacement [m],force [N],force [kN]\n0,0,0,0\n", SchemaError, "appears twice", 1),
     ("time [s],displacement [m],force [N],friction_force [N]\n0,0,0,0\n", SchemaError, "keep one", 1),
@@ -136,3 +137,25 @@ def test_non_utf8_file_is_a_schema_error(tmp_path, name):
     with pytest.raises(SchemaError, match="not UTF-8 text .byte 0xff at offset 40") as err:
         read_hysteresis(p)
     assert name in str(err.value)
+
+
+def test_csv_is_read_with_the_rig_csv_machinery(tmp_path):
+    """Issue 19: the hysteresis CSV is parsed as a rig CSV is (BOM, CRLF, blank and quoted fields, a bad value
+    named by the file's own line counting blank lines), not split by hand."""
+    t, x, f = synthetic_loop()
+    rows = [f'{a:.6f},"{b * 1e3:.9f}",{c:.9f}' for a, b, c in zip(t, x, f)]
+    rows.insert(5, "")
+    p = tmp_path / "loop.csv"
+    p.write_bytes(("\ufeff# source: bench\r\n" + '"time [s]","displacement [mm]",force [N]\r\n'
+                   + "\r\n".join(rows) + "\r\n").encode("utf-8"))
+    rec = read_hysteresis(p)
+    # the written decimals, parsed back exactly (pyarrow and Python both round correctly)
+    assert np.array_equal(rec.force, [float(f"{c:.9f}") for c in f])
+    assert np.array_equal(rec.time, [float(f"{a:.6f}") for a in t])
+    assert np.allclose(rec.displacement, x, rtol=0, atol=1e-12)  # 9 decimals of mm: 5e-13 m rounding
+    assert rec.metadata["source"].startswith("loop.csv sha256:")
+    rows[40] = "x" + rows[40]
+    p.write_text("time [s],displacement [mm],force [N]\n" + "\n".join(rows) + "\n")
+    with pytest.raises(SchemaError, match="cannot read") as err:
+        read_hysteresis(p)
+    assert err.value.line == 1 + 41 and err.value.column == "time"  # header, then rows[0..40] with one blank line

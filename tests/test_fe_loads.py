@@ -140,7 +140,7 @@ def test_pressure_enters_the_contact_preload(root):
 @pytest.mark.parametrize("load, key, words", [
     ({"name": "p", "body": "beam", "edge": "inner", "pressure": "1 MPa"}, "loads[0].edge", ["inner"]),
     ({"name": "p", "body": "beam", "edge": "top", "pressure": "1 m"}, "loads[0].pressure", ["Pa"]),
-    ({"name": "p", "body": "beam", "edge": "top"}, "loads[0]", ["pressure"]),
+    ({"name": "p", "body": "beam", "edge": "top"}, "loads[0].pressure", ["required"]),
 ])
 def test_bad_load_is_a_config_error(load, key, words):
     cfg = copy.deepcopy(cantilever())

@@ -90,11 +90,11 @@ _DELETE = object()
 
 
 @pytest.mark.parametrize("changes, key, what", [
-    ({"colums": {}}, "colums", "unknown key; did you mean 'columns'?"),
-    ({"fivid-rig-profile": 2}, "fivid-rig-profile", "must be 1"),
-    ({"format": "excel"}, "format", "must be one of"),
+    ({"colums": {}}, "colums", "unknown key; allowed: checks, columns, csv, description, fivid-rig-profile, format, metadata, name; did you mean 'columns'?"),
+    ({"fivid-rig-profile": 2}, "fivid-rig-profile", "expected 1 (the profile format version), found 2"),
+    ({"format": "excel"}, "format", "expected one of 'fivid-rig-csv' or 'table', found str 'excel'"),
     ({"csv__delimiter": ","}, "csv.decimal", "cannot also be the delimiter"),
-    ({"csv__decimal": "·"}, "csv.decimal", "must be '.' or ','"),
+    ({"csv__decimal": "·"}, "csv.decimal", "expected one of '.' or ','"),
     ({"csv__delimiter": ";;"}, "csv.delimiter", "one character"),
     ({"csv__encoding": "klingon"}, "csv.encoding", "unknown text encoding"),
     ({"csv__encoding": "utf-16"}, "csv.encoding", "not ASCII-compatible"),
@@ -113,7 +113,7 @@ _DELETE = object()
     ({"metadata__file_name": {"pattern": "x", "units": {"rig": "m"}}}, "metadata.file_name.units.rig",
      "not a quantity attribute"),
     ({"metadata__in_file": {"pattern": "(?P<key>\\w+)=(.*)"}}, "metadata.in_file.pattern", "(?P<value>...)"),
-    ({"checks__sampling_tolerance": 5}, "checks.sampling_tolerance", "between 0 and 1"),
+    ({"checks__sampling_tolerance": 5}, "checks.sampling_tolerance", "expected a value < 1, found int 5"),
 ])
 def test_profile_errors_name_the_key_path(changes, key, what):
     with pytest.raises(ConfigError) as info:
@@ -127,8 +127,8 @@ def test_all_problems_are_listed_at_once():
     raw = _with(csv__decimal="x", columns__friction_force__units="mm", checks__sampling_tolerance=-1)
     with pytest.raises(ConfigError) as info:
         rig_profile_from_mapping(raw)
-    text = info.value.message
-    assert "3 problems" in text
+    text = str(info.value)  # one error: the first problem leads, the others follow with their key paths
+    assert "(and 2 more: " in text
     for key in ("csv.decimal", "columns.friction_force.units", "checks.sampling_tolerance"):
         assert f"key '{key}'" in text
 

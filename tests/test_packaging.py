@@ -20,6 +20,7 @@ def test_every_built_in_config_is_found_by_name():
     assert builtin_folders("rigs")[0] == ROOT / "configs" / "rigs"  # the checkout first
     assert set(builtin_names("rigs")) == {p.stem for p in (ROOT / "configs" / "rigs").glob("*.yaml")}
     assert set(builtin_names("models")) == {p.stem for p in (ROOT / "configs" / "models").glob("*.yaml")}
+    assert set(builtin_names("dampers")) == {p.stem for p in (ROOT / "configs" / "dampers").glob("*.yaml")} != set()
     assert find_builtin("models", "triboair_coarse") == ROOT / "configs" / "models" / "triboair_coarse.yaml"
     assert find_builtin("models", "triboair_coarse.yaml") == find_builtin("models", "triboair_coarse")
     assert find_builtin("rigs", "nonexistent") is None and find_builtin("rigs", "../rigs/labdaq") is None
@@ -33,6 +34,30 @@ def test_rig_and_model_names_work_from_another_folder(tmp_path, monkeypatch):
     assert load_rig_profile("labdaq").name == "labdaq"
     model = load_model("rough_pair")  # its profile data (profiles/*.csv) is found beside the YAML
     assert model.describe() == load_model(ROOT / "configs" / "models" / "rough_pair.yaml").describe()
+
+
+def test_damper_models_are_found_by_name(tmp_path, monkeypatch):
+    """configs/dampers/ is a built-in kind like rigs and models (issue 19, packaging leftover)."""
+    from fivid.damper.model import load_damper_model
+
+    monkeypatch.chdir(tmp_path)
+    by_name = load_damper_model("seed004_model1")
+    assert by_name.source == str(ROOT / "configs" / "dampers" / "seed004_model1.yaml")
+    assert (by_name.friction_coefficient, by_name.contact_stiffness) == (0.45, 3.9e5)
+
+
+def test_setup_and_manifest_ship_every_built_in_kind():
+    """The wheel's build hook (setup.py) and the sdist (MANIFEST.in) carry every kind fivid.builtin looks up."""
+    import ast
+
+    from fivid.builtin import KINDS
+
+    tree = ast.parse((ROOT / "setup.py").read_text(encoding="utf-8"))
+    shipped = next(ast.literal_eval(n.value) for n in ast.walk(tree)
+                   if isinstance(n, ast.Assign) and getattr(n.targets[0], "id", "") == "SHIPPED")
+    assert set(shipped) == set(KINDS)
+    manifest = (ROOT / "MANIFEST.in").read_text(encoding="utf-8")
+    assert all(f"recursive-include configs/{kind} *.yaml" in manifest for kind in KINDS)
 
 
 def test_an_unknown_model_name_lists_the_built_in_ones(tmp_path, monkeypatch, capsys):
@@ -88,3 +113,6 @@ def test_a_wheel_installed_in_a_fresh_venv_ingests_with_a_built_in_rig_profile(o
                             cwd=work, env=env, capture_output=True, text=True)
     assert models.returncode == 0, models.stderr
     assert len(json.loads(models.stdout)["frequencies_hz"]) == 2
+    damper = subprocess.run([str(bin_ / "python"), "-c", "from fivid.damper.model import load_damper_model as l; "
+                             "print(l('seed004_model2').source)"], cwd=work, env=env, capture_output=True, text=True)
+    assert damper.returncode == 0 and "site-packages" in damper.stdout, damper.stderr

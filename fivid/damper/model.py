@@ -14,17 +14,20 @@ Config layout (quantities with units, parsed by pint)::
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Annotated
 
-import numpy as np
+from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
 
 from fivid.damper.modal import ModalModel, modal_model_from_matrices
-from fivid.errors import ConfigError, FividError
+from fivid.config_layer import (ConfigModel, Name, Quantity, fail, from_mapping, quantity_parser, quantity_schema,
+                                read_yaml, validate)
+from fivid.errors import ConfigError
 from fivid.fe.beam import cantilever_beam
-from fivid.units import parse_quantity
 
-__all__ = ["DamperModel", "load_damper_model", "damper_model_from_dict"]
+__all__ = ["DamperModel", "DamperConfig", "load_damper_model", "damper_model_from_dict"]
 
 
 @dataclass(frozen=True)
@@ -77,135 +80,119 @@ class DamperModel:
         return replace(self, **kw)
 
 
-# Keys a damper model config may have (a typo of an optional key would otherwise fall back to its default).
-_ALLOWED_KEYS = {
-    "": {"name", "description", "beam", "contact", "excitation", "measurement", "frequency_range",
-         "harmonic_balance"},
-    "beam": {"length", "width", "thickness", "youngs_modulus", "density", "tip_mass", "n_elements",
-             "modal_damping_ratio", "clamp_rotational_stiffness"},
-    "contact": {"position", "friction_coefficient", "stiffness"},
-    "excitation": {"position", "amplitude"},
-    "measurement": {"position"},
-    "harmonic_balance": {"harmonics", "samples_per_period"},
-}
+def _stiffness_or_inf(value):
+    """``inf`` (a clamped root) or a rotational stiffness quantity [N m]."""
+    if str(value).strip().lower() == "inf":
+        return math.inf
+    return quantity_parser("N m", positive=True)(value)
 
 
-def _check_keys(node: dict, name: str) -> None:
-    unknown = sorted(str(k) for k in node if k not in _ALLOWED_KEYS[name])
-    if unknown:
-        key = f"{name}.{unknown[0]}" if name else unknown[0]
-        raise ConfigError(f"unknown key; allowed: {', '.join(sorted(_ALLOWED_KEYS[name]))}", key=key)
+class _Beam(ConfigModel):
+    length: Quantity("m", positive=True)
+    width: Quantity("m", positive=True)
+    thickness: Quantity("m", positive=True)
+    youngs_modulus: Quantity("Pa", positive=True)
+    density: Quantity("kg m-3", positive=True)
+    tip_mass: Quantity("kg", nonnegative=True) = 0.0
+    n_elements: Annotated[int, Field(ge=2)] = 20
+    modal_damping_ratio: Quantity("1", nonnegative=True) = 0.005
+    clamp_rotational_stiffness: Annotated[float, BeforeValidator(_stiffness_or_inf),
+                                          WithJsonSchema(quantity_schema("N m", positive=True, also=("inf",)))
+                                          ] = math.inf
 
 
-def _section(cfg: dict, name: str) -> dict:
-    sec = cfg.get(name)
-    if not isinstance(sec, dict):
-        raise ConfigError(f"missing or invalid section {name!r} (a mapping of quantities with units)", key=name)
-    _check_keys(sec, name)
-    return sec
+class _Contact(ConfigModel):
+    position: Quantity("m")
+    friction_coefficient: Quantity("1", positive=True)
+    stiffness: Quantity("N m-1", positive=True)
 
 
-def _q(sec: dict, path: str, key: str, units: str, default=None) -> float:
-    if key not in sec:
-        if default is not None:
-            return float(default)
-        raise ConfigError(f"missing {key!r} (a quantity in units compatible with {units!r})", key=f"{path}.{key}")
-    try:
-        return parse_quantity(sec[key], units)
-    except FividError as exc:
-        raise ConfigError(exc.message, key=f"{path}.{key}") from None
+class _Excitation(ConfigModel):
+    position: Quantity("m")
+    amplitude: Quantity("N")
+
+
+class _Measurement(ConfigModel):
+    position: Quantity("m")
+
+
+class _HarmonicBalance(ConfigModel):
+    harmonics: Annotated[list[Annotated[int, Field(ge=1)]], Field(min_length=1)] = [1, 3, 5, 7]
+    samples_per_period: int = 128
+
+    @model_validator(mode="after")
+    def _odd_and_sampled(self):
+        if any(h % 2 == 0 for h in self.harmonics):
+            raise fail(f"expected odd harmonics (the Jenkins loop is half-wave symmetric), found {self.harmonics!r}",
+                       at=("harmonics",))
+        if self.samples_per_period < 4 * max(self.harmonics):
+            raise fail(f"expected samples_per_period >= 4 x the highest harmonic ({4 * max(self.harmonics)}), "
+                       f"found {self.samples_per_period!r}", at=("samples_per_period",))
+        return self
+
+
+class DamperConfig(ConfigModel):
+    """A damper model config (``configs/dampers/*.yaml``); quantities in SI after validation."""
+
+    name: Name = "damper"
+    description: str = ""
+    beam: _Beam
+    contact: _Contact
+    excitation: _Excitation
+    measurement: _Measurement
+    frequency_range: Annotated[list[Quantity("Hz", positive=True)], Field(min_length=2, max_length=2)] = [15.0, 130.0]
+    harmonic_balance: _HarmonicBalance = _HarmonicBalance()
+
+    @model_validator(mode="after")
+    def _positions_and_range(self):
+        for section in ("contact", "excitation", "measurement"):
+            x = getattr(self, section).position
+            if not 0.0 < x <= self.beam.length:
+                raise fail(f"expected a position in (0, {self.beam.length:g}] m, found {x:g} m: not on the beam",
+                           at=(section, "position"))
+        lo, hi = self.frequency_range
+        if not lo < hi:
+            raise fail(f"expected [low, high] with low < high, found {[lo, hi]!r} Hz", at=("frequency_range",))
+        return self
 
 
 def damper_model_from_dict(cfg: dict, *, source: str = "dict") -> DamperModel:
     """Build a :class:`DamperModel` from a parsed config (see the module docstring for the layout)."""
     if not isinstance(cfg, dict):
         raise ConfigError("a damper model config must be a mapping", file=source if source != "dict" else None)
-    _check_keys(cfg, "")
-    beam = _section(cfg, "beam")
-    contact = _section(cfg, "contact")
-    excitation = _section(cfg, "excitation")
-    measurement = _section(cfg, "measurement")
-    length = _q(beam, "beam", "length", "m")
-    xc = _q(contact, "contact", "position", "m")
-    xe = _q(excitation, "excitation", "position", "m")
-    xm = _q(measurement, "measurement", "position", "m")
-    for key, x in (("contact.position", xc), ("excitation.position", xe), ("measurement.position", xm)):
-        if not (0.0 < x <= length):
-            raise ConfigError(f"position {x} m is not on the beam (0, {length}] m", key=key)
-    clamp = beam.get("clamp_rotational_stiffness", "inf")
-    k_rot = np.inf if str(clamp).strip().lower() == "inf" else _q(beam, "beam", "clamp_rotational_stiffness", "N m")
-    n_el = beam.get("n_elements", 20)
-    if not isinstance(n_el, int) or n_el < 2:
-        raise ConfigError(f"n_elements must be an integer >= 2, got {n_el!r}", key="beam.n_elements")
-    props = dict(
-        length=length,
-        width=_q(beam, "beam", "width", "m"),
-        thickness=_q(beam, "beam", "thickness", "m"),
-        youngs_modulus=_q(beam, "beam", "youngs_modulus", "Pa"),
-        density=_q(beam, "beam", "density", "kg m-3"),
-    )
-    tip_mass = _q(beam, "beam", "tip_mass", "kg", default=0.0)
-    fe = cantilever_beam(**props, n_elements=n_el, points=(xc, xe, xm), tip_mass=tip_mass,
-                         clamp_rotational_stiffness=k_rot)
-    zeta = _q(beam, "beam", "modal_damping_ratio", "1", default=0.005)
+    return _build(validate(DamperConfig, from_mapping(cfg)), source)
+
+
+def _build(c: DamperConfig, source: str) -> DamperModel:
+    b = c.beam
+    xc, xe, xm = c.contact.position, c.excitation.position, c.measurement.position
+    props = dict(length=b.length, width=b.width, thickness=b.thickness, youngs_modulus=b.youngs_modulus,
+                 density=b.density)
+    fe = cantilever_beam(**props, n_elements=b.n_elements, points=(xc, xe, xm), tip_mass=b.tip_mass,
+                         clamp_rotational_stiffness=b.clamp_rotational_stiffness)
     modal = modal_model_from_matrices(fe.mass, fe.stiffness, fe.transverse_dof(xc), fe.transverse_dof(xe),
-                                      fe.transverse_dof(xm), zeta)
-    mu = _q(contact, "contact", "friction_coefficient", "1")
-    kd = _q(contact, "contact", "stiffness", "N m-1")
-    if not mu > 0:
-        raise ConfigError(f"friction coefficient must be > 0, got {mu}", key="contact.friction_coefficient")
-    if not kd > 0:
-        raise ConfigError(f"contact stiffness must be > 0 N/m, got {kd}", key="contact.stiffness")
-    fr = cfg.get("frequency_range", ["15 Hz", "130 Hz"])
-    if not (isinstance(fr, list) and len(fr) == 2):
-        raise ConfigError(f"frequency_range must be [low, high] with units, got {fr!r}", key="frequency_range")
-    f_lo, f_hi = (_q({"f": v}, "frequency_range", "f", "Hz") for v in fr)
-    if not 0 < f_lo < f_hi:
-        raise ConfigError(f"frequency_range must have 0 < low < high, got {fr!r}", key="frequency_range")
-    hb = cfg.get("harmonic_balance", {}) or {}
-    if not isinstance(hb, dict):
-        raise ConfigError(f"harmonic_balance must be a mapping, got {hb!r}", key="harmonic_balance")
-    _check_keys(hb, "harmonic_balance")
-    harmonics = tuple(hb.get("harmonics", (1, 3, 5, 7)))
-    if not harmonics or any((not isinstance(h, int)) or h < 1 or h % 2 == 0 for h in harmonics):
-        raise ConfigError(f"harmonics must be odd integers >= 1, got {list(harmonics)!r}", key="harmonic_balance.harmonics")
-    nt = hb.get("samples_per_period", 128)
-    if not isinstance(nt, int) or nt < 4 * max(harmonics):
-        raise ConfigError(f"samples_per_period must be an integer >= 4 x the highest harmonic ({4 * max(harmonics)}), "
-                          f"got {nt!r}", key="harmonic_balance.samples_per_period")
+                                      fe.transverse_dof(xm), b.modal_damping_ratio)
     return DamperModel(
-        name=str(cfg.get("name", "damper")),
+        name=c.name,
         modal=modal,
-        friction_coefficient=mu,
-        contact_stiffness=kd,
-        excitation_amplitude=_q(excitation, "excitation", "amplitude", "N"),
-        frequency_range=(f_lo, f_hi),
-        harmonics=harmonics,
-        samples_per_period=nt,
+        friction_coefficient=c.contact.friction_coefficient,
+        contact_stiffness=c.contact.stiffness,
+        excitation_amplitude=c.excitation.amplitude,
+        frequency_range=tuple(c.frequency_range),
+        harmonics=tuple(c.harmonic_balance.harmonics),
+        samples_per_period=c.harmonic_balance.samples_per_period,
         source=source,
-        beam=dict(props, tip_mass=tip_mass, n_elements=n_el),
+        beam=dict(props, tip_mass=b.tip_mass, n_elements=b.n_elements),
     )
 
 
 def load_damper_model(path) -> DamperModel:
-    """Read a damper model YAML file (see the module docstring)."""
-    import yaml
+    """Read a damper model YAML file (see the module docstring), or a built-in one by name (``seed004_model1``)."""
+    from fivid.builtin import find_builtin
 
+    text = str(path)
+    if not Path(path).exists() and not any(c in text for c in "/\\"):
+        path = find_builtin("dampers", text) or path
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"cannot read the model file: {exc.strerror}", file=path) from None
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})",
-                          file=path) from None
-    try:
-        cfg = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise ConfigError(f"not valid YAML: {getattr(exc, 'problem', exc)}", file=path,
-                          line=None if mark is None else mark.line + 1) from None
-    try:
-        return damper_model_from_dict(cfg, source=str(path))
-    except FividError as exc:
-        raise exc.located(file=str(path)) from None
+    source = read_yaml(path, "damper model")
+    return _build(validate(DamperConfig, source), str(path))

@@ -7,27 +7,23 @@ file, the line (when read from a file) and the key path, e.g. ``bodies.upper.mat
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from os import PathLike
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Annotated, Any, Literal, Mapping
 
 import numpy as np
+from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
+from pydantic_core import PydanticCustomError
 
-from fivid.errors import ConfigError, UnitError
 import fivid.fe.model as fm
-from fivid.units import parse_quantity
+from fivid.config_layer import (MISSING, ConfigModel, ConfigSource, Name, Quantity, fail, from_mapping, key_loc,
+                                none_as, quantity_parser, quantity_schema, read_yaml, unknown_key_message,
+                                validate)
+from fivid.errors import ConfigError
 
-__all__ = ["build_model", "read_config"]
+__all__ = ["build_model", "read_config", "ModelConfig"]
 
-_TOP_KEYS = {
-    "name": "optional", "description": "optional", "plane": "optional", "materials": "optional",
-    "bodies": "required", "damping": "optional", "contacts": "optional", "motions": "optional",
-    "point_masses": "optional", "springs": "optional", "sensors": "optional", "reactions": "optional",
-    "loads": "optional",
-}
 _BODY_KEYS = {"corners": "optional", "annulus": "optional", "profile": "optional", "grading": "optional",
               "divisions": "required", "material": "required", "thickness": "required",
               "clamp": "optional", "initial_velocity": "optional"}
@@ -35,69 +31,165 @@ _ANNULUS_KEYS = {"center": "required", "inner_radius": "required", "outer_radius
 _PROFILE_KEYS = {"edge": "required", "x": "optional", "z": "optional", "file": "optional", "units": "optional",
                  "sine": "optional", "gaussian": "optional"}
 _GRADING_KEYS = {"edge": "optional", "ratio": "required"}
-_MATERIAL_KEYS = {"E": "required", "nu": "required", "rho": "required"}
+_PROFILE_UNITS_KEYS = {"x": "optional", "z": "optional"}
+_SINE_KEYS = {"amplitude": "required", "wavelength": "required", "phase": "optional"}
+_GAUSSIAN_KEYS = {"amplitude": "required", "width": "required", "center": "required"}
+_EDGE_REF_KEYS = {"body": "required", "edge": "required", "x": "optional", "y": "optional"}
+_POINT_REF_KEYS = {"body": "required", "at": "required"}
+_MOTION_KEYS = {"name": "required", "component": "required", "kind": "required", "amplitude": "required",
+                "ramp_time": "optional", "role": "optional"}
+_POINT_MASS_KEYS = {"name": "required", "mass": "required"}
+_SPRING_KEYS = {"name": "required", "a": "required", "b": "required", "component": "required",
+                "stiffness": "required", "damping": "optional"}
+_SENSOR_KEYS = {"name": "required", "direction": "required", "quantity": "optional"}
+_REACTION_KEYS = {"name": "required", "tangential": "required", "normal": "required"}
+_LOAD_KEYS = {"name": "required", "pressure": "required", "ramp_time": "optional", "start": "optional"}
+_CONTACT_KEYS = {"name": "required", "slave": "required", "master": "optional", "rigid": "optional", "mu": "required",
+                 "mu_static": "optional", "stribeck_velocity": "optional", "viscous": "optional",
+                 "normal": "optional", "normal_stiffness": "optional"}
+_NORMAL_LAW_KEYS = {"law": "required", "stiffness": "optional", "coefficient": "optional", "exponent": "optional",
+                    "sigma": "optional", "asperity_radius": "optional", "asperity_density": "optional",
+                    "e_star": "optional", "pressure_range": "optional", "max_pressure": "optional", "fit": "optional"}
+_RIGID_KEYS = {"line": "optional", "circle": "optional", "velocity": "optional", "speed": "optional",
+               "start": "optional", "ramp_time": "optional"}
+_RIGID_LINE_KEYS = {"point": "required", "normal": "required"}
+_RIGID_CIRCLE_KEYS = {"center": "required", "radius": "required", "side": "optional"}
 _COMPONENTS = {"x": 0, "y": 1}
 
 
-class _Context:
-    """Where the config came from, and the line of every key path (from the YAML node marks)."""
-
-    def __init__(self, file: str | None, lines: dict[str, int]):
-        self.file = file
-        self.lines = lines
-
-    def error(self, key: str, message: str) -> ConfigError:
-        line = None
-        k = key
-        while k and line is None:  # the line of the key, or of its nearest parent
-            line = self.lines.get(k)
-            k = k.rsplit(".", 1)[0] if "." in k else (k.split("[")[0] if "[" in k else "")
-        return ConfigError(message, file=self.file, line=line, key=key)
-
-
-def _compose_lines(node, path: str, lines: dict[str, int]) -> None:
-    import yaml
-
-    lines.setdefault(path, node.start_mark.line + 1)
-    if isinstance(node, yaml.MappingNode):
-        for k, v in node.value:
-            sub = f"{path}.{k.value}" if path else str(k.value)
-            lines[sub] = k.start_mark.line + 1
-            _compose_lines(v, sub, lines)
-    elif isinstance(node, yaml.SequenceNode):
-        for i, v in enumerate(node.value):
-            _compose_lines(v, f"{path}[{i}]", lines)
-
-
-def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, _Context, str]:
-    """Parse a config file (or take a mapping): ``(mapping, context, source string with sha256)``."""
-    import yaml
-
+def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, ConfigSource, str]:
+    """Parse a config file (:func:`fivid.config_layer.read_yaml`) or take a mapping:
+    ``(mapping, source with the key lines, provenance string with sha256)``."""
     if isinstance(source, Mapping):
-        text = json.dumps(source, sort_keys=True, default=str)
-        digest = hashlib.sha256(text.encode()).hexdigest()
-        return dict(source), _Context(None, {}), f"<mapping> sha256:{digest}"
-    path = Path(source)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(f"cannot read the model config: {exc.strerror}", file=str(path)) from None
-    text = raw.decode("utf-8", errors="replace")
-    try:
-        data = yaml.safe_load(text)
-        root = yaml.compose(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise ConfigError(
-            f"not valid YAML: {getattr(exc, 'problem', exc)}", file=str(path),
-            line=None if mark is None else mark.line + 1,
-        ) from None
-    if not isinstance(data, dict):
-        raise ConfigError("a model config is a mapping with at least 'bodies'", file=str(path))
-    lines: dict[str, int] = {}
-    if root is not None:
-        _compose_lines(root, "", lines)
-    return data, _Context(str(path), lines), f"{path} sha256:{hashlib.sha256(raw).hexdigest()}"
+        src = from_mapping(source)
+    else:
+        src = read_yaml(source, "model config")
+    return src.data, src, src.origin
+
+
+# ---------------------------------------------------------------------------------------------- typed sections
+
+
+def _inf_or_frequency(value):
+    if value in (None, "none", "inf"):
+        return math.inf
+    return quantity_parser("Hz", positive=True, bare="Hz")(value)
+
+
+class _Material(ConfigModel):
+    """Linear elastic isotropic material."""
+
+    E: Quantity("Pa", positive=True, bare_is_si=True) = Field(description="Young's modulus")
+    nu: Quantity("dimensionless", bare_is_si=True) = Field(description="Poisson's ratio, -1 < nu < 0.5")
+    rho: Quantity("kg m-3", positive=True, bare_is_si=True) = Field(description="density")
+
+    @model_validator(mode="after")
+    def _poisson(self):
+        if not -1.0 < self.nu < 0.5:
+            raise fail(f"expected Poisson's ratio -1 < nu < 0.5 (nu >= 0.5 is incompressible: the elasticity matrix is "
+                       f"singular), found {self.nu!r}", at=("nu",))
+        return self
+
+
+class _Ratio(ConfigModel):
+    frequency: Quantity("Hz", positive=True, bare_is_si=True)
+    ratio: Quantity("dimensionless", nonnegative=True, bare_is_si=True)
+
+
+class _Damping(ConfigModel):
+    """Rayleigh damping: ``alpha`` and ``beta`` given, or fitted through two modal damping ``ratios``."""
+
+    alpha: Quantity("s-1", nonnegative=True, bare_is_si=True) = 0.0
+    beta: Quantity("s", nonnegative=True, bare_is_si=True) = 0.0
+    ratios: Annotated[list[_Ratio], Field(min_length=2, max_length=2)] | None = None
+    cutoff: Annotated[float, BeforeValidator(_inf_or_frequency),
+                      WithJsonSchema(quantity_schema("Hz", positive=True, bare_is_si=True, also=("inf", "none", None)))
+                      ] = Field(math.inf, description="frequency above which beta stops acting ('inf' or 'none': "
+                                                      "classic Rayleigh)")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_way(cls, data):
+        if isinstance(data, Mapping) and "ratios" in data and ("alpha" in data or "beta" in data):
+            raise fail("give either {alpha, beta} or ratios, not both")
+        return data
+
+    @model_validator(mode="after")
+    def _distinct(self):
+        if self.ratios is not None and self.ratios[0].frequency == self.ratios[1].frequency:
+            raise fail("expected two different frequencies", at=("ratios",))
+        return self
+
+
+def _keys_schema(keys: dict[str, str], properties: dict | None = None, **more) -> dict:
+    """The JSON Schema of a hand-checked mapping: its allowed and required keys (what :func:`_mapping` checks)."""
+    properties = properties or {}
+    schema = {"type": "object", "properties": {k: properties.get(k, {}) for k in keys},
+              "additionalProperties": False, **more}
+    required = [k for k, need in keys.items() if need == "required"]
+    return schema | ({"required": required} if required else {})
+
+
+def _item_schemas() -> dict:
+    """JSON Schemas of the sections :func:`build_model` checks item by item (for editors; the checks are the code's)."""
+    material = {"anyOf": [{"type": "string", "description": "an entry of 'materials'"},
+                          _keys_schema({"E": "required", "nu": "required", "rho": "required"})]}
+    edge_ref, point_ref = _keys_schema(_EDGE_REF_KEYS), _keys_schema(_POINT_REF_KEYS)
+    profile = _keys_schema(_PROFILE_KEYS, {"units": _keys_schema(_PROFILE_UNITS_KEYS), "sine": _keys_schema(_SINE_KEYS),
+                                           "gaussian": _keys_schema(_GAUSSIAN_KEYS)})
+    body = _keys_schema(_BODY_KEYS, {"annulus": _keys_schema(_ANNULUS_KEYS), "profile": profile,
+                                     "grading": _keys_schema(_GRADING_KEYS), "material": material,
+                                     "divisions": {"type": "array", "items": {"type": "integer", "minimum": 1},
+                                                   "minItems": 2, "maxItems": 2}})
+    rigid = _keys_schema(_RIGID_KEYS, {"line": _keys_schema(_RIGID_LINE_KEYS),
+                                       "circle": _keys_schema(_RIGID_CIRCLE_KEYS)})
+    contact = _keys_schema(_CONTACT_KEYS, {"slave": edge_ref, "master": edge_ref, "rigid": rigid,
+                                           "normal": {"anyOf": [{"type": "string"}, _keys_schema(_NORMAL_LAW_KEYS)]}})
+    spring = _keys_schema(_SPRING_KEYS, {"a": point_ref, "b": {"anyOf": [{"const": "ground"}, point_ref]}})
+
+    def items(schema):
+        return {"type": "array", "items": schema}
+
+    return {
+        "bodies": {"type": "object", "minProperties": 1, "additionalProperties": body,
+                   "description": "body name -> {corners | annulus, divisions, material, thickness, ...}"},
+        "contacts": items(contact),
+        "motions": items(_keys_schema({**_EDGE_REF_KEYS, **_MOTION_KEYS})),
+        "point_masses": items(_keys_schema({**_POINT_REF_KEYS, **_POINT_MASS_KEYS})),
+        "springs": items(spring),
+        "sensors": items(_keys_schema({**_POINT_REF_KEYS, **_SENSOR_KEYS})),
+        "reactions": items(_keys_schema({**_EDGE_REF_KEYS, **_REACTION_KEYS})),
+        "loads": items(_keys_schema({**_EDGE_REF_KEYS, **_LOAD_KEYS})),
+    }
+
+
+_SCHEMAS = _item_schemas()
+
+
+def _items_of(section: str):
+    return Annotated[list[dict[str, Any]], none_as(list), WithJsonSchema(_SCHEMAS[section])]
+
+
+class ModelConfig(ConfigModel):
+    """A finite-element model config (``configs/models/*.yaml``, ``docs/model-config.md``).
+
+    The top-level keys, materials and damping are typed here; bodies, contacts, motions, loads and the
+    other item lists are checked item by item by :func:`build_model` (same error format).
+    """
+
+    name: Name = ""
+    description: str = ""
+    plane: Literal["stress", "strain"] = "stress"
+    materials: Annotated[dict[str, _Material], none_as(dict)] = {}
+    bodies: Annotated[dict[str, Any], Field(min_length=1), WithJsonSchema(_SCHEMAS["bodies"])]
+    damping: _Damping | None = None
+    contacts: _items_of("contacts") = []
+    motions: _items_of("motions") = []
+    point_masses: _items_of("point_masses") = []
+    springs: _items_of("springs") = []
+    sensors: _items_of("sensors") = []
+    reactions: _items_of("reactions") = []
+    loads: _items_of("loads") = []
 
 
 # ---------------------------------------------------------------------------------------------- readers
@@ -105,68 +197,56 @@ def read_config(source: str | PathLike | Mapping[str, Any]) -> tuple[dict, _Cont
 
 def _mapping(ctx, value, key, allowed: dict[str, str]) -> dict:
     if not isinstance(value, Mapping):
-        raise ctx.error(key, f"expected a mapping with keys {sorted(allowed)}, got {type(value).__name__} {value!r}")
+        raise ctx.error(key, f"expected a mapping with keys {', '.join(sorted(allowed))}, found {type(value).__name__} "
+                             f"{value!r}")
     unknown = [k for k in value if k not in allowed]
     if unknown:
-        raise ctx.error(f"{key}.{unknown[0]}" if key else str(unknown[0]),
-                        f"unknown key {unknown[0]!r}; allowed here: {', '.join(sorted(allowed))}")
+        raise ctx.error(f"{key}.{unknown[0]}" if key else str(unknown[0]), unknown_key_message(unknown[0], allowed))
     missing = [k for k, need in allowed.items() if need == "required" and k not in value]
     if missing:
-        raise ctx.error(key, f"missing required key {missing[0]!r} (required here: "
-                             f"{', '.join(k for k, n in allowed.items() if n == 'required')})")
+        raise ctx.error(f"{key}.{missing[0]}" if key else missing[0],
+                        f"{MISSING}; required here: {', '.join(k for k, n in allowed.items() if n == 'required')}")
     return dict(value)
 
 
 def _quantity(ctx, value, key, units: str, *, positive=False, nonnegative=False) -> float:
+    """``value`` in SI ``units`` (a bare number is SI): the config layer's quantity check, at ``key``."""
     try:
-        q = parse_quantity(value, units, default_units=units)
-    except UnitError as exc:
-        raise ctx.error(key, f"{exc.message} (expected a quantity in {units!r})") from None
-    if not np.isfinite(q):
-        raise ctx.error(key, f"{value!r} is not finite")
-    if positive and not q > 0:
-        raise ctx.error(key, f"must be > 0, got {value!r}")
-    if nonnegative and not q >= 0:
-        raise ctx.error(key, f"must be >= 0, got {value!r}")
-    return float(q)
+        return quantity_parser(units, positive, nonnegative, bare=units)(value)
+    except PydanticCustomError as exc:
+        raise ctx.error(key, exc.context["message"]) from None
 
 
 def _list(ctx, value, key, length=None) -> list:
     if not isinstance(value, (list, tuple)):
-        raise ctx.error(key, f"expected a list, got {value!r}")
+        raise ctx.error(key, f"expected a list, found {value!r}")
     if length is not None and len(value) != length:
-        raise ctx.error(key, f"expected a list of {length} items, got {len(value)}: {value!r}")
+        raise ctx.error(key, f"expected a list of {length} items, found {len(value)}: {value!r}")
     return list(value)
 
 
 def _choice(ctx, value, key, choices):
     if value not in choices:
-        raise ctx.error(key, f"{value!r} is not allowed; choose one of {', '.join(map(str, choices))}")
+        raise ctx.error(key, f"expected one of {', '.join(map(str, choices))}, found {value!r}")
     return value
 
 
 def _name(ctx, value, key) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise ctx.error(key, f"expected a non-empty name, got {value!r}")
+        raise ctx.error(key, f"expected a non-empty name, found {value!r}")
     return value
 
 
-def _material(ctx, value, key, materials: dict) -> Material:
+def _material(ctx, value, key, materials: dict) -> fm.Material:
     if isinstance(value, str):
         if value not in materials:
             raise ctx.error(key, f"material {value!r} is not defined under 'materials' "
                                  f"(defined: {', '.join(materials) or 'none'})")
         return materials[value]
     if value is None:
-        raise ctx.error(key, "missing material: give {E, nu, rho} or the name of an entry of 'materials'")
-    m = _mapping(ctx, value, key, _MATERIAL_KEYS)
-    E = _quantity(ctx, m["E"], f"{key}.E", "Pa", positive=True)
-    nu = _quantity(ctx, m["nu"], f"{key}.nu", "dimensionless")
-    if not -1.0 < nu < 0.5:
-        raise ctx.error(f"{key}.nu", f"Poisson's ratio {nu!r} is not allowed; need -1 < nu < 0.5 "
-                                     "(nu >= 0.5 is incompressible: the elasticity matrix is singular)")
-    rho = _quantity(ctx, m["rho"], f"{key}.rho", "kg m-3", positive=True)
-    return fm.Material(E, nu, rho)
+        raise ctx.error(key, f"{MISSING}: give {{E, nu, rho}} or the name of an entry of 'materials'")
+    m = validate(_Material, ctx, data=value, prefix=key_loc(key))
+    return fm.Material(m.E, m.nu, m.rho)
 
 
 def _check_corners(ctx, corners: np.ndarray, key: str) -> None:
@@ -225,11 +305,11 @@ def _annulus(ctx, spec, key, nx: int, t: np.ndarray) -> tuple[np.ndarray, bool]:
         a0, a1 = 0.0, 2.0 * np.pi
     span = a1 - a0
     if not 0.0 < span <= 2.0 * np.pi * (1.0 + 1e-12):
-        raise ctx.error(f"{key}.angles", f"need start < end <= start + 360 deg (counter-clockwise), got "
+        raise ctx.error(f"{key}.angles", f"expected start < end <= start + 360 deg (counter-clockwise), found "
                                          f"[{np.degrees(a0):.6g} deg, {np.degrees(a1):.6g} deg]")
     periodic = abs(span - 2.0 * np.pi) <= 1e-12 * 2.0 * np.pi
     if periodic and nx < 3:
-        raise ctx.error(f"{key}", f"a full ring needs at least 3 divisions around, got {nx}")
+        raise ctx.error(f"{key}", f"a full ring needs at least 3 divisions around, found {nx}")
     if not periodic and span / nx > np.pi / 2:
         raise ctx.error(f"{key}", f"{nx} divisions over {np.degrees(span):.6g} deg: an element may span at most 90 deg")
     return annulus_coords(center, r_in, r_out, a0, a0 + 2.0 * np.pi if periodic else a1, nx, t,
@@ -252,7 +332,7 @@ def _float_array(ctx, value, key) -> np.ndarray:
 
 def _profile_table(ctx, p: dict, key) -> tuple[np.ndarray, np.ndarray]:
     """The (x, z) points of a measured profile [m], from arrays or a two-column file, with ``units: {x, z}``."""
-    units = _mapping(ctx, p.get("units", {}), f"{key}.units", {"x": "optional", "z": "optional"})
+    units = _mapping(ctx, p.get("units", {}), f"{key}.units", _PROFILE_UNITS_KEYS)
     scale = [_quantity(ctx, f"1 {units[c]}" if c in units else 1.0, f"{key}.units.{c}", "m") for c in ("x", "z")]
     if "file" in p:
         if "x" in p or "z" in p:
@@ -279,7 +359,7 @@ def _profile_table(ctx, p: dict, key) -> tuple[np.ndarray, np.ndarray]:
             raise ctx.error(key, "a measured profile needs both 'x' and 'z' (or 'file', 'sine' or 'gaussian')")
         x, z = _float_array(ctx, p["x"], f"{key}.x"), _float_array(ctx, p["z"], f"{key}.z")
         if x.size != z.size or x.size < 2:
-            raise ctx.error(f"{key}.z", f"x and z need the same length >= 2, got {x.size} and {z.size}")
+            raise ctx.error(f"{key}.z", f"expected x and z of the same length >= 2, found {x.size} and {z.size}")
     if not np.all(np.diff(x) > 0):
         raise ctx.error(f"{key}.x", "profile x must increase strictly")
     return x * scale[0], z * scale[1]
@@ -301,21 +381,19 @@ def _profile(ctx, spec, key, corners: np.ndarray, s: np.ndarray, t: np.ndarray) 
     edge = _choice(ctx, p["edge"], f"{key}.edge", ("bottom", "top"))
     c = corners
     if not (c[0, 1] == c[1, 1] and c[2, 1] == c[3, 1] and c[0, 0] == c[3, 0] and c[1, 0] == c[2, 0]):
-        raise ctx.error(f"{key}", f"a profiled body needs axis-aligned rectangular corners, got {c.tolist()}")
+        raise ctx.error(f"{key}", f"a profiled body needs axis-aligned rectangular corners, found {c.tolist()}")
     length = c[1, 0] - c[0, 0]
     xs = length * s  # node x measured from the left end
     kinds = [k for k in ("sine", "gaussian", "file", "x") if k in p]
     if len(kinds) != 1 and not (kinds == ["file", "x"]):
         raise ctx.error(key, "give exactly one profile: 'sine', 'gaussian', 'file', or 'x' and 'z' arrays")
     if "sine" in p:
-        q = _mapping(ctx, p["sine"], f"{key}.sine", {"amplitude": "required", "wavelength": "required",
-                                                       "phase": "optional"})
+        q = _mapping(ctx, p["sine"], f"{key}.sine", _SINE_KEYS)
         h = sine_profile(xs, _quantity(ctx, q["amplitude"], f"{key}.sine.amplitude", "m"),
                          _quantity(ctx, q["wavelength"], f"{key}.sine.wavelength", "m", positive=True),
                          _quantity(ctx, q.get("phase", 0.0), f"{key}.sine.phase", "rad"))
     elif "gaussian" in p:
-        q = _mapping(ctx, p["gaussian"], f"{key}.gaussian", {"amplitude": "required", "width": "required",
-                                                               "center": "required"})
+        q = _mapping(ctx, p["gaussian"], f"{key}.gaussian", _GAUSSIAN_KEYS)
         h = gaussian_profile(xs, _quantity(ctx, q["amplitude"], f"{key}.gaussian.amplitude", "m"),
                              _quantity(ctx, q["width"], f"{key}.gaussian.width", "m", positive=True),
                              _quantity(ctx, q["center"], f"{key}.gaussian.center", "m"))
@@ -378,7 +456,7 @@ def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ..
         div = _list(ctx, b["divisions"], f"{key}.divisions", 2)
         for i, d in enumerate(div):
             if isinstance(d, bool) or not isinstance(d, int) or d < 1:
-                raise ctx.error(f"{key}.divisions[{i}]", f"divisions must be integers >= 1, got {d!r}")
+                raise ctx.error(f"{key}.divisions[{i}]", f"expected divisions as integers >= 1, found {d!r}")
         nx, ny = div
         coords, shape, periodic = _block_geometry(ctx, b, key, nx, ny)
         material = _material(ctx, b["material"], f"{key}.material", materials)
@@ -400,7 +478,7 @@ def _bodies(ctx, data, plane, materials) -> tuple[tuple, dict[str, tuple[str, ..
     return tuple(blocks), clamps
 
 
-def _block_ref(ctx, blocks, value, key) -> Block:
+def _block_ref(ctx, blocks, value, key) -> fm.Block:
     for b in blocks:
         if b.name == value:
             return b
@@ -409,7 +487,7 @@ def _block_ref(ctx, blocks, value, key) -> Block:
 
 def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[fm.Block, np.ndarray, dict]:
     """``{body, edge, x: [lo, hi] | y: [lo, hi]}`` -> (block, nodes in edge order, the other keys)."""
-    allowed = {"body": "required", "edge": "required", "x": "optional", "y": "optional", **extra}
+    allowed = {**_EDGE_REF_KEYS, **extra}
     m = _mapping(ctx, spec, key, allowed)
     block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
     _choice(ctx, m["edge"], f"{key}.edge", block.edge_names)
@@ -430,7 +508,7 @@ def _edge_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[fm.Block, 
 
 def _point_ref(ctx, blocks, spec, key, extra: dict[str, str]) -> tuple[int, dict]:
     """``{body, at: [x, y]}`` -> the nearest node of the body (must lie within one element of the point)."""
-    m = _mapping(ctx, spec, key, {"body": "required", "at": "required", **extra})
+    m = _mapping(ctx, spec, key, {**_POINT_REF_KEYS, **extra})
     block = _block_ref(ctx, blocks, m["body"], f"{key}.body")
     at = np.array([_quantity(ctx, v, f"{key}.at[{i}]", "m") for i, v in
                    enumerate(_list(ctx, m["at"], f"{key}.at", 2))])
@@ -453,10 +531,7 @@ def _contact(ctx, spec, key, blocks):
     """One ``contacts`` item: slave edge against a master edge or a rigid surface, with its laws."""
     from fivid.contact import TangentialLaw
 
-    m = _mapping(ctx, spec, key, {"name": "required", "slave": "required", "master": "optional",
-                                  "rigid": "optional", "mu": "required", "mu_static": "optional",
-                                  "stribeck_velocity": "optional", "viscous": "optional",
-                                  "normal": "optional", "normal_stiffness": "optional"})
+    m = _mapping(ctx, spec, key, _CONTACT_KEYS)
     sb, snodes, _ = _edge_ref(ctx, blocks, m["slave"], f"{key}.slave", {})
     if ("master" in m) == ("rigid" in m):
         raise ctx.error(key, "give either 'master' (an edge of another body) or 'rigid' (a rigid line or circle)")
@@ -510,10 +585,7 @@ def _normal_law(ctx, spec, key, slave_block, master_block):
         return NormalLaw()
     if isinstance(spec, str):
         spec = {"law": spec}
-    m = _mapping(ctx, spec, key, {"law": "required", "stiffness": "optional", "coefficient": "optional",
-                                  "exponent": "optional", "sigma": "optional", "asperity_radius": "optional",
-                                  "asperity_density": "optional", "e_star": "optional", "pressure_range": "optional",
-                                  "max_pressure": "optional", "fit": "optional"})
+    m = _mapping(ctx, spec, key, _NORMAL_LAW_KEYS)
     kind = _choice(ctx, m["law"], f"{key}.law", ("rigid", "linear", "power", "greenwood-williamson"))
     need = {"rigid": (), "linear": ("stiffness",), "power": ("coefficient", "exponent"),
             "greenwood-williamson": ("sigma", "asperity_radius", "asperity_density")}[kind]
@@ -567,8 +639,7 @@ def _rigid_surface(ctx, spec, key):
     """``rigid: {line: {point, normal} | circle: {center, radius, side}, velocity | speed, start, ramp_time}``."""
     from fivid.contact import RigidSurface
 
-    m = _mapping(ctx, spec, key, {"line": "optional", "circle": "optional", "velocity": "optional",
-                                  "speed": "optional", "start": "optional", "ramp_time": "optional"})
+    m = _mapping(ctx, spec, key, _RIGID_KEYS)
     if ("line" in m) == ("circle" in m):
         raise ctx.error(key, "give either 'line: {point, normal}' or 'circle: {center, radius, side}'")
     start = _quantity(ctx, m.get("start", 0.0), f"{key}.start", "s", nonnegative=True)
@@ -577,7 +648,7 @@ def _rigid_surface(ctx, spec, key):
         if "speed" in m:
             raise ctx.error(f"{key}.speed", "a rigid line moves with 'velocity: [vx, vy]' (along itself); 'speed' "
                                             "is a circle's rotation (e.g. 10 rpm)")
-        q = _mapping(ctx, m["line"], f"{key}.line", {"point": "required", "normal": "required"})
+        q = _mapping(ctx, m["line"], f"{key}.line", _RIGID_LINE_KEYS)
         point = _point(ctx, q["point"], f"{key}.line.point")
         normal = np.array([_quantity(ctx, v, f"{key}.line.normal[{j}]", "dimensionless")
                            for j, v in enumerate(_list(ctx, q["normal"], f"{key}.line.normal", 2))])
@@ -597,7 +668,7 @@ def _rigid_surface(ctx, spec, key):
     if "velocity" in m:
         raise ctx.error(f"{key}.velocity", "a rigid circle turns with 'speed' (e.g. 10 rpm or 1.05 rad/s, "
                                            "counter-clockwise positive)")
-    q = _mapping(ctx, m["circle"], f"{key}.circle", {"center": "required", "radius": "required", "side": "optional"})
+    q = _mapping(ctx, m["circle"], f"{key}.circle", _RIGID_CIRCLE_KEYS)
     side = _choice(ctx, q.get("side", "outside"), f"{key}.circle.side", ("outside", "inside"))
     omega = _quantity(ctx, m.get("speed", 0.0), f"{key}.speed", "rad s-1")
     return RigidSurface("circle", _point(ctx, q["center"], f"{key}.circle.center"),
@@ -610,14 +681,12 @@ def _items(ctx, data, section) -> list:
     return _list(ctx, value, section)
 
 
-def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
+def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
     """Validate a config (path or mapping) and build the :class:`Model` (see :func:`fivid.fe.load_model`)."""
     data, ctx, origin = read_config(source)
-    _mapping(ctx, data, "", _TOP_KEYS)
-    plane = _choice(ctx, data.get("plane", "stress"), "plane", ("stress", "strain"))
-    materials = {}
-    for name, spec in (data.get("materials") or {}).items():
-        materials[name] = _material(ctx, spec, f"materials.{name}", {})
+    top = validate(ModelConfig, ctx)
+    plane = top.plane
+    materials = {name: fm.Material(m.E, m.nu, m.rho) for name, m in top.materials.items()}
     blocks, clamps = _bodies(ctx, data, plane, materials)
     n_nodes = sum(b.n_nodes for b in blocks)
     coords = np.concatenate([b.coords.reshape(-1, 2) for b in blocks])
@@ -631,9 +700,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     motions = []
     for i, spec in enumerate(_items(ctx, data, "motions")):
         key = f"motions[{i}]"
-        extra = {"name": "required", "component": "required", "kind": "required", "amplitude": "required",
-                 "ramp_time": "optional", "role": "optional"}
-        block, nodes, m = _edge_ref(ctx, blocks, spec, key, extra)
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, _MOTION_KEYS)
         kind = _choice(ctx, m["kind"], f"{key}.kind", ("velocity", "displacement"))
         comp = _COMPONENTS[_choice(ctx, m["component"], f"{key}.component", tuple(_COMPONENTS))]
         amp = _quantity(ctx, m["amplitude"], f"{key}.amplitude", "m s-1" if kind == "velocity" else "m")
@@ -650,15 +717,14 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     point_masses = []
     for i, spec in enumerate(_items(ctx, data, "point_masses")):
         key = f"point_masses[{i}]"
-        node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "mass": "required"})
+        node, m = _point_ref(ctx, blocks, spec, key, _POINT_MASS_KEYS)
         point_masses.append(fm.PointMass(_name(ctx, m["name"], f"{key}.name"), node,
                                       _quantity(ctx, m["mass"], f"{key}.mass", "kg", positive=True)))
 
     springs = []
     for i, spec in enumerate(_items(ctx, data, "springs")):
         key = f"springs[{i}]"
-        m = _mapping(ctx, spec, key, {"name": "required", "a": "required", "b": "required", "component": "required",
-                                      "stiffness": "required", "damping": "optional"})
+        m = _mapping(ctx, spec, key, _SPRING_KEYS)
         a, _ = _point_ref(ctx, blocks, m["a"], f"{key}.a", {})
         b = -1 if m["b"] == "ground" else _point_ref(ctx, blocks, m["b"], f"{key}.b", {})[0]
         if a == b:
@@ -673,8 +739,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     sensors = []
     for i, spec in enumerate(_items(ctx, data, "sensors")):
         key = f"sensors[{i}]"
-        node, m = _point_ref(ctx, blocks, spec, key, {"name": "required", "direction": "required",
-                                                      "quantity": "optional"})
+        node, m = _point_ref(ctx, blocks, spec, key, _SENSOR_KEYS)
         d = m["direction"]
         if isinstance(d, str):
             sign = -1.0 if d.startswith("-") else 1.0
@@ -694,8 +759,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     reactions = []
     for i, spec in enumerate(_items(ctx, data, "reactions")):
         key = f"reactions[{i}]"
-        block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "tangential": "required",
-                                                               "normal": "required"})
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, _REACTION_KEYS)
         t = _COMPONENTS[_choice(ctx, m["tangential"], f"{key}.tangential", tuple(_COMPONENTS))]
         n = _COMPONENTS[_choice(ctx, m["normal"], f"{key}.normal", tuple(_COMPONENTS))]
         if t == n:
@@ -709,8 +773,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     loads = []
     for i, spec in enumerate(_items(ctx, data, "loads")):
         key = f"loads[{i}]"
-        block, nodes, m = _edge_ref(ctx, blocks, spec, key, {"name": "required", "pressure": "required",
-                                                               "ramp_time": "optional", "start": "optional"})
+        block, nodes, m = _edge_ref(ctx, blocks, spec, key, _LOAD_KEYS)
         if nodes.size < 2:
             raise ctx.error(key, "a pressure load needs at least 2 nodes of the edge (one segment)")
         loads.append(fm.PressureLoad(_name(ctx, m["name"], f"{key}.name"), block.name,
@@ -720,7 +783,7 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                                                nonnegative=True),
                                      _quantity(ctx, m.get("start", 0.0), f"{key}.start", "s", nonnegative=True)))
 
-    alpha, beta, cutoff = _damping(ctx, data.get("damping"))
+    alpha, beta, cutoff = _damping(ctx, top.damping)
     for section, items in (("motions", motions), ("point_masses", point_masses), ("springs", springs),
                            ("contacts", contacts), ("sensors", sensors), ("reactions", reactions),
                            ("loads", loads)):
@@ -734,34 +797,17 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> Model:
                  rayleigh_alpha=alpha, rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data)
 
 
-def _damping(ctx, spec) -> tuple[float, float, float]:
+def _damping(ctx, spec: _Damping | None) -> tuple[float, float, float]:
     """``(alpha [s-1], beta [s], cutoff [Hz])`` of the ``damping`` section (cutoff inf: classic Rayleigh)."""
     from fivid.fe.damping import fit_rayleigh
 
     if spec is None:
         return 0.0, 0.0, math.inf
-    m = _mapping(ctx, spec, "damping", {"alpha": "optional", "beta": "optional", "ratios": "optional",
-                                        "cutoff": "optional"})
-    cutoff = math.inf
-    if "cutoff" in m and m["cutoff"] not in (None, "none", "inf"):
-        cutoff = _quantity(ctx, m["cutoff"], "damping.cutoff", "Hz", positive=True)
-    if "ratios" in m:
-        if "alpha" in m or "beta" in m:
-            raise ctx.error("damping", "give either {alpha, beta} or ratios, not both")
-        pts = _list(ctx, m["ratios"], "damping.ratios", 2)
-        fz = []
-        for i, p in enumerate(pts):
-            k = f"damping.ratios[{i}]"
-            q = _mapping(ctx, p, k, {"frequency": "required", "ratio": "required"})
-            fz += [_quantity(ctx, q["frequency"], f"{k}.frequency", "Hz", positive=True),
-                   _quantity(ctx, q["ratio"], f"{k}.ratio", "dimensionless", nonnegative=True)]
-        if fz[0] == fz[2]:
-            raise ctx.error("damping.ratios", "the two frequencies must differ")
-        alpha, beta = fit_rayleigh(*fz, cutoff=cutoff)
-        if alpha < 0 or beta < 0:
-            raise ctx.error("damping.ratios", f"these ratios need a negative Rayleigh coefficient (alpha {alpha:.4g} "
-                                              f"s-1, beta {beta:.4g} s): no Rayleigh curve passes through both points")
-        return alpha, beta, cutoff
-    alpha = _quantity(ctx, m.get("alpha", 0.0), "damping.alpha", "s-1", nonnegative=True)
-    beta = _quantity(ctx, m.get("beta", 0.0), "damping.beta", "s", nonnegative=True)
-    return alpha, beta, cutoff
+    if spec.ratios is None:
+        return spec.alpha, spec.beta, spec.cutoff
+    (f1, z1), (f2, z2) = ((r.frequency, r.ratio) for r in spec.ratios)
+    alpha, beta = fit_rayleigh(f1, z1, f2, z2, cutoff=spec.cutoff)
+    if alpha < 0 or beta < 0:
+        raise ctx.error("damping.ratios", f"these ratios need a negative Rayleigh coefficient (alpha {alpha:.4g} "
+                                          f"s-1, beta {beta:.4g} s): no Rayleigh curve passes through both points")
+    return alpha, beta, spec.cutoff

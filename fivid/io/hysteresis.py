@@ -2,7 +2,9 @@
 
 Two layouts:
 
-* CSV with units in the header, optional ``# key: value`` metadata lines first::
+* CSV with units in the header, optional ``# key: value`` metadata lines first (read with the rig CSV
+  machinery: the head as :mod:`fivid.io.rig_header` reads it, the data parsed by pyarrow as in
+  :mod:`fivid.io.rig_csv`, errors naming file, line and column)::
 
       # fivid-hysteresis-csv: 1
       # source: my rig
@@ -27,6 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError, UnitError
+from fivid.io.rig_header import RigHead, _head_lines, _split
+from fivid.io.rig_profile import ColumnSpec, RigProfile
 from fivid.units import conversion
 
 __all__ = ["HysteresisRecord", "read_hysteresis", "read_hysteresis_csv", "read_hysteresis_json", "read_units_csv",
@@ -127,6 +131,32 @@ def read_hysteresis_json(path) -> HysteresisRecord:
     return _finish(path, rows[:, 0] * st, rows[:, 1] * sx, rows[:, 2] * sf, meta)
 
 
+def _units_head(path: Path, example_header: str):
+    """The head of a units CSV, read as a rig CSV's head is (:func:`fivid.io.rig_header._head_lines`: BOM, binary
+    and encoding checks; the header split by the csv module): ``(meta, header line, header, n_fields, data offset)``."""
+    meta = {}
+    for number, offset, text in _head_lines(path, "utf-8"):
+        if text.startswith("#") or not text.strip():
+            m = re.match(r"#\s*([^:]+):\s*(.*)$", text)
+            if m:
+                meta[m.group(1).strip()] = m.group(2).strip()
+            continue
+        fields = _split(text, ",", path, number)
+        header = {}
+        for j, cell in enumerate(fields):
+            m = _HEADER.match(cell)
+            if m is None:
+                raise UnitError(f"header cell {cell!r} has no unit; write it as 'name [unit]'",
+                                file=path, line=number, column=cell)
+            name = m.group(1).strip()
+            if name in header:
+                raise SchemaError(f"column {name!r} appears twice in the header (cells {header[name][0] + 1} and "
+                                  f"{j + 1})", file=path, line=number, column=name)
+            header[name] = (j, m.group(2).strip())
+        return meta, number, header, len(fields), offset
+    raise SchemaError(f"no header line such as {example_header!r} found", file=path)
+
+
 def read_units_csv(path, example_header: str):
     """Split a CSV with ``# key: value`` metadata lines and a ``name [unit]`` header.
 
@@ -143,35 +173,16 @@ def read_units_csv(path, example_header: str):
     """
     path = Path(path)
     lines = _read_text(path).splitlines()
-    meta = {}
-    i = 0
-    while i < len(lines) and (lines[i].startswith("#") or not lines[i].strip()):
-        m = re.match(r"#\s*([^:]+):\s*(.*)$", lines[i])
-        if m:
-            meta[m.group(1).strip()] = m.group(2).strip()
-        i += 1
-    if i == len(lines):
-        raise SchemaError(f"no header line such as {example_header!r} found", file=path)
-    header = {}
-    for j, cell in enumerate(lines[i].split(",")):
-        m = _HEADER.match(cell)
-        if m is None:
-            raise UnitError(f"header cell {cell.strip()!r} has no unit; write it as 'name [unit]'",
-                            file=path, line=i + 1, column=cell.strip())
-        name = m.group(1).strip()
-        if name in header:
-            raise SchemaError(f"column {name!r} appears twice in the header (cells {header[name][0] + 1} and {j + 1})",
-                              file=path, line=i + 1, column=name)
-        header[name] = (j, m.group(2).strip())
-    body = [(k, line) for k, line in enumerate(lines[i + 1:], start=i + 2) if line.strip()]
-    return meta, i + 1, header, body
+    meta, header_line, header, _, _ = _units_head(path, example_header)
+    body = [(k, line) for k, line in enumerate(lines[header_line:], start=header_line + 1) if line.strip()]
+    return meta, header_line, header, body
 
 
 def numeric_columns(path, body, indices) -> np.ndarray:
     """The given column indices of the data lines as floats, shape (n_rows, len(indices))."""
     data = []
     for k, line in body:
-        cells = line.split(",")
+        cells = _split(line, ",", path, k)
         try:
             data.append([float(cells[j]) for j in indices])
         except (ValueError, IndexError):
@@ -179,27 +190,49 @@ def numeric_columns(path, body, indices) -> np.ndarray:
     return np.asarray(data, dtype=float).reshape(-1, len(indices))
 
 
+def _si_columns(path: Path, header_line: int, n_fields: int, data_offset: int, columns: list) -> list:
+    """The data of ``columns`` (``(field index, ColumnSpec)``) in SI, parsed as a rig CSV's data are
+    (:mod:`fivid.io.rig_csv`: pyarrow from a memory map; a bad value is named by line and column)."""
+    import pyarrow as pa
+
+    from fivid.io.rig_csv import _first_null, _Lines, _parse_columns, _to_si
+
+    head = RigHead(path, RigProfile(), columns, n_fields, header_line, data_offset, attrs={})
+    with pa.memory_map(str(path), "r") as mapped:
+        buffer = mapped.read_buffer()
+        lines = _Lines(buffer, head)
+        parsed = _parse_columns(buffer, head, lines)
+        out = []
+        for index, spec in columns:
+            column = parsed[index]
+            if column.null_count:
+                raise DataQualityError("empty value (a missing sample)", file=path, line=lines(_first_null(column)),
+                                       column=spec.name)
+            out.append(_to_si(column, spec.factor, spec.offset, np.empty(len(column))))
+    return out
+
+
 def read_hysteresis_csv(path) -> HysteresisRecord:
     """Read a hysteresis CSV with ``name [unit]`` headers (see the module docstring)."""
     path = Path(path)
-    meta, header_line, header, body = read_units_csv(path, "time [s],displacement [m],force [N]")
-    cols, scales = {}, {}
+    _read_text(path)  # the whole file is UTF-8 text (the data part is parsed as bytes)
+    meta, header_line, header, n_fields, data_offset = _units_head(path, "time [s],displacement [m],force [N]")
     if "force" in header and "friction_force" in header:
         raise SchemaError("both 'force' and 'friction_force' columns: keep one (they name the same quantity)",
                           file=path, line=header_line, column="friction_force")
+    specs = {}
     for name, (j, unit) in header.items():
         if name in _CANONICAL:
             canon, to = _CANONICAL[name]
-            cols[canon] = j
-            scales[canon] = _scale(unit, to, file=path, column=name)
+            specs[canon] = (j, ColumnSpec(canon, name, unit, factor=_scale(unit, to, file=path, column=name)))
             meta.setdefault("original_units", {})[canon] = unit
-    missing = [c for c in ("time", "displacement", "force") if c not in cols]
+    missing = [c for c in ("time", "displacement", "force") if c not in specs]
     if missing:
         raise SchemaError(f"missing columns {missing}; the header needs time, displacement and force (with units)",
                           file=path, line=header_line)
-    arr = numeric_columns(path, body, [cols[c] for c in ("time", "displacement", "force")])
-    return _finish(path, arr[:, 0] * scales["time"], arr[:, 1] * scales["displacement"],
-                   arr[:, 2] * scales["force"], meta)
+    t, x, f = _si_columns(path, header_line, n_fields, data_offset, [specs[c] for c in ("time", "displacement",
+                                                                                        "force")])
+    return _finish(path, t, x, f, meta)
 
 
 def read_hysteresis(path) -> HysteresisRecord:

@@ -22,13 +22,18 @@ with its key path (``columns.acceleration.sensitivity``).
 from __future__ import annotations
 
 import codecs
-import difflib
 import math
 import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Annotated, Any, Literal
 
+from pydantic import AfterValidator, BeforeValidator, Field, WithJsonSchema, model_validator
+from pydantic_core import PydanticCustomError
+
+from fivid.config_layer import (ConfigModel, ConfigSource, Name, Number, Problems, fail, key_loc, read_yaml,
+                                validate)
 from fivid.errors import ConfigError, FividError, UnitError
 from fivid.io.rig_quantities import attribute_units, metadata_value, sensitivity_factor
 from fivid.schema import registry
@@ -36,6 +41,7 @@ from fivid.units import conversion
 
 __all__ = [
     "RigProfile",
+    "RigProfileConfig",
     "ColumnSpec",
     "FORMATS",
     "PROFILE_VERSION",
@@ -155,8 +161,6 @@ def load_rig_profile(name_or_path) -> RigProfile:
         The profile is not found, is not YAML, or is invalid; the message lists every problem
         with its key path.
     """
-    import yaml
-
     text = str(name_or_path)
     looks_like_path = isinstance(name_or_path, os.PathLike) or any(c in text for c in "/\\") or text.endswith(
         (".yaml", ".yml")
@@ -176,101 +180,197 @@ def load_rig_profile(name_or_path) -> RigProfile:
                 f"no rig profile named {text!r}; known profiles: {', '.join(known) or '(none)'} "
                 f"(searched {', '.join(str(f) for f in profile_search_path())}); or give the path of a YAML file"
             )
-    try:
-        raw = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"rig profile is not UTF-8 text ({exc.reason} at byte {exc.start})", file=path) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = None if mark is None else mark.line + 1
-        raise ConfigError(f"rig profile is not valid YAML: {getattr(exc, 'problem', exc)}", file=path, line=line) from None
-    return rig_profile_from_mapping(raw, path=path)
+    source = read_yaml(path, "rig profile", mapping=False)
+    if source.data is None:
+        raise ConfigError("the rig profile is empty; expected a mapping starting 'fivid-rig-profile: 1'", file=path)
+    return rig_profile_from_mapping(source.data, path=path, source=source)
 
 
-class _Problems:
-    """Collects ``(key path, message)`` pairs; raises one ConfigError listing them all."""
-
-    def __init__(self, path):
-        self.path = None if path is None else str(path)
-        self.items: list[tuple[str, str]] = []
-
-    def add(self, key: str, message: str) -> None:
-        self.items.append((key, message))
-
-    def raise_if_any(self) -> None:
-        if not self.items:
-            return
-        if len(self.items) == 1:
-            key, message = self.items[0]
-            raise ConfigError(f"invalid rig profile: {message}", file=self.path, key=key)
-        listed = "; ".join(f"key {k!r}: {m}" for k, m in self.items)
-        raise ConfigError(f"invalid rig profile ({len(self.items)} problems): {listed}", file=self.path)
+def _attribute_name(name) -> str:
+    """A metadata attribute a profile may set; otherwise a :func:`fail` error."""
+    if not isinstance(name, str) or not _ATTR_NAME.match(name):
+        raise fail(f"expected an attribute name (letters, digits, _; starting with a letter), found {name!r}: "
+                   "not a valid attribute name")
+    if name in RESERVED_ATTRIBUTES or name.endswith("_units"):
+        raise fail(f"attribute {name!r} is written by fivid itself and cannot come from metadata")
+    return name
 
 
-def _mapping(raw, key: str, problems: _Problems, allowed: tuple[str, ...] | None = None) -> dict:
-    if raw is None:
-        return {}
-    if not isinstance(raw, dict):
-        problems.add(key, f"must be a mapping, got {type(raw).__name__} {raw!r}")
-        return {}
-    if allowed is not None:
-        for k in raw:
-            if k not in allowed:
-                close = difflib.get_close_matches(str(k), allowed, n=1)
-                hint = f"did you mean {close[0]!r}? " if close else ""
-                problems.add(f"{key}.{k}" if key else str(k), f"unknown key; {hint}allowed: {', '.join(allowed)}")
-    return raw
-
-
-def _string(raw: dict, name: str, key: str, problems: _Problems, default=None):
-    value = raw.get(name, default)
-    if value is not None and not isinstance(value, str):
-        problems.add(key, f"must be a string, got {value!r}")
-        return default
-    return value
-
-
-def _regex(text: str | None, key: str, problems: _Problems, groups: tuple[str, ...] = ()):
+def _regex(text: str | None, groups: tuple[str, ...] = ()):
     if text is None:
         return None
     try:
         compiled = re.compile(text)
     except re.error as exc:
-        problems.add(key, f"not a valid regular expression ({exc}): {text!r}")
-        return None
+        raise fail(f"expected a regular expression, found {text!r}: not a valid regular expression ({exc})") from None
     missing = [g for g in groups if g not in compiled.groupindex]
     if missing:
-        problems.add(key, f"the regular expression needs named groups {', '.join(f'(?P<{g}>...)' for g in missing)}")
-        return None
+        raise fail(f"the regular expression needs named groups {', '.join(f'(?P<{g}>...)' for g in missing)}")
     return compiled
 
 
-def _check_attribute_name(name, key: str, problems: _Problems) -> bool:
-    if not isinstance(name, str) or not _ATTR_NAME.match(name):
-        problems.add(key, f"{name!r} is not a valid attribute name (letters, digits, _; starting with a letter)")
-        return False
-    if name in RESERVED_ATTRIBUTES or name.endswith("_units"):
-        problems.add(key, f"attribute {name!r} is written by fivid itself and cannot come from metadata")
-        return False
-    return True
-
-
-def _units_map(raw, key: str, problems: _Problems) -> dict:
+def _units_map(raw: dict) -> dict:
     out = {}
-    for name, units in _mapping(raw, key, problems).items():
-        k = f"{key}.{name}"
+    for name, units in raw.items():
         target = attribute_units(name)
         if target is None:
-            problems.add(k, f"{name!r} is not a quantity attribute; units apply to "
-                         f"{', '.join(n for n, a in registry().attributes.items() if a.units)}")
-            continue
+            quantities = ", ".join(n for n, a in registry().attributes.items() if a.units)
+            raise fail(f"{name!r} is not a quantity attribute; expected one of {quantities}", at=(name,))
         try:
             conversion(str(units), target)
         except UnitError as exc:
-            problems.add(k, exc.message)
-            continue
+            raise fail(exc.message, at=(name,)) from None
         out[name] = str(units)
     return out
+
+
+_UnitsMap = Annotated[dict[str, Name], AfterValidator(_units_map)]
+
+
+def _delimiter(value: str) -> str:
+    if len(value) != 1 or value in "\r\n\"":
+        raise fail(f"expected one character (',', ';', '\\t', ...), found {value!r}")
+    return value
+
+
+def _encoding(value: str) -> str:
+    try:
+        name = codecs.lookup(value).name
+    except LookupError:
+        raise fail(f"unknown text encoding {value!r}; expected e.g. utf-8, latin-1, cp1252") from None
+    if "a;,.\n".encode(name) != b"a;,.\n":
+        raise fail(f"{name!r} is not ASCII-compatible; expected utf-8, latin-1, cp1252, ...")
+    return name
+
+
+class _Csv(ConfigModel):
+    delimiter: Annotated[str, AfterValidator(_delimiter)] = ","
+    decimal: Literal[".", ","] = "."
+    encoding: Annotated[str, AfterValidator(_encoding)] = "utf-8"
+    header_line: Annotated[int, Field(ge=1, description="1 = the first line")] | None = None
+    comment: str = "#"
+
+    @model_validator(mode="after")
+    def _distinct(self):
+        if self.decimal == self.delimiter:
+            raise fail(f"the decimal mark {self.decimal!r} cannot also be the delimiter", at=("decimal",))
+        return self
+
+
+def _metadata_keys(raw: dict) -> dict:
+    keys = {}
+    for raw_key, attr in raw.items():
+        try:
+            keys[str(raw_key).strip().casefold()] = _attribute_name(attr)
+        except PydanticCustomError as exc:
+            raise fail(exc.context["message"], at=(raw_key,)) from None
+    return keys
+
+
+class _InFile(ConfigModel):
+    pattern: Annotated[str, AfterValidator(lambda t: (_regex(t, ("key", "value")), t)[1])] = DEFAULT_METADATA_PATTERN
+    keys: Annotated[dict[Name, Name], AfterValidator(_metadata_keys)] = {}
+    units: _UnitsMap = {}
+
+
+def _file_name_pattern(text):
+    compiled = _regex(text)
+    if compiled is not None:
+        for group in compiled.groupindex:
+            try:
+                _attribute_name(group)
+            except PydanticCustomError as exc:
+                raise fail(f"group {group!r}: {exc.context['message']}") from None
+    return text
+
+
+class _FileName(ConfigModel):
+    pattern: Annotated[str, AfterValidator(_file_name_pattern)] | None = None
+    units: _UnitsMap = {}
+
+
+def _metadata_values(raw: dict) -> dict:
+    values = {}
+    for attr, value in raw.items():
+        try:
+            values[_attribute_name(attr)] = metadata_value(attr, value)
+        except PydanticCustomError as exc:
+            raise fail(exc.context["message"], at=(attr,)) from None
+        except FividError as exc:
+            raise fail(exc.message, at=(attr,)) from None
+    return values
+
+
+class _Metadata(ConfigModel):
+    in_file: _InFile | None = None
+    file_name: _FileName = _FileName()
+    values: Annotated[dict[Name, Any], AfterValidator(_metadata_values)] = {}
+
+
+def _scale(value: float) -> float:
+    if not math.isfinite(value) or value == 0:
+        raise fail(f"expected a finite non-zero number (e.g. -1 to flip the sign), found {value!r}")
+    return value
+
+
+def _as_text(value):
+    return None if value is None else str(value)
+
+
+class _Column(ConfigModel):
+    """One raw column: its name in the header, its unit, and (for a transducer signal) the sensitivity."""
+
+    name: str | None = Field(None, description="the column's name as written in the file's header")
+    units: str | None = Field(None, description="the unit the column is written in")
+    sensitivity: Annotated[str | None, BeforeValidator(_as_text)] = Field(
+        None, description="'<number> <signal unit>/<measured unit>', e.g. '100 mV/g'")
+    scale: Annotated[Number, AfterValidator(_scale)] = 1.0
+    sensor: Annotated[str | None, BeforeValidator(_as_text)] = Field(
+        None, description="sensor name when a variable has several columns")
+
+
+def _column_entry_schema() -> dict:
+    column = _Column.model_json_schema()
+    return {"anyOf": [{"type": "string", "description": "the column's name"}, column,
+                      {"type": "array", "items": column, "minItems": 1}]}
+
+
+class _Checks(ConfigModel):
+    sampling_tolerance: Annotated[Number, Field(gt=0, lt=1, description="fraction of the time step (0.01 = 1 %)")
+                                  ] = 0.01
+
+
+def _version(value):
+    if value != PROFILE_VERSION or isinstance(value, bool):
+        raise fail(f"expected {PROFILE_VERSION} (the profile format version), found {value!r}")
+    return value
+
+
+class RigProfileConfig(ConfigModel):
+    """A rig profile (``configs/rigs/*.yaml``, ``docs/ingest.md``)."""
+
+    fivid_rig_profile: Annotated[int, BeforeValidator(_version), WithJsonSchema({"const": PROFILE_VERSION})] = Field(
+        alias="fivid-rig-profile")
+    name: Name | None = None
+    description: str = ""
+    format: Literal["fivid-rig-csv", "table"] = "table"
+    csv: _Csv = _Csv()
+    metadata: _Metadata = _Metadata()
+    columns: Annotated[dict[str, Any], WithJsonSchema({"type": "object",
+                                                       "additionalProperties": _column_entry_schema(),
+                                                       "description": "canonical variable -> raw column(s)"})] = {}
+    checks: _Checks = _Checks()
+
+    @model_validator(mode="after")
+    def _by_format(self):
+        if self.format == "fivid-rig-csv":
+            if self.columns:
+                raise fail("a fivid-rig-csv file names its columns and units in its header; remove 'columns' or use "
+                           "format: table", at=("columns",))
+            if self.metadata.in_file is not None and self.metadata.in_file.model_fields_set:
+                raise fail("a fivid-rig-csv file gives its metadata as '# key: value' lines; remove in_file",
+                           at=("metadata", "in_file"))
+        return self
 
 
 def has_sensor_dim(variable: str) -> bool:
@@ -281,70 +381,61 @@ def has_sensor_dim(variable: str) -> bool:
 _SENSOR_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
 
 
-def _column_spec(variable: str, spec, key: str, problems: _Problems, sensor_required: bool) -> ColumnSpec | None:
+def _column_spec(variable: str, raw, key: str, source: ConfigSource, problems: Problems,
+                 sensor_required: bool) -> ColumnSpec | None:
     """One column mapping ``{name, units, sensitivity, scale, sensor}`` (or just the name)."""
-    if isinstance(spec, str):
-        spec = {"name": spec}
-    allowed = ("name", "units", "sensitivity", "scale", "sensor") if has_sensor_dim(variable) else (
-        "name", "units", "sensitivity", "scale")
-    spec = _mapping(spec, key, problems, allowed=allowed)
-    name = _string(spec, "name", f"{key}.name", problems)
-    units = _string(spec, "units", f"{key}.units", problems)
-    sensitivity = spec.get("sensitivity")
-    scale = spec.get("scale", 1.0)
-    sensor = spec.get("sensor")
+    if isinstance(raw, str):
+        raw = {"name": raw}
+    if isinstance(raw, dict) and "sensor" in raw and not has_sensor_dim(variable):
+        problems.add(f"{key}.sensor", f"unknown key: {variable!r} has no sensor dimension; allowed: name, units, "
+                                      "sensitivity, scale")
+        return None
+    spec = validate(_Column, source, problems, data=raw, prefix=key_loc(key))
+    if spec is None:
+        return None
     target = registry().variables[variable].units
-    if name is None or not name.strip():
-        problems.add(f"{key}.name", "missing: the column's name as written in the file's header")
+    if spec.name is None or not spec.name.strip():
+        problems.add(f"{key}.name", "is required (missing): the column's name as written in the file's header")
         return None
-    if units is None:
-        problems.add(f"{key}.units", f"missing: the unit the column is written in (canonical: {target!r})")
+    if spec.units is None:
+        problems.add(f"{key}.units", f"is required (missing): the unit the column is written in (canonical: {target!r})")
         return None
-    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:
-        problems.add(f"{key}.scale", f"must be a finite non-zero number (e.g. -1 to flip the sign), got {scale!r}")
+    if spec.sensor is None and sensor_required:
+        problems.add(f"{key}.sensor", "is required (missing): with several columns for one variable, name each "
+                                      "one's sensor")
         return None
-    if sensor is None and sensor_required:
-        problems.add(f"{key}.sensor", "missing: with several columns for one variable, name each one's sensor")
-        return None
-    if sensor is not None and not _SENSOR_NAME.match(str(sensor)):
-        problems.add(f"{key}.sensor", f"{sensor!r} is not a sensor name (letters, digits, . _ + -)")
+    if spec.sensor is not None and not _SENSOR_NAME.match(spec.sensor):
+        problems.add(f"{key}.sensor", f"expected a sensor name (letters, digits, . _ + -), found {spec.sensor!r}")
         return None
     try:
-        if sensitivity is None:
-            factor, offset = conversion(units, target)
+        if spec.sensitivity is None:
+            factor, offset = conversion(spec.units, target)
         else:
-            factor, offset = sensitivity_factor(units, str(sensitivity), target), 0.0
+            factor, offset = sensitivity_factor(spec.units, spec.sensitivity, target), 0.0
     except UnitError as exc:
-        problems.add(f"{key}.{'units' if sensitivity is None else 'sensitivity'}", exc.message)
+        problems.add(f"{key}.{'units' if spec.sensitivity is None else 'sensitivity'}", exc.message)
         return None
-    return ColumnSpec(variable, name.strip(), units, None if sensitivity is None else str(sensitivity),
-                      float(scale), factor * float(scale), offset * float(scale),
-                      None if sensor is None else str(sensor))
+    return ColumnSpec(variable, spec.name.strip(), spec.units, spec.sensitivity, spec.scale, factor * spec.scale,
+                      offset * spec.scale, spec.sensor)
 
 
-def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
+def _column_specs(columns: dict, source: ConfigSource, problems: Problems) -> tuple[ColumnSpec, ...]:
     reg = registry()
-    columns = _mapping(raw, "columns", problems)
-    if fmt == "fivid-rig-csv":
-        if columns:
-            problems.add("columns", "a fivid-rig-csv file names its columns and units in its header; "
-                         "remove 'columns' or use format: table")
-        return ()
     specs = []
     mappable = [n for n, v in reg.variables.items() if not v.coordinate or n == "time"]
     for variable, spec in columns.items():
         key = f"columns.{variable}"
         if variable not in mappable:
-            problems.add(key, f"{variable!r} is not a canonical variable; known: {', '.join(mappable)}")
+            problems.add(key, f"{variable!r} is not a canonical variable; expected one of {', '.join(mappable)}")
             continue
         if isinstance(spec, list):
             if not has_sensor_dim(variable):
-                problems.add(key, f"{variable!r} has no sensor dimension: map it to one column")
+                problems.add(key, f"{variable!r} has no sensor dimension: expected one column, found a list")
                 continue
             if not spec:
-                problems.add(key, "an empty list: map it to at least one column")
+                problems.add(key, "expected at least one column, found an empty list")
                 continue
-            found = [_column_spec(variable, s, f"{key}[{i}]", problems, True) for i, s in enumerate(spec)]
+            found = [_column_spec(variable, s, f"{key}[{i}]", source, problems, True) for i, s in enumerate(spec)]
             seen = set()
             for i, s in enumerate(found):
                 if s is not None and s.sensor in seen:
@@ -352,7 +443,7 @@ def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
                 seen.add(None if s is None else s.sensor)
             specs += [s for s in found if s is not None]
         else:
-            found = _column_spec(variable, spec, key, problems, False)
+            found = _column_spec(variable, spec, key, source, problems, False)
             if found is not None:
                 specs.append(found)
     names = [s.name for s in specs]
@@ -360,100 +451,37 @@ def _column_specs(raw, fmt: str, problems: _Problems) -> tuple[ColumnSpec, ...]:
         if names.count(s.name) > 1:
             problems.add(f"columns.{s.variable}.name", f"column {s.name!r} is mapped more than once")
     required = [n for n, v in reg.variables.items() if v.required or n == "time"]
-    given = {s.variable for s in specs} | set(columns)
     for n in required:
-        if n not in given:
-            problems.add(f"columns.{n}", f"required variable {n!r} ({reg.variables[n].units}) is not mapped to a column")
+        if n not in columns:
+            problems.add(f"columns.{n}", f"required variable {n!r} ({reg.variables[n].units}) is not mapped to a "
+                                         "column")
     return tuple(specs)
 
 
-def rig_profile_from_mapping(raw, *, path=None) -> RigProfile:
+def rig_profile_from_mapping(raw, *, path=None, source: ConfigSource | None = None) -> RigProfile:
     """Validate a profile given as a mapping (the parsed YAML) and build a :class:`RigProfile`.
 
-    Raises :class:`ConfigError` listing every problem with its key path.
+    Raises :class:`ConfigError` listing every problem with its key path (and line, from ``source``).
     """
-    problems = _Problems(path)
-    top = _mapping(raw, "", problems, allowed=(
-        "fivid-rig-profile", "name", "description", "format", "csv", "metadata", "columns", "checks"))
+    if source is None:
+        source = ConfigSource(raw, None if path is None else str(path))
+    problems = Problems(source)
     if raw is None:
-        problems.add("fivid-rig-profile", "the profile is empty")
+        problems.add("fivid-rig-profile", "the profile is empty; expected a mapping starting 'fivid-rig-profile: 1'")
+        problems.raise_if_any()
+    cfg = validate(RigProfileConfig, source, problems, data=raw)
+    columns = ()
+    raw_columns = raw.get("columns") if isinstance(raw, dict) else None
+    if isinstance(raw_columns, dict) and raw.get("format", "table") == "table":  # checked even when others fail
+        columns = _column_specs(raw_columns, source, problems)
     problems.raise_if_any()
-    version = top.get("fivid-rig-profile")
-    if version != PROFILE_VERSION:
-        problems.add("fivid-rig-profile", f"must be {PROFILE_VERSION} (the profile format version), got {version!r}")
-    name = _string(top, "name", "name", problems)
-    if name is None:
-        name = Path(path).stem if path is not None else "unnamed"
-    description = _string(top, "description", "description", problems, default="")
-    fmt = top.get("format", "table")
-    if fmt not in FORMATS:
-        problems.add("format", f"must be one of {', '.join(FORMATS)}, got {fmt!r}")
-        fmt = "table"
-
-    csv = _mapping(top.get("csv"), "csv", problems, allowed=("delimiter", "decimal", "encoding", "header_line", "comment"))
-    delimiter = _string(csv, "delimiter", "csv.delimiter", problems, default=",")
-    if delimiter is not None and (len(delimiter) != 1 or delimiter in "\r\n\""):
-        problems.add("csv.delimiter", f"must be one character (',', ';', '\\t', ...), got {delimiter!r}")
-    decimal = _string(csv, "decimal", "csv.decimal", problems, default=".")
-    if decimal not in (".", ","):
-        problems.add("csv.decimal", f"must be '.' or ',', got {decimal!r}")
-    elif decimal == delimiter:
-        problems.add("csv.decimal", f"the decimal mark {decimal!r} cannot also be the delimiter")
-    encoding = _string(csv, "encoding", "csv.encoding", problems, default="utf-8")
-    try:
-        encoding = codecs.lookup(encoding).name
-        if "a;,.\n".encode(encoding) != b"a;,.\n":
-            problems.add("csv.encoding", f"{encoding!r} is not ASCII-compatible; use utf-8, latin-1, cp1252, ...")
-    except (LookupError, TypeError):
-        problems.add("csv.encoding", f"unknown text encoding {encoding!r} (e.g. utf-8, latin-1, cp1252)")
-    header_line = csv.get("header_line")
-    if header_line is not None and (isinstance(header_line, bool) or not isinstance(header_line, int) or header_line < 1):
-        problems.add("csv.header_line", f"must be a line number >= 1 (1 = first line), got {header_line!r}")
-    comment = _string(csv, "comment", "csv.comment", problems, default="#")
-
-    meta = _mapping(top.get("metadata"), "metadata", problems, allowed=("in_file", "file_name", "values"))
-    in_file = _mapping(meta.get("in_file"), "metadata.in_file", problems, allowed=("pattern", "keys", "units"))
-    if fmt == "fivid-rig-csv" and in_file:
-        problems.add("metadata.in_file", "a fivid-rig-csv file gives its metadata as '# key: value' lines; remove in_file")
-    pattern = _string(in_file, "pattern", "metadata.in_file.pattern", problems, default=DEFAULT_METADATA_PATTERN)
-    _regex(pattern, "metadata.in_file.pattern", problems, groups=("key", "value"))
-    keys = {}
-    for raw_key, attr in _mapping(in_file.get("keys"), "metadata.in_file.keys", problems).items():
-        if _check_attribute_name(attr, f"metadata.in_file.keys.{raw_key}", problems):
-            keys[str(raw_key).strip().casefold()] = attr
-    metadata_units = _units_map(in_file.get("units"), "metadata.in_file.units", problems)
-
-    from_name = _mapping(meta.get("file_name"), "metadata.file_name", problems, allowed=("pattern", "units"))
-    file_name_pattern = _string(from_name, "pattern", "metadata.file_name.pattern", problems)
-    compiled = _regex(file_name_pattern, "metadata.file_name.pattern", problems)
-    if compiled is not None:
-        for group in compiled.groupindex:
-            _check_attribute_name(group, f"metadata.file_name.pattern (group {group!r})", problems)
-    file_name_units = _units_map(from_name.get("units"), "metadata.file_name.units", problems)
-
-    values = {}
-    for attr, value in _mapping(meta.get("values"), "metadata.values", problems).items():
-        key = f"metadata.values.{attr}"
-        if not _check_attribute_name(attr, key, problems):
-            continue
-        try:
-            values[attr] = metadata_value(attr, value)
-        except FividError as exc:
-            problems.add(key, exc.message)
-
-    columns = _column_specs(top.get("columns"), fmt, problems)
-
-    checks = _mapping(top.get("checks"), "checks", problems, allowed=("sampling_tolerance",))
-    tolerance = checks.get("sampling_tolerance", 0.01)
-    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) or not 0 < tolerance < 1:
-        problems.add("checks.sampling_tolerance",
-                     f"must be a fraction of the time step between 0 and 1 (0.01 = 1 %), got {tolerance!r}")
-        tolerance = 0.01
-    problems.raise_if_any()
+    in_file = cfg.metadata.in_file or _InFile()
+    name = cfg.name if cfg.name is not None else (Path(path).stem if path is not None else "unnamed")
     return RigProfile(
-        name=name, format=fmt, description=description, delimiter=delimiter, decimal=decimal, encoding=encoding,
-        header_line=header_line, comment=comment, metadata_pattern=pattern, metadata_keys=keys,
-        metadata_units=metadata_units, file_name_pattern=file_name_pattern, file_name_units=file_name_units,
-        values=values, columns=columns, sampling_tolerance=float(tolerance),
+        name=name, format=cfg.format, description=cfg.description, delimiter=cfg.csv.delimiter,
+        decimal=cfg.csv.decimal, encoding=cfg.csv.encoding, header_line=cfg.csv.header_line, comment=cfg.csv.comment,
+        metadata_pattern=in_file.pattern, metadata_keys=in_file.keys, metadata_units=in_file.units,
+        file_name_pattern=cfg.metadata.file_name.pattern, file_name_units=cfg.metadata.file_name.units,
+        values=cfg.metadata.values, columns=columns, sampling_tolerance=cfg.checks.sampling_tolerance,
         path=None if path is None else str(path),
     )

@@ -20,18 +20,24 @@ the file and the key path (``simulate.duration``).
 from __future__ import annotations
 
 import fnmatch
-import hashlib
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from fivid.errors import ConfigError, FividError, UnitError
-from fivid.units import parse_quantity
+from typing import Annotated, Literal
+
+from pydantic import AfterValidator, BeforeValidator, Field, WithJsonSchema, model_validator
+
+from fivid import config_layer
+from fivid.config_layer import ConfigModel, Name, Number, Problems, Quantity, fail, validate
+from fivid.errors import ConfigError, FividError
 
 __all__ = [
     "STAGE_REQUIRES",
     "Plan",
     "RunConfig",
+    "RunConfigModel",
+    "RecipeConfig",
     "Threshold",
     "load_plan",
     "load_recipe",
@@ -119,25 +125,9 @@ class Plan:
 
 
 def read_yaml(path: str | os.PathLike, what: str) -> tuple[dict, str]:
-    """Load a YAML mapping; returns ``(mapping, sha256 of the file bytes)``."""
-    import yaml
-
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{what} {str(path)!r} does not exist", file=path)
-    data = path.read_bytes()
-    try:
-        obj = yaml.safe_load(data.decode("utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        mark = getattr(exc, "problem_mark", None)
-        # one line: the parser's problem and its line/column, not its multi-line excerpt of the file
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        where = "" if mark is None else f" at column {mark.column + 1}"
-        raise ConfigError(f"not valid YAML: {problem}{where}", file=path,
-                          line=None if mark is None else mark.line + 1) from None
-    if not isinstance(obj, dict):
-        raise ConfigError(f"{what} must be a YAML mapping, got {type(obj).__name__}", file=path)
-    return obj, hashlib.sha256(data).hexdigest()
+    """Load a YAML mapping (:func:`fivid.config_layer.read_yaml`); returns ``(mapping, sha256 of the file bytes)``."""
+    source = config_layer.read_yaml(path, what)
+    return source.data, source.sha256
 
 
 def line_of_key(path, key: str) -> int | None:
@@ -146,112 +136,53 @@ def line_of_key(path, key: str) -> int | None:
     A key that is not in the file (a required one left out) gives the line of its closest parent;
     None when there is none or the file cannot be read. Called only when reporting an error.
     """
-    import re
-
-    import yaml
-
-    from fivid.fe.config import _compose_lines  # the model config's key -> line map, reused
-
-    lines: dict = {}
     try:
-        _compose_lines(yaml.compose(Path(path).read_text(encoding="utf-8")), "", lines)
-    except (OSError, yaml.YAMLError, UnicodeDecodeError, AttributeError):  # AttributeError: an empty file
+        return config_layer.read_yaml(path, "config", mapping=False).line(key)
+    except ConfigError:
         return None
-    while key:
-        if key in lines:
-            return lines[key]
-        key = re.sub(r"(\[\d+\]|\.?[^.\[]*)$", "", key, count=1)
-    return None
 
 
-class _Checker:
-    """Collects every problem of one file, each with its key path, and raises them together.
+# ---------------------------------------------------------------------------------------------- the recipe
 
-    The error carries the line of the (first) offending key, looked up in the YAML file's nodes.
-    """
 
-    def __init__(self, file):
-        self.file = file
-        self.problems: list[tuple[str, str]] = []
+def _stage(value):
+    if value not in STAGE_REQUIRES:
+        raise fail(f"unknown stage {value!r}; expected one of {', '.join(STAGE_REQUIRES)}")
+    return value
 
-    def add(self, key: str, msg: str) -> None:
-        self.problems.append((key, msg))
 
-    def section(self, raw: dict, key: str, allowed: set[str], required: set[str] = frozenset()) -> dict:
-        node = raw.get(key, {}) if key else raw
-        if node is None:
-            node = {}
-        if not isinstance(node, dict):
-            self.add(key, f"must be a mapping, got {node!r}")
-            return {}
-        prefix = f"{key}." if key else ""
-        for k in node:
-            if k not in allowed:
-                self.add(f"{prefix}{k}", f"unknown key; allowed: {', '.join(sorted(allowed))}")
-        for k in sorted(required - set(node)):
-            self.add(f"{prefix}{k}", "is required")
-        return node
+Stage = Annotated[str, AfterValidator(_stage), WithJsonSchema({"enum": list(STAGE_REQUIRES)})]
 
-    def quantity(self, node: dict, key: str, name: str, units: str, default=None, positive=True):
-        value = node.get(name, default)
-        if value is None:
-            return None
-        try:
-            q = parse_quantity(value, units)
-        except UnitError as exc:
-            self.add(key, exc.message)
-            return None
-        if positive and not q > 0:
-            self.add(key, f"must be positive, got {value!r}")
-            return None
-        return q
 
-    def integer(self, node: dict, key: str, name: str, default: int, lo: int, hi: int) -> int:
-        value = node.get(name, default)
-        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            self.add(key, f"must be an integer in [{lo}, {hi}], got {value!r}")
-            return default
-        return value
+class RecipeConfig(ConfigModel):
+    """A pipeline recipe (``pipelines/*.yaml``): which stages run, in which order."""
 
-    def raise_if_any(self) -> None:
-        if not self.problems:
-            return
-        key, msg = self.problems[0]
-        more = ""
-        if len(self.problems) > 1:
-            def at(k):
-                line = line_of_key(self.file, k)
-                return k if line is None else f"{k} (line {line})"
+    fivid_pipeline: Literal[1] = Field(alias="fivid-pipeline", description="recipe format version")
+    name: Name | None = None
+    description: str = ""
+    stages: Annotated[list[Stage], Field(min_length=1)]
 
-            more = f" (and {len(self.problems) - 1} more: " + "; ".join(f"{at(k)}: {m}" for k, m in self.problems[1:]) + ")"
-        raise ConfigError(msg + more, file=self.file, key=key, line=line_of_key(self.file, key))
+    @model_validator(mode="after")
+    def _order(self):
+        seen: list[str] = []
+        for i, stage in enumerate(self.stages):
+            if stage in seen:
+                raise fail(f"stage {stage!r} is listed twice; expected each stage once", at=("stages", i))
+            missing = [r for r in STAGE_REQUIRES[stage] if r not in seen]
+            if missing:
+                raise fail(f"stage {stage!r} needs {', '.join(missing)} listed before it", at=("stages", i))
+            seen.append(stage)
+        return self
 
 
 def load_recipe(path: str | os.PathLike) -> tuple[str, tuple[str, ...], str, dict]:
     """Read and check a recipe; returns ``(name, stages, sha256, raw)``."""
-    raw, sha = read_yaml(path, "pipeline recipe")
-    chk = _Checker(path)
-    chk.section(raw, "", {"fivid-pipeline", "name", "description", "stages"}, {"fivid-pipeline", "stages"})
-    if raw.get("fivid-pipeline") not in (1, None):
-        chk.add("fivid-pipeline", f"unsupported recipe version {raw.get('fivid-pipeline')!r}; this fivid reads 1")
-    stages = raw.get("stages") or []
-    if not isinstance(stages, list) or not stages:
-        chk.add("stages", f"must be a non-empty list of stage names from {', '.join(STAGE_REQUIRES)}")
-        stages = []
-    seen: list[str] = []
-    for i, stage in enumerate(stages):
-        if stage not in STAGE_REQUIRES:
-            chk.add(f"stages[{i}]", f"unknown stage {stage!r}; known stages: {', '.join(STAGE_REQUIRES)}")
-            continue
-        if stage in seen:
-            chk.add(f"stages[{i}]", f"stage {stage!r} is listed twice")
-            continue
-        missing = [r for r in STAGE_REQUIRES[stage] if r not in seen]
-        if missing:
-            chk.add(f"stages[{i}]", f"stage {stage!r} needs {', '.join(missing)} listed before it")
-        seen.append(stage)
-    chk.raise_if_any()
-    return str(raw.get("name") or Path(path).stem), tuple(seen), sha, raw
+    source = config_layer.read_yaml(path, "pipeline recipe")
+    recipe = validate(RecipeConfig, source)
+    return str(recipe.name or Path(path).stem), tuple(recipe.stages), source.sha256, source.data
+
+
+# ---------------------------------------------------------------------------------------------- the run config
 
 
 def _resolve(base: Path, value) -> Path:
@@ -259,56 +190,155 @@ def _resolve(base: Path, value) -> Path:
     return Path(os.path.normpath(p if p.is_absolute() else (base / p)))
 
 
-_IDENTIFY_CHOICES = {"shape_method": ("smoothed", "rolloff"), "weighting": ("none", "estimator"),
-                     "injection": ("uniform", "per_node", "convected")}
+def _pair(units: str, example: str, *, positive: bool):
+    """A ``[low, high]`` pair of quantities, increasing."""
+
+    def check(pair):
+        if not pair[0] < pair[1]:
+            raise fail(f"expected an increasing pair [low, high] such as {example}, found {pair!r} ({units})")
+        return tuple(pair)
+
+    item = Quantity(units, positive=positive, nonnegative=not positive)
+    return Annotated[list[item], Field(min_length=2, max_length=2), AfterValidator(check)]
 
 
-def _identify_options(chk: _Checker, raw: dict) -> dict:
-    """The ``identify`` section as keyword arguments of :func:`fivid.identify.identify_friction_law` (SI)."""
-    node = chk.section(raw, "identify", {"band", "tare", "nperseg", "tolerance", "min_normal_force", "mains_frequency",
-                                         "shape_method", "smoothing_octaves", "forms", "weighting", "injection",
-                                         "confidence"})
-    out: dict = {}
-    for name, units, example in (("band", "Hz", "[100 Hz, 5 kHz]"), ("tare", "s", "[0 s, 15 ms]")):
-        if name in node:
-            b = node[name]
-            if not isinstance(b, (list, tuple)) or len(b) != 2:
-                chk.add(f"identify.{name}", f"must be a pair with units, e.g. {example}, got {b!r}")
-                continue
-            q = [chk.quantity({"v": v}, f"identify.{name}[{i}]", "v", units, positive=False) for i, v in enumerate(b)]
-            if None not in q:
-                if not 0 <= q[0] < q[1]:
-                    chk.add(f"identify.{name}", f"must be increasing and non-negative, got {b!r}")
-                else:
-                    out[name] = (q[0], q[1])
-    if "nperseg" in node:
-        out["nperseg"] = chk.integer(node, "identify.nperseg", "nperseg", 4096, 64, 2**22)
-    for name, units in (("min_normal_force", "N"), ("mains_frequency", "Hz")):
-        if name in node:
-            out[name] = chk.quantity(node, f"identify.{name}", name, units) if node[name] is not None else None
-    for name, lo, hi in (("tolerance", 0.0, 1.0), ("smoothing_octaves", 0.0, 4.0), ("confidence", 0.5, 0.9999)):
-        if name in node:
-            v = node[name]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo < v < hi:
-                chk.add(f"identify.{name}", f"must be a number in ({lo:g}, {hi:g}), got {v!r}")
-            else:
-                out[name] = float(v)
-    for name, choices in _IDENTIFY_CHOICES.items():
-        if name in node:
-            if node[name] not in choices:
-                chk.add(f"identify.{name}", f"must be one of {', '.join(choices)}, got {node[name]!r}")
-            else:
-                out[name] = node[name]
-    if "forms" in node:
-        from fivid.friction.amplitude import AMPLITUDE_FORMS
+def _int_range(lo: int, hi: int):
+    return Annotated[int, Field(ge=lo, le=hi)]
 
-        forms = node["forms"]
-        if not isinstance(forms, list) or not forms or any(f not in AMPLITUDE_FORMS for f in forms):
-            chk.add("identify.forms", f"must be a list of amplitude forms from {', '.join(AMPLITUDE_FORMS)}, "
-                    f"got {forms!r}")
-        else:
-            out["forms"] = tuple(forms)
-    return out
+
+def _open_range(lo: float, hi: float):
+    return Annotated[Number, Field(gt=lo, lt=hi)]
+
+
+class _Inputs(ConfigModel):
+    folder: str
+    pattern: str = "*.csv"
+    rig_profile: str | None = Field(None, description="a rig profile name (configs/rigs/) or the path of one")
+
+
+class _Analysis(ConfigModel):
+    band: _pair("Hz", "[500 Hz, 20 kHz]", positive=True) = (100.0, 20000.0)
+    nperseg: _int_range(64, 2**22) | None = Field(
+        None, description="Welch segment length [samples]; default: the one rule (fivid.signal.welch.default_nperseg) "
+                          "on the simulated steady part")
+    settle: Quantity("s", nonnegative=True) = 0.0
+
+
+def _amplitude_form(value):
+    from fivid.friction.amplitude import AMPLITUDE_FORMS
+
+    if value not in AMPLITUDE_FORMS:
+        raise fail(f"unknown amplitude form {value!r}; expected one of {', '.join(AMPLITUDE_FORMS)}")
+    return value
+
+
+class _Identify(ConfigModel):
+    """Keyword arguments of :func:`fivid.identify.identify_friction_law` (only the keys given are passed)."""
+
+    band: _pair("Hz", "[100 Hz, 5 kHz]", positive=False) = None
+    tare: _pair("s", "[0 s, 15 ms]", positive=False) = None
+    nperseg: _int_range(64, 2**22) = 4096
+    tolerance: _open_range(0.0, 1.0) = None
+    min_normal_force: Quantity("N", positive=True) | None = None
+    mains_frequency: Quantity("Hz", positive=True) | None = None
+    shape_method: Literal["smoothed", "rolloff"] = "smoothed"
+    smoothing_octaves: _open_range(0.0, 4.0) = None
+    forms: Annotated[list[Annotated[str, AfterValidator(_amplitude_form)]], Field(min_length=1)] = None
+    weighting: Literal["none", "estimator"] = "none"
+    injection: Literal["uniform", "per_node", "convected"] = "uniform"
+    confidence: _open_range(0.5, 0.9999) = None
+
+
+def _seeds(value):
+    if isinstance(value, int) and not isinstance(value, bool):
+        if 1 <= value <= 1000:
+            return tuple(range(value))
+    elif isinstance(value, list) and value and all(isinstance(s, int) and not isinstance(s, bool) and s >= 0
+                                                   for s in value) and len(set(value)) == len(value):
+        return tuple(value)
+    raise fail(f"expected a count in [1, 1000] or a list of distinct non-negative integers, found {value!r}")
+
+
+def _samples(value):
+    if value == 0 or 2 <= value <= 10000:
+        return value
+    raise fail(f"expected 0 (off) or an integer in [2, 10000], found {value!r}")
+
+
+class _Simulate(ConfigModel):
+    duration: Quantity("s", positive=True) = 0.5
+    sample_rate: Quantity("Hz", positive=True) = 51200.0
+    seeds: Annotated[tuple, BeforeValidator(_seeds), WithJsonSchema({"anyOf": [
+        {"type": "integer", "minimum": 1, "maximum": 1000},
+        {"type": "array", "items": {"type": "integer", "minimum": 0}, "minItems": 1, "uniqueItems": True}]})] = (0,)
+    samples: Annotated[int, AfterValidator(_samples), WithJsonSchema({"anyOf": [
+        {"const": 0}, {"type": "integer", "minimum": 2, "maximum": 10000}]})] = Field(
+        0, description="Monte-Carlo samples of the law's uncertainty per condition (0: off; docs/uncertainty.md)")
+
+
+class _Modal(ConfigModel):
+    n_modes: _int_range(1, 200) = 8
+
+
+def _bound(kind: str):
+    """A threshold ``{max: 4}`` (``max_abs``, ``min``) -> its number."""
+
+    def parse(value):
+        if not isinstance(value, dict) or set(value) != {kind} or isinstance(value[kind], bool) \
+                or not isinstance(value[kind], (int, float)):
+            raise fail(f"expected {{{kind}: <number>}}, found {value!r}")
+        return float(value[kind])
+
+    schema = {"type": "object", "properties": {kind: {"type": "number"}}, "required": [kind],
+              "additionalProperties": False}
+    return Annotated[float, BeforeValidator(parse), WithJsonSchema(schema)]
+
+
+class _Thresholds(ConfigModel):
+    """Pass/fail bounds on the scores (DESIGN §6)."""
+
+    lsd_db: _bound("max") | None = None
+    level_diff_db: _bound("max_abs") | None = None
+    band_level_rms_error_db: _bound("max") | None = None
+    shape_correlation: _bound("min") | None = None
+
+
+class RunConfigModel(ConfigModel):
+    """A run configuration (``configs/runs/*.yaml``): the numbers of a pipeline run."""
+
+    fivid_run: Literal[1] = Field(1, alias="fivid-run", description="run-config format version")
+    description: str = ""
+    inputs: _Inputs
+    model: str = Field(description="the FE model config, relative to this file")
+    output: str | None = Field(None, description="output folder, relative to this file (created if missing)")
+    analysis: _Analysis = _Analysis()
+    identify: _Identify = _Identify()
+    modal: _Modal = _Modal()
+    simulate: _Simulate = _Simulate()
+    thresholds: _Thresholds = _Thresholds()
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        sim, analysis = self.simulate, self.analysis
+        if analysis.band[1] > sim.sample_rate / 2:
+            raise fail(f"upper edge {analysis.band[1]:g} Hz is above {sim.sample_rate / 2:g} Hz, the Nyquist frequency "
+                       f"of simulate.sample_rate: the simulated PSD stops there; expected the band's upper edge lowered "
+                       "or simulate.sample_rate raised", at=("analysis", "band"))
+        if (sim.duration - analysis.settle) * sim.sample_rate < _nperseg(self):
+            raise fail(f"{sim.duration:g} s less analysis.settle at {sim.sample_rate:g} Hz gives fewer samples than "
+                       f"analysis.nperseg = {_nperseg(self)}; expected a longer duration or a lower nperseg",
+                       at=("simulate", "duration"))
+        return self
+
+
+def _nperseg(cfg: RunConfigModel) -> int:
+    """analysis.nperseg, or the one default rule on the simulated steady part (duration less settle)."""
+    from fivid.signal.welch import default_nperseg
+
+    a, sim = cfg.analysis, cfg.simulate
+    if a.nperseg is not None:
+        return a.nperseg
+    return default_nperseg(sim.sample_rate, max(0, int((sim.duration - a.settle) * sim.sample_rate)))
 
 
 def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike | None = None) -> RunConfig:
@@ -321,107 +351,55 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
     output : path-like, optional
         Override of the ``output`` key (e.g. from the command line).
     """
-    raw, sha = read_yaml(path, "run configuration")
+    source = config_layer.read_yaml(path, "run configuration")
+    raw = source.data
     base = Path(path).resolve().parent
-    chk = _Checker(path)
-    top = {"fivid-run", "description", "inputs", "model", "output", "analysis", "identify", "modal",
-           "simulate", "thresholds"}
-    chk.section(raw, "", top, {"inputs", "model"} | (set() if output else {"output"}))
-    if raw.get("fivid-run") not in (1, None):
-        chk.add("fivid-run", f"unsupported run-config version {raw.get('fivid-run')!r}; this fivid reads 1")
+    problems = Problems(source)
+    cfg = validate(RunConfigModel, source, problems)
+    if cfg is None:
+        problems.raise_if_any()
+    if output is None and cfg.output is None:
+        problems.add("output", "is required (missing): the output folder (or give one on the command line)")
 
-    inputs = chk.section(raw, "inputs", {"folder", "pattern", "rig_profile"}, {"folder"})
-    folder = _resolve(base, inputs.get("folder", "."))
-    pattern = str(inputs.get("pattern", "*.csv"))
+    folder = _resolve(base, cfg.inputs.folder)
+    pattern = cfg.inputs.pattern
     files: tuple[Path, ...] = ()
-    if "folder" in inputs:
-        if not folder.is_dir():
-            chk.add("inputs.folder", f"input folder {str(folder)!r} does not exist")
-        else:
-            files = tuple(sorted(p for p in folder.iterdir() if p.is_file() and fnmatch.fnmatch(p.name, pattern)))
-            if not files:
-                chk.add("inputs.pattern", f"no file in {str(folder)!r} matches {pattern!r}")
-    profile = inputs.get("rig_profile")
-    if profile is not None and not isinstance(profile, str):
-        chk.add("inputs.rig_profile", f"must be a rig profile name or path, got {profile!r}")
-        profile = None
-    if isinstance(profile, str) and ("/" in profile or profile.endswith((".yaml", ".yml"))):
+    if not folder.is_dir():
+        problems.add("inputs.folder", f"expected an existing folder, found none at {str(folder)!r}")
+    else:
+        files = tuple(sorted(p for p in folder.iterdir() if p.is_file() and fnmatch.fnmatch(p.name, pattern)))
+        if not files:
+            problems.add("inputs.pattern", f"no file in {str(folder)!r} matches {pattern!r}")
+    profile = cfg.inputs.rig_profile
+    if profile is not None and ("/" in profile or profile.endswith((".yaml", ".yml"))):
         resolved = _resolve(base, profile)
         if not resolved.is_file():
-            chk.add("inputs.rig_profile", f"rig profile file {str(resolved)!r} does not exist")
+            problems.add("inputs.rig_profile", f"rig profile file {str(resolved)!r} does not exist")
         profile = str(resolved)
 
-    model = _resolve(base, raw.get("model", ""))
-    if "model" in raw and not model.is_file():
-        chk.add("model", f"model file {str(model)!r} does not exist")
+    model = _resolve(base, cfg.model)
+    if not model.is_file():
+        problems.add("model", f"model file {str(model)!r} does not exist")
 
-    out = Path(output) if output is not None else _resolve(base, raw.get("output", "out"))
+    out = Path(output) if output is not None else _resolve(base, cfg.output or "out")
     if out.exists() and not out.is_dir():
-        chk.add("output", f"output {str(out)!r} exists and is not a folder; name a folder (it is created if missing)")
+        problems.add("output", f"output {str(out)!r} exists and is not a folder; name a folder (it is created if "
+                               "missing)")
+    problems.raise_if_any()
 
-    analysis = chk.section(raw, "analysis", {"band", "nperseg", "settle"})
-    band_raw = analysis.get("band", ["100 Hz", "20 kHz"])
-    band = (0.0, 0.0)
-    if not isinstance(band_raw, (list, tuple)) or len(band_raw) != 2:
-        chk.add("analysis.band", f"must be [f_lo, f_hi] with units, e.g. [500 Hz, 20 kHz], got {band_raw!r}")
-    else:
-        lo = chk.quantity({"v": band_raw[0]}, "analysis.band[0]", "v", "Hz")
-        hi = chk.quantity({"v": band_raw[1]}, "analysis.band[1]", "v", "Hz")
-        if lo is not None and hi is not None:
-            if not lo < hi:
-                chk.add("analysis.band", f"f_lo must be below f_hi, got {band_raw!r}")
-            band = (lo, hi)
-    nperseg = chk.integer(analysis, "analysis.nperseg", "nperseg", 256, 64, 2**22) if "nperseg" in analysis else None
-    settle = chk.quantity(analysis, "analysis.settle", "settle", "s", default="0 s", positive=False)
-    if settle is not None and settle < 0:
-        chk.add("analysis.settle", f"must be >= 0 s, got {analysis.get('settle')!r}")
-
-    identify = _identify_options(chk, raw)
-
-    modal = chk.section(raw, "modal", {"n_modes"})
-    n_modes = chk.integer(modal, "modal.n_modes", "n_modes", 8, 1, 200)
-
-    sim = chk.section(raw, "simulate", {"duration", "sample_rate", "seeds"})
-    duration = chk.quantity(sim, "simulate.duration", "duration", "s", default="0.5 s")
-    sample_rate = chk.quantity(sim, "simulate.sample_rate", "sample_rate", "Hz", default="51.2 kHz")
-    seeds_raw = sim.get("seeds", 1)
-    if isinstance(seeds_raw, int) and not isinstance(seeds_raw, bool) and 1 <= seeds_raw <= 1000:
-        seeds = tuple(range(seeds_raw))
-    elif isinstance(seeds_raw, list) and seeds_raw and all(isinstance(s, int) and s >= 0 for s in seeds_raw) \
-            and len(set(seeds_raw)) == len(seeds_raw):
-        seeds = tuple(seeds_raw)
-    else:
-        chk.add("simulate.seeds", f"must be a count in [1, 1000] or a list of distinct non-negative integers, got {seeds_raw!r}")
-        seeds = (0,)
-    if sample_rate and band[1] > sample_rate / 2:
-        chk.add("analysis.band", f"upper edge {band[1]:g} Hz is above {sample_rate / 2:g} Hz, the Nyquist frequency of "
-                f"simulate.sample_rate = {sim.get('sample_rate', '51.2 kHz')!r}: the simulated PSD stops there; lower "
-                "the band's upper edge or raise simulate.sample_rate")
-    if nperseg is None:  # the one default rule (fivid.signal.welch.default_nperseg) on the simulated steady part
-        from fivid.signal.welch import default_nperseg
-        nperseg = default_nperseg(sample_rate, (duration - (settle or 0.0)) * sample_rate) if duration and sample_rate \
-            else 256
-    if duration is not None and nperseg and sample_rate and (duration - (settle or 0.0)) * sample_rate < nperseg:
-        chk.add("simulate.duration", f"{sim.get('duration')!r} less analysis.settle at {sample_rate:g} Hz gives "
-                f"fewer samples than analysis.nperseg = {nperseg}; lengthen it or lower nperseg")
-
-    thr_node = chk.section(raw, "thresholds", set(_SCORE_KINDS))
+    identify = cfg.identify.model_dump(exclude_unset=True)
+    for name in ("band", "tare", "forms"):
+        if identify.get(name) is not None:
+            identify[name] = tuple(identify[name])
     thresholds = []
-    for name, spec in thr_node.items():
-        if name not in _SCORE_KINDS:
-            continue
-        kind = _SCORE_KINDS[name]
-        if not isinstance(spec, dict) or set(spec) != {kind} or isinstance(spec[kind], bool) \
-                or not isinstance(spec[kind], (int, float)):
-            chk.add(f"thresholds.{name}", f"must be {{{kind}: <number>}}, got {spec!r}")
-            continue
-        thresholds.append(Threshold(name, kind, float(spec[kind])))
-    chk.raise_if_any()
+    for name in (raw.get("thresholds") or {}):  # in the order of the file
+        thresholds.append(Threshold(name, _SCORE_KINDS[name], getattr(cfg.thresholds, name)))
+    a, sim = cfg.analysis, cfg.simulate
     return RunConfig(
-        path=Path(path), sha256=sha, raw=raw, input_folder=folder, input_pattern=pattern, input_files=files,
-        rig_profile=profile, model=model, output=out, band=band, nperseg=nperseg, settle=settle or 0.0,
-        identify=identify,
-        n_modes=n_modes, duration=duration, sample_rate=sample_rate, seeds=seeds, thresholds=tuple(thresholds),
+        path=Path(path), sha256=source.sha256, raw=raw, input_folder=folder, input_pattern=pattern, input_files=files,
+        rig_profile=profile, model=model, output=out, band=tuple(a.band), nperseg=_nperseg(cfg), settle=a.settle,
+        identify=identify, n_modes=cfg.modal.n_modes, duration=sim.duration, sample_rate=sim.sample_rate,
+        seeds=tuple(sim.seeds), thresholds=tuple(thresholds),
     )
 
 

@@ -25,19 +25,22 @@ Every problem raises :class:`~fivid.errors.ConfigError` with the file, line and 
 from __future__ import annotations
 
 import copy
+import functools
 import hashlib
 import json
+import re
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Annotated, Any, Literal, Mapping
 
 import numpy as np
+from pydantic import BeforeValidator, Field, model_validator
 
+from fivid.config_layer import ConfigModel, Name, Number, Quantity, fail, from_mapping, read_yaml, validate
 from fivid.errors import ConfigError
-from fivid.fe.config import _quantity  # one quantity check (file, line, key) for every model-side config
 
-__all__ = ["Study", "AXES", "load_study", "STUDY_VERSION"]
+__all__ = ["Study", "StudyConfig", "AXES", "load_study", "STUDY_VERSION"]
 
 STUDY_VERSION = 1
 #: sweepable condition -> (SI units, long name); `seed` is an integer
@@ -51,10 +54,6 @@ AXES = {
     "mesh": ("1", "mesh refinement factor (divisions x factor)"),
     "time_step": ("1", "time step as a fraction of the critical step"),
 }
-_TOP = {"fivid-study", "name", "description", "system", "sweep", "cea", "points", "quick"}
-_POINT_TASKS = {"modes", "transient", "psd", "roughness"}
-_LUMPED = {"hoffmann": {"mass": "kg", "k1": "N m-1", "k2": "N m-1", "k3": "N m-1", "damping": "N s m-1",
-                        "preload": "N", "belt_velocity": "m s-1"}}
 
 
 @dataclass(frozen=True)
@@ -136,230 +135,280 @@ def _merge(base: dict, over: Mapping, path: str = "") -> dict:
     return out
 
 
+# ---------------------------------------------------------------------------------------------- typed sections
+
+
+def _as_values(spec):
+    """A bare list is ``{values: [...]}``."""
+    return {"values": list(spec)} if isinstance(spec, (list, tuple)) else spec
+
+
+@functools.lru_cache(maxsize=None)
+def _axis(units: str):
+    """The model of a sweep axis (or the CEA's mu) in ``units``: ``{values}`` or ``{start, stop, num, spacing}``."""
+    q = Quantity(units, bare_is_si=True)
+
+    class Axis(ConfigModel):
+        values: Annotated[list[q], Field(min_length=1)] | None = None
+        start: q | None = None
+        stop: q | None = None
+        num: Annotated[int, Field(ge=1)] | None = None
+        spacing: Literal["linear", "log"] = "linear"
+
+        @model_validator(mode="after")
+        def _one_way(self):
+            given = self.model_fields_set
+            if self.values is not None:
+                if given - {"values"}:
+                    raise fail("give either values or start/stop/num, not both")
+                return self
+            missing = [k for k in ("start", "stop", "num") if getattr(self, k) is None]
+            if missing:
+                raise fail(f"missing {missing[0]!r}: expected values, or start, stop and num")
+            if self.spacing == "log" and not (self.start > 0 and self.stop > 0):
+                raise fail(f"log spacing needs start and stop > 0, found {self.start:g} and {self.stop:g}")
+            return self
+
+        def array(self) -> np.ndarray:
+            if self.values is not None:
+                return np.array(self.values)
+            make = np.geomspace if self.spacing == "log" else np.linspace
+            return make(self.start, self.stop, self.num)
+
+    Axis.__name__ = Axis.__qualname__ = f"Axis_{re.sub(r'[^A-Za-z0-9]', '_', units)}"
+    return Annotated[Axis, BeforeValidator(_as_values)]
+
+
+class _Sweep(ConfigModel):
+    """Axes with units; the points are their grid (or, with ``combine: zip``, element-wise)."""
+
+    combine: Literal["grid", "zip"] = "grid"
+    normal_load: _axis("N") | None = None
+    sliding_velocity: _axis("m s-1") | None = None
+    roughness_ra: _axis("m") | None = None
+    mu: _axis("1") | None = None
+    mu_static: _axis("1") | None = None
+    seed: _axis("1") | None = None
+    mesh: _axis("1") | None = None
+    time_step: _axis("1") | None = None
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        sizes = {}
+        for name in AXES:
+            axis = getattr(self, name)
+            if axis is None:
+                continue
+            vals = axis.array()
+            sizes[name] = vals.size
+            if name == "seed":
+                if np.any(vals != np.round(vals)) or np.any(vals < 0):
+                    raise fail("expected seeds as whole numbers >= 0", at=("seed",))
+            elif name in ("normal_load", "sliding_velocity", "mesh") and np.any(vals <= 0):
+                raise fail(f"expected {name} > 0, found {vals.min():g}", at=(name,))
+            elif np.any(vals < 0):
+                raise fail(f"expected {name} >= 0, found {vals.min():g}", at=(name,))
+            if name == "time_step" and np.any((vals <= 0) | (vals > 1)):
+                raise fail("expected a fraction of the critical step: 0 < value <= 1", at=("time_step",))
+        if self.combine == "zip" and len(set(sizes.values())) > 1:
+            raise fail("zip needs axes of one length, found " + ", ".join(f"{k} {v}" for k, v in sizes.items()),
+                       at=("combine",))
+        return self
+
+
+class _Hoffmann(ConfigModel):
+    """Parameters of the 2-DOF mode-coupling model (:class:`fivid.study.lumped.HoffmannSystem`)."""
+
+    mass: Quantity("kg", bare_is_si=True) = None
+    k1: Quantity("N m-1", bare_is_si=True) = None
+    k2: Quantity("N m-1", bare_is_si=True) = None
+    k3: Quantity("N m-1", bare_is_si=True) = None
+    damping: Quantity("N s m-1", bare_is_si=True) = None
+    preload: Quantity("N", bare_is_si=True) = None
+    belt_velocity: Quantity("m s-1", bare_is_si=True) = None
+
+
+class _System(ConfigModel):
+    """The system of every point: an FE model config (relative to the study file) or a lumped model."""
+
+    model: str | None = None
+    lumped: Literal["hoffmann"] | None = None
+    parameters: _Hoffmann = _Hoffmann()
+
+    @model_validator(mode="after")
+    def _exactly_one(self):
+        if (self.model is None) == (self.lumped is None):
+            raise fail("give exactly one of 'model' (an FE model config) and 'lumped'")
+        return self
+
+
+class _Cea(ConfigModel):
+    mu: _axis("1")
+    normal_load: Quantity("N", bare_is_si=True) | None = None
+
+    @model_validator(mode="after")
+    def _increasing(self):
+        mu = self.mu.array()
+        if np.any(np.diff(mu) <= 0) or np.any(mu < 0):
+            raise fail("expected the CEA's mu >= 0 and increasing", at=("mu",))
+        return self
+
+
+class _Modes(ConfigModel):
+    n_modes: Annotated[int, Field(ge=1)] = 10
+
+
+class _Transient(ConfigModel):
+    duration: Quantity("s", positive=True, bare_is_si=True) = 0.1
+    sample_rate: Quantity("Hz", positive=True, bare_is_si=True) = 51200.0
+    perturbation: Quantity("m", bare_is_si=True) | None = None
+    law: str | None = Field(None, description="friction law file (netCDF), relative to the study file")
+    coulomb_reference: bool = False
+
+
+class _Psd(ConfigModel):
+    nperseg: Annotated[int, Field(ge=16)] = 1024
+    band: Annotated[list[Quantity("Hz", bare_is_si=True)], Field(min_length=2, max_length=2)] | None = None
+
+
+class _Roughness(ConfigModel):
+    """seed 003's rough pair (:mod:`fivid.study.roughness`)."""
+
+    correlation_length: Quantity("m", positive=True, bare_is_si=True) = None
+    profile_step: Quantity("m", positive=True, bare_is_si=True) = None
+    seeds: Annotated[list[Annotated[int, Field(ge=0)]], Field(min_length=2, max_length=2,
+                                                              description="lower, upper profile")] = None
+    sensor_every: Annotated[int, Field(ge=1)] = None
+    gs_tolerance: Annotated[Number, Field(gt=0, lt=1)] = None
+    gs_max_iterations: Annotated[int, Field(ge=1)] = None
+    settle_time: Quantity("s", positive=True, bare_is_si=True) = None
+
+
+class _Points(ConfigModel):
+    """The analyses computed at every point."""
+
+    modes: _Modes | None = None
+    transient: _Transient | None = None
+    psd: _Psd | None = None
+    roughness: _Roughness | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _asked_with_defaults(cls, data):  # ``modes:`` with nothing under it asks for the task with its defaults
+        return {k: ({} if v is None else v) for k, v in data.items()} if isinstance(data, dict) else data
+
+
+class StudyConfig(ConfigModel):
+    """A study config (``configs/studies/*.yaml``, ``docs/studies.md``)."""
+
+    fivid_study: Literal[1] = Field(alias="fivid-study", description="study format version")
+    name: Name = "study"
+    description: str = ""
+    system: _System
+    sweep: _Sweep = _Sweep()
+    cea: _Cea | None = None
+    points: _Points = _Points()
+    quick: dict[str, Any] | None = Field(None, description="overrides for --quick (same keys)")
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        lumped, pts = self.system.lumped is not None, self.points
+        if lumped and pts.modes is not None:
+            raise fail("modes are computed for FE models (a lumped model has its closed form)", at=("points", "modes"))
+        if lumped and pts.transient is not None and pts.transient.law is not None:
+            raise fail("a lumped model takes mu from the sweep, not a law file", at=("points", "transient", "law"))
+        if pts.transient is not None and pts.transient.coulomb_reference and pts.transient.law is None:
+            raise fail("compares a law with its mu0: give 'law' too", at=("points", "transient", "coulomb_reference"))
+        if pts.psd is not None:
+            if pts.transient is None:
+                raise fail("a PSD needs a transient at each point", at=("points", "psd"))
+            nyquist = pts.transient.sample_rate / 2
+            if pts.psd.band is not None and not 0 <= pts.psd.band[0] < pts.psd.band[1] <= nyquist:
+                raise fail(f"expected 0 <= low < high <= Nyquist ({nyquist:g} Hz), found {pts.psd.band[0]:g}, "
+                           f"{pts.psd.band[1]:g}", at=("points", "psd", "band"))
+        if pts.roughness is not None:
+            if lumped:
+                raise fail("the rough pair is an FE model: give system.model (e.g. ../models/rough_pair_short.yaml)",
+                           at=("points", "roughness"))
+            if pts.transient is None:
+                raise fail("a rough-pair point is a transient: give points.transient (duration, sample_rate)",
+                           at=("points", "roughness"))
+        if lumped and ({"mesh", "time_step"} & self.sweep.model_fields_set):
+            raise fail("mesh and time_step axes refine an FE model, not a lumped one", at=("sweep",))
+        if lumped and pts.transient is not None and self.sweep.mu is None:
+            raise fail("a lumped model's transient takes its friction coefficient from a 'mu' axis", at=("sweep",))
+        return self
+
+
 def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = False) -> Study:
     """Read and validate a study config (a file or a mapping; relative model paths from the file's folder)."""
-    from fivid.fe.config import read_config
-
-    data, ctx, origin = read_config(source)
-    base = Path(source).resolve().parent if not isinstance(source, Mapping) else Path.cwd()
-    if not isinstance(data, dict):
-        raise ctx.error("", "a study config is a mapping of keys (see docs/studies.md)")
-    unknown = sorted(set(data) - _TOP)
-    if unknown:
-        raise ctx.error(unknown[0], f"unknown key {unknown[0]!r}; allowed: {', '.join(sorted(_TOP))}")
-    version = data.get("fivid-study")
-    if version != STUDY_VERSION:
-        raise ctx.error("fivid-study", f"expected 'fivid-study: {STUDY_VERSION}' as the format marker, got {version!r}")
+    if isinstance(source, Mapping):
+        src, base = from_mapping(source), Path.cwd()
+    else:
+        src, base = read_yaml(source, "study config"), Path(source).resolve().parent
+    data = src.data
     if quick and isinstance(data.get("quick"), Mapping):
         data = _merge({k: v for k, v in data.items() if k != "quick"}, data["quick"])
-    model_path, lumped = _system(ctx, data.get("system"), base)
-    axes, combine = _sweep(ctx, data.get("sweep") or {})
+    cfg = validate(StudyConfig, src, data=data)
+    model_path, lumped = None, None
+    if cfg.system.model is not None:
+        model_path = (base / cfg.system.model).resolve()
+        if not model_path.is_file():
+            raise src.error("system.model", f"no such model config: {str(model_path)!r}")
+    else:
+        from fivid.study.lumped import HoffmannSystem
+
+        si = cfg.system.parameters.model_dump(exclude_unset=True)
+        try:
+            HoffmannSystem(**si)
+        except ConfigError as exc:
+            raise src.error(exc.key or "system.parameters", exc.message) from None
+        lumped = {"kind": cfg.system.lumped, "parameters": si}
+    axes = {}
+    for name in (data.get("sweep") or {}):  # in the order of the file
+        if name != "combine":
+            vals = getattr(cfg.sweep, name).array()
+            axes[name] = vals.astype(np.int64) if name == "seed" else vals
     cea = None
-    if data.get("cea") is not None:
-        spec = _mapping(ctx, data["cea"], "cea", {"mu", "normal_load"})
-        if "mu" not in spec:
-            raise ctx.error("cea", "the study-level CEA needs 'mu' (values, or start/stop/num)")
-        cea = {"mu": _values(ctx, spec["mu"], "cea.mu", "1")}
-        if "normal_load" in spec:
-            cea["normal_load"] = _quantity(ctx, spec["normal_load"], "cea.normal_load", "N")
-        if np.any(np.diff(cea["mu"]) <= 0) or np.any(cea["mu"] < 0):
-            raise ctx.error("cea.mu", "the CEA's mu must be >= 0 and increasing")
-    points = _points(ctx, data.get("points") or {}, lumped is not None, base)
-    if cea is not None and model_path is not None and "normal_load" not in cea and not _pressed_by_loads(model_path):
-        raise ctx.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N), "
-                               "unless the model's pressure loads press the contact")
-    if lumped is not None and ({"mesh", "time_step"} & set(axes)):
-        raise ctx.error("sweep", "mesh and time_step axes refine an FE model, not a lumped one")
-    if lumped is not None and "transient" in points and "mu" not in axes:
-        raise ctx.error("sweep", "a lumped model's transient takes its friction coefficient from a 'mu' axis")
-    return Study(name=str(data.get("name", "study")), description=str(data.get("description", "")),
-                 model_path=model_path, lumped=lumped, axes=axes, combine=combine, cea=cea, points=points,
-                 source=origin, config=data, quick=quick)
+    if cfg.cea is not None:
+        cea = {"mu": cfg.cea.mu.array()}
+        if cfg.cea.normal_load is not None:
+            cea["normal_load"] = cfg.cea.normal_load
+        if model_path is not None and "normal_load" not in cea and not _pressed_by_loads(model_path):
+            raise src.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N), "
+                                   "unless the model's pressure loads press the contact")
+    points = _points(src, cfg.points, base)
+    return Study(name=cfg.name, description=cfg.description, model_path=model_path, lumped=lumped, axes=axes,
+                 combine=cfg.sweep.combine, cea=cea, points=points, source=src.origin, config=data, quick=quick)
 
 
 def _pressed_by_loads(model_path) -> bool:
     """True when the model config has pressure loads (its contact state under them needs no clamp load)."""
-    import yaml
-
-    with open(model_path, encoding="utf-8") as fh:
-        return bool((yaml.safe_load(fh) or {}).get("loads"))
+    return bool(read_yaml(model_path, "model config").data.get("loads"))
 
 
-def _mapping(ctx, value, key, allowed) -> dict:
-    if not isinstance(value, Mapping):
-        raise ctx.error(key, f"expected a mapping, got {value!r}")
-    bad = sorted(set(value) - set(allowed))
-    if bad:
-        raise ctx.error(f"{key}.{bad[0]}", f"unknown key {bad[0]!r}; allowed: {', '.join(sorted(allowed))}")
-    return dict(value)
-
-
-def _values(ctx, spec, key, units) -> np.ndarray:
-    """``{values: [...]}`` or ``{start, stop, num, spacing: linear|log}`` (or a bare list) -> SI array."""
-    if isinstance(spec, (list, tuple)):
-        spec = {"values": list(spec)}
-    spec = _mapping(ctx, spec, key, {"values", "start", "stop", "num", "spacing"})
-    if "values" in spec:
-        if len(spec) > 1:
-            raise ctx.error(key, "give either values or start/stop/num, not both")
-        vals = spec["values"]
-        if not isinstance(vals, (list, tuple)) or not vals:
-            raise ctx.error(f"{key}.values", f"expected a non-empty list, got {vals!r}")
-        return np.array([_quantity(ctx, v, f"{key}.values[{i}]", units) for i, v in enumerate(vals)])
-    missing = sorted({"start", "stop", "num"} - set(spec))
-    if missing:
-        raise ctx.error(key, f"missing {missing[0]!r}: give values, or start, stop and num")
-    lo = _quantity(ctx, spec["start"], f"{key}.start", units)
-    hi = _quantity(ctx, spec["stop"], f"{key}.stop", units)
-    num = spec["num"]
-    if isinstance(num, bool) or not isinstance(num, int) or num < 1:
-        raise ctx.error(f"{key}.num", f"expected a whole number >= 1, got {num!r}")
-    spacing = spec.get("spacing", "linear")
-    if spacing == "log":
-        if not (lo > 0 and hi > 0):
-            raise ctx.error(key, f"log spacing needs start and stop > 0, got {lo:g} and {hi:g}")
-        return np.geomspace(lo, hi, num)
-    if spacing != "linear":
-        raise ctx.error(f"{key}.spacing", f"expected 'linear' or 'log', got {spacing!r}")
-    return np.linspace(lo, hi, num)
-
-
-def _system(ctx, spec, base: Path):
-    if spec is None:
-        raise ctx.error("system", "missing: give {model: PATH} (an FE model config) or {lumped: hoffmann, ...}")
-    spec = _mapping(ctx, spec, "system", {"model", "lumped", "parameters"})
-    if ("model" in spec) == ("lumped" in spec):
-        raise ctx.error("system", "give exactly one of 'model' (an FE model config) and 'lumped'")
-    if "model" in spec:
-        path = (base / str(spec["model"])).resolve()
-        if not path.is_file():
-            raise ctx.error("system.model", f"no such model config: {str(path)!r}")
-        return path, None
-    kind = spec["lumped"]
-    if kind not in _LUMPED:
-        raise ctx.error("system.lumped", f"unknown lumped model {kind!r}; allowed: {', '.join(_LUMPED)}")
-    units = _LUMPED[kind]
-    params = _mapping(ctx, spec.get("parameters") or {}, "system.parameters", set(units))
-    si = {k: _quantity(ctx, v, f"system.parameters.{k}", units[k]) for k, v in params.items()}
-    from fivid.study.lumped import HoffmannSystem
-
-    try:
-        HoffmannSystem(**si)
-    except ConfigError as exc:
-        raise ctx.error(exc.key or "system.parameters", exc.message) from None
-    return None, {"kind": kind, "parameters": si}
-
-
-def _sweep(ctx, spec):
-    spec = dict(_mapping(ctx, spec, "sweep", set(AXES) | {"combine"}))
-    combine = spec.pop("combine", "grid")
-    if combine not in ("grid", "zip"):
-        raise ctx.error("sweep.combine", f"expected 'grid' or 'zip', got {combine!r}")
-    axes = {}
-    for name, s in spec.items():
-        vals = _values(ctx, s, f"sweep.{name}", AXES[name][0])
-        if name == "seed":
-            if np.any(vals != np.round(vals)) or np.any(vals < 0):
-                raise ctx.error("sweep.seed", "seeds are whole numbers >= 0")
-            vals = vals.astype(np.int64)
-        elif name in ("normal_load", "sliding_velocity", "mesh") and np.any(vals <= 0):
-            raise ctx.error(f"sweep.{name}", f"{name} must be > 0, got {vals.min():g}")
-        elif np.any(vals < 0):
-            raise ctx.error(f"sweep.{name}", f"{name} must be >= 0, got {vals.min():g}")
-        if name == "time_step" and np.any((vals <= 0) | (vals > 1)):
-            raise ctx.error("sweep.time_step", "a fraction of the critical step: 0 < value <= 1")
-        axes[name] = vals
-    if combine == "zip" and len({v.size for v in axes.values()}) > 1:
-        raise ctx.error("sweep.combine", "zip needs axes of one length: " +
-                        ", ".join(f"{k} {v.size}" for k, v in axes.items()))
-    return axes, combine
-
-
-def _points(ctx, spec, lumped: bool, base: Path) -> dict:
-    spec = _mapping(ctx, spec, "points", _POINT_TASKS)
+def _points(src, spec: _Points, base: Path) -> dict:
+    """The per-point task settings in SI, as the tasks take them (only the keys given, beside the defaults)."""
     out = {}
-    if "modes" in spec:
-        if lumped:
-            raise ctx.error("points.modes", "modes are computed for FE models (a lumped model has its closed form)")
-        m = _mapping(ctx, spec["modes"] or {}, "points.modes", {"n_modes"})
-        n = m.get("n_modes", 10)
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ctx.error("points.modes.n_modes", f"expected a whole number >= 1, got {n!r}")
-        out["modes"] = {"n_modes": n}
-    if "transient" in spec:
-        t = _mapping(ctx, spec["transient"] or {}, "points.transient",
-                     {"duration", "sample_rate", "perturbation", "law", "coulomb_reference"})
-        tr = {"duration": _quantity(ctx, t.get("duration", "0.1 s"), "points.transient.duration", "s"),
-              "sample_rate": _quantity(ctx, t.get("sample_rate", "51.2 kHz"), "points.transient.sample_rate", "Hz")}
-        if not (tr["duration"] > 0 and tr["sample_rate"] > 0):
-            raise ctx.error("points.transient", "duration and sample_rate must be > 0")
-        if "perturbation" in t:
-            tr["perturbation"] = _quantity(ctx, t["perturbation"], "points.transient.perturbation", "m")
-        if "law" in t:
-            if lumped:
-                raise ctx.error("points.transient.law", "a lumped model takes mu from the sweep, not a law file")
-            law = (base / str(t["law"])).resolve()
+    if spec.modes is not None:
+        out["modes"] = {"n_modes": spec.modes.n_modes}
+    if spec.transient is not None:
+        t = spec.transient
+        tr = {"duration": t.duration, "sample_rate": t.sample_rate}
+        if t.perturbation is not None:
+            tr["perturbation"] = t.perturbation
+        if t.law is not None:
+            law = (base / t.law).resolve()
             if not law.is_file():
-                raise ctx.error("points.transient.law", f"no such law file: {str(law)!r}")
+                raise src.error("points.transient.law", f"no such law file: {str(law)!r}")
             tr["law"] = str(law)
-        if t.get("coulomb_reference"):
-            if "law" not in tr:
-                raise ctx.error("points.transient.coulomb_reference", "compares a law with its mu0: give 'law' too")
+        if t.coulomb_reference:
             tr["coulomb_reference"] = True
         out["transient"] = tr
-    if "psd" in spec:
-        if "transient" not in out:
-            raise ctx.error("points.psd", "a PSD needs a transient at each point")
-        p = _mapping(ctx, spec["psd"] or {}, "points.psd", {"nperseg", "band"})
-        nps = p.get("nperseg", 1024)
-        if isinstance(nps, bool) or not isinstance(nps, int) or nps < 16:
-            raise ctx.error("points.psd.nperseg", f"expected a whole number >= 16, got {nps!r}")
-        psd = {"nperseg": nps}
-        if "band" in p:
-            b = p["band"]
-            if not isinstance(b, (list, tuple)) or len(b) != 2:
-                raise ctx.error("points.psd.band", f"expected [low, high], got {b!r}")
-            lo, hi = (_quantity(ctx, v, f"points.psd.band[{i}]", "Hz") for i, v in enumerate(b))
-            if not 0 <= lo < hi <= out["transient"]["sample_rate"] / 2:
-                raise ctx.error("points.psd.band", f"need 0 <= low < high <= Nyquist "
-                                                   f"({out['transient']['sample_rate'] / 2:g} Hz), got {lo:g}, {hi:g}")
-            psd["band"] = (lo, hi)
-        out["psd"] = psd
-    if "roughness" in spec:
-        out["roughness"] = _roughness_task(ctx, spec["roughness"] or {}, lumped, out)
-    return out
-
-
-def _roughness_task(ctx, spec, lumped: bool, points: dict) -> dict:
-    """``points.roughness`` (seed 003's rough pair, :mod:`fivid.study.roughness`) in SI."""
-    key = "points.roughness"
-    if lumped:
-        raise ctx.error(key, "the rough pair is an FE model: give system.model (e.g. ../models/rough_pair_short.yaml)")
-    if "transient" not in points:
-        raise ctx.error(key, "a rough-pair point is a transient: give points.transient (duration, sample_rate)")
-    r = _mapping(ctx, spec, key, {"correlation_length", "profile_step", "seeds", "sensor_every", "gs_tolerance",
-                                  "gs_max_iterations", "settle_time"})
-    out = {}
-    for name, units in (("correlation_length", "m"), ("profile_step", "m"), ("settle_time", "s")):
-        if name in r:
-            out[name] = _quantity(ctx, r[name], f"{key}.{name}", units)
-            if not out[name] > 0:
-                raise ctx.error(f"{key}.{name}", f"expected a positive quantity, got {r[name]!r}")
-    for name in ("sensor_every", "gs_max_iterations"):
-        if name in r:
-            v = r[name]
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ctx.error(f"{key}.{name}", f"expected a whole number >= 1, got {v!r}")
-            out[name] = v
-    if "gs_tolerance" in r:
-        v = r["gs_tolerance"]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
-            raise ctx.error(f"{key}.gs_tolerance", f"expected a number in (0, 1), got {v!r}")
-        out["gs_tolerance"] = float(v)
-    if "seeds" in r:
-        v = r["seeds"]
-        if (not isinstance(v, (list, tuple)) or len(v) != 2
-                or any(isinstance(s, bool) or not isinstance(s, int) or s < 0 for s in v)):
-            raise ctx.error(f"{key}.seeds", f"expected two whole numbers >= 0 (lower, upper profile), got {v!r}")
-        out["seeds"] = list(v)
+    if spec.psd is not None:
+        out["psd"] = {"nperseg": spec.psd.nperseg}
+        if spec.psd.band is not None:
+            out["psd"]["band"] = tuple(spec.psd.band)
+    if spec.roughness is not None:
+        out["roughness"] = spec.roughness.model_dump(exclude_unset=True)
     return out
