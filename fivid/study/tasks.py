@@ -134,10 +134,9 @@ def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None):
 
     gw = False
     if roughness_ra is not None:
-        import yaml
+        from fivid.config_layer import read_yaml
 
-        with open(path, encoding="utf-8") as fh:
-            raw = yaml.safe_load(fh) or {}
+        raw = read_yaml(path, "model config").data
         gw = any(isinstance(c.get("normal"), dict) and c["normal"].get("law") == "greenwood-williamson"
                  for c in raw.get("contacts") or [])
     if factor == 1.0 and not gw:
