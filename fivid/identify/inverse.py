@@ -45,6 +45,7 @@ class InverseAmplitude:
     peaks: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
+        """A JSON-ready dict: amplitudes [-], band [Hz], PSD levels and the iterations of the search."""
         return {
             "run_id": self.run_id,
             "band": list(self.band),
