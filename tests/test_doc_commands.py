@@ -35,7 +35,6 @@ selector, a body's ``grading``, a contact's ``rigid`` master) is placed into the
 
 from __future__ import annotations
 
-import copy
 import doctest
 import os
 import re
@@ -267,7 +266,7 @@ def _run(text: str, cwd: Path, where: str, status: int, expected: str | None) ->
                FIVID_DOC_PYTHON=sys.executable, NO_COLOR="1")
     script = 'fivid() { "$FIVID_DOC_PYTHON" -m fivid "$@"; }\n' + text + "\n"
     proc = subprocess.run(["bash", "-c", script], cwd=cwd, env=env, capture_output=True, text=True,
-                          timeout=3600)
+                          timeout=3600, check=False)
     output = proc.stdout + proc.stderr
     assert proc.returncode == status, (
         f"{where}: `{text}` exited {proc.returncode}, the docs expect {status}\n--- output ---\n{output[-4000:]}")

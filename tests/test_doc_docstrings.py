@@ -69,8 +69,8 @@ def test_docstring_examples():
     assert not failures, "\n".join(failures)
 
 
-_NUMPY_DEFAULTS = dict(precision=8, threshold=1000, edgeitems=3, linewidth=75, suppress=False, nanstr="nan",
-                       infstr="inf", sign="-", floatmode="maxprec", legacy=False)
+_NUMPY_DEFAULTS = {"precision": 8, "threshold": 1000, "edgeitems": 3, "linewidth": 75, "suppress": False,
+                   "nanstr": "nan", "infstr": "inf", "sign": "-", "floatmode": "maxprec", "legacy": False}
 
 
 def _has_doc(obj) -> bool:

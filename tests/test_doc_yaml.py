@@ -26,8 +26,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-
-from test_doc_commands import ROOT, Block, all_blocks
+from test_doc_commands import ROOT, all_blocks
 
 YAML_LANGS = {"yaml", "yml"}
 COARSE = "configs/models/triboair_coarse.yaml"
