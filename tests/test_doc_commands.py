@@ -15,8 +15,8 @@ written (comments dropped, whitespace collapsed), with the reason:
 - ``slow(reason, quick=..., run=...)``: long (a full study, the full pipeline, a long simulation): it runs in
   ``test_documented_commands_slow`` (``-m slow``), as written or, for a study of 15-25 min, as ``run`` (its
   ``--quick`` variant); ``quick``, when given, is the documented quick substitution the fast test runs.
-- ``skip(reason)``: cannot run here (network, root, apt, a cluster, cron), or needs what a skipped or
-  Python example makes; never executed.
+- ``skip(reason)``: cannot run here (network, root, apt, a cluster, cron), needs what a skipped or Python
+  example makes, or is a 20-min study whose ``--quick`` line beside it runs; never executed.
 
 ``test_decisions_match_the_docs`` asserts that every listed command is in the docs, so the skipped list is
 exactly what the docs hold: a new block is executed unless somebody lists it here with a reason.
@@ -83,7 +83,10 @@ _QUICK_SIM = ('the 1 mm rig for 0.1 s is minutes of solver time (docs/solver.md:
               'test runs the 2 mm variant triboair_coarse.yaml for 5 ms')
 
 DECISIONS: dict[str, Decision] = {
-    # README.md
+    # README.md (and docs/studies.md: the same command)
+    "fivid study configs/studies/hoffmann_mu_sweep.yaml -o out/hoffmann": slow(
+        "a 5-point study with transients (~1 min on a loaded 2-core machine, most of it dask start-up); the "
+        "fast test runs docs/studies.md's --quick variant of the same study"),
     f'python -m pip install -e ".[all,test]" -c constraints.txt && {_PIPELINE}': skip(
         "pip install needs the network (CI installs before the tests); the pipeline command after it is "
         "docs/pipeline.md's, run by the slow test"),
@@ -131,9 +134,6 @@ DECISIONS: dict[str, Decision] = {
         "(--workers 0, documented in docs/studies.md)",
         quick="fivid study configs/studies/hoffmann_mu_sweep.yaml -o out/hoffmann-q --quick --workers 0"),
 }
-DECISIONS["fivid study configs/studies/hoffmann_mu_sweep.yaml -o out/hoffmann"] = slow(
-    "a 5-point study with transients (~1 min on a loaded 2-core machine, most of it dask start-up); the fast "
-    "test runs the --quick variant of the same study")
 
 #: documented failures: command -> exit status the docs show
 EXIT_CODES = {"fivid profile dektak-1.csv --window 468 733": 2}
@@ -332,6 +332,12 @@ def test_decisions_match_the_docs():
     skipped = {c.key for c in all_commands() if DECISIONS.get(c.key) and DECISIONS[c.key].fast is None
                and DECISIONS[c.key].slow is None}
     assert skipped == {k for k, d in DECISIONS.items() if d.fast is None and d.slow is None}
+
+
+def test_every_command_block_has_commands():
+    """A command block the parser reads as empty would pass without running anything."""
+    empty = [f"{b.doc}:{b.line}" for b in all_blocks() if b.lang in COMMAND_LANGS and not commands(b)]
+    assert not empty, f"command blocks with no command: {empty}"
 
 
 def test_command_blocks_are_tagged():
