@@ -1,6 +1,8 @@
 """Every shell example in README.md and docs/*.md runs; every YAML example loads through its config loader.
 
-Command blocks are the fenced blocks tagged ``bash``, ``sh``, ``shell``, ``console`` (``$ `` lines are
+Python examples (```python blocks) run too, each as one script in the document's directory, in document order
+with the commands (a script may read what a command above wrote); listed in ``DECISIONS`` as ``python: <first
+line>``. Command blocks are the fenced blocks tagged ``bash``, ``sh``, ``shell``, ``console`` (``$ `` lines are
 commands, the lines after one its documented output) and ``crontab`` (the command after the five time fields).
 An untagged block that starts like a command (``fivid ``, ``$ ``, ``python ``) is an error: tag it, or tag it
 ``text`` when it is a synopsis. A document's commands run in order, in one temporary directory per document
@@ -124,7 +126,12 @@ DECISIONS: dict[str, Decision] = {
         "tests/test_roughness.py::test_a_rough_run_goes_through_fivid_identify (slow) runs that route"),
     "fivid simulate configs/models/triboair_coarse.yaml --law law.nc ...": skip(
         "'...': the options of docs/solver.md's command, with the law of the skipped command above"),
+    "python: from fivid.fe import load_model": skip(
+        "needs the reader's profilometer traces (lower_trace.csv, upper_trace.csv) and 0.12 s rough-pair "
+        "simulations; tests/test_roughness.py::test_a_rough_run_goes_through_fivid_identify (slow) runs it"),
     # docs/solver.md
+    "python: from fivid.solver import simulate, critical_time_step, time_step_study": slow(
+        "a 0.05 s simulation of the coarse rig (tens of seconds)"),
     _SIM: slow(_QUICK_SIM, quick=_SIM.replace("triboair.yaml", "triboair_coarse.yaml").replace('"0.1 s"', '"5 ms"')),
     _SIM_LAW: slow(_QUICK_SIM, quick=_SIM_LAW.replace("triboair.yaml", "triboair_coarse.yaml")
                    .replace('"0.1 s"', '"5 ms"')),
@@ -190,9 +197,12 @@ class Command:
     line: int
     text: str
     expected: str | None
+    lang: str = "bash"
 
     @property
     def key(self) -> str:
+        if self.lang == "python":  # a Python example: by its first line
+            return "python: " + self.text.strip().splitlines()[0]
         return " ".join(re.sub(r"(^|\s)#(\s.*)?$", "", self.text).split())
 
 
@@ -217,6 +227,8 @@ def commands(block: Block) -> list[Command]:
     """The commands of a command block, continuation lines joined."""
     out: list[Command] = []
     lines = block.text.splitlines()
+    if block.lang == "python":
+        return [Command(block.doc, block.line + 1, block.text, None, "python")] if block.text.strip() else []
     if block.lang == "console":
         for k, line in enumerate(lines):
             if line.startswith("$ "):
@@ -246,7 +258,8 @@ def all_blocks() -> list[Block]:
 
 
 def all_commands() -> list[Command]:
-    return [c for b in all_blocks() if b.lang in COMMAND_LANGS for c in commands(b)]
+    """The commands and Python examples of every document, in document order."""
+    return [c for b in all_blocks() if b.lang in COMMAND_LANGS | {"python"} for c in commands(b)]
 
 
 # ------------------------------------------------------------------------------------------------ running
@@ -261,9 +274,11 @@ def _prepare(cwd: Path, doc: str) -> None:
             _run(step, cwd, f"setup of {doc}", 0, None)
 
 
-def _run(text: str, cwd: Path, where: str, status: int, expected: str | None) -> None:
+def _run(text: str, cwd: Path, where: str, status: int, expected: str | None, lang: str = "bash") -> None:
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p]),
                FIVID_DOC_PYTHON=sys.executable, NO_COLOR="1")
+    if lang == "python":
+        text = f'"$FIVID_DOC_PYTHON" - <<\'FIVID_DOC_EOF\'\n{text}\nFIVID_DOC_EOF'
     script = 'fivid() { "$FIVID_DOC_PYTHON" -m fivid "$@"; }\n' + text + "\n"
     proc = subprocess.run(["bash", "-c", script], cwd=cwd, env=env, capture_output=True, text=True,
                           timeout=3600, check=False)
@@ -299,7 +314,7 @@ def _run_doc(doc: str, mode: str, tmp_path: Path) -> None:
     _prepare(tmp_path, doc)
     for cmd, run in plan:
         _run(run, tmp_path, f"{cmd.doc}:{cmd.line}", EXIT_CODES.get(cmd.key, 0),
-             cmd.expected if run == cmd.text else None)
+             cmd.expected if run == cmd.text else None, cmd.lang if run == cmd.text else "bash")
 
 
 def _docs_with(mode: str) -> list[str]:
