@@ -130,8 +130,6 @@ DECISIONS: dict[str, Decision] = {
         "needs the reader's profilometer traces (lower_trace.csv, upper_trace.csv) and 0.12 s rough-pair "
         "simulations; tests/test_roughness.py::test_a_rough_run_goes_through_fivid_identify (slow) runs it"),
     # docs/solver.md
-    "python: from fivid.solver import simulate, critical_time_step, time_step_study": slow(
-        "a 0.05 s simulation of the coarse rig (tens of seconds)"),
     _SIM: slow(_QUICK_SIM, quick=_SIM.replace("triboair.yaml", "triboair_coarse.yaml").replace('"0.1 s"', '"5 ms"')),
     _SIM_LAW: slow(_QUICK_SIM, quick=_SIM_LAW.replace("triboair.yaml", "triboair_coarse.yaml")
                    .replace('"0.1 s"', '"5 ms"')),
