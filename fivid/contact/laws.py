@@ -82,6 +82,7 @@ class NormalLaw:
 
     @property
     def code(self) -> int:
+        """The law's kind as the integer the contact kernel switches on: 0 rigid, 1 linear, 2 power, 3 table."""
         return _KINDS[self.kind]
 
     @property
@@ -134,6 +135,7 @@ class NormalLaw:
         return (p / self.coefficient) ** (1.0 / self.exponent)
 
     def describe(self) -> str:
+        """One line for logs and reports: the pressure law p(d) [Pa] of the penetration d [m], and its source."""
         if self.kind == "rigid":
             return "rigid (Lagrange multipliers)"
         if self.kind == "linear":
@@ -282,6 +284,7 @@ class TangentialLaw:
                                               self.viscous, float(x)) for x in v.ravel()]).reshape(v.shape)
 
     def describe(self, mu_k: float) -> str:
+        """One line for logs and reports: ``mu_k`` [-], and ``mu_s`` [-], ``v_s`` [m/s], viscous [s/m] when set."""
         parts = [f"mu_k {mu_k:.4g}"]
         if self.mu_static_excess:
             parts.append(f"mu_s {mu_k + self.mu_static_excess:.4g}")
@@ -331,6 +334,7 @@ class RigidSurface:
 
     @property
     def code(self) -> int:
+        """The surface's kind as the integer the contact kernel switches on: 1 line, 2 circle."""
         return 1 if self.kind == "line" else 2
 
     def columns(self) -> list[float]:
@@ -359,6 +363,7 @@ class RigidSurface:
         return out[:, 0], out[:, 1:3], out[:, 3:5], r * out[:, 5]
 
     def describe(self) -> str:
+        """One line for logs and reports: the line or circle's geometry [m], surface velocity [m/s] or speed [rad/s]."""
         if self.kind == "line":
             return (f"rigid line through {np.round(self.point, 9).tolist()} m, normal {np.round(self.normal, 6).tolist()}"
                     f", surface velocity {np.round(self.velocity, 9).tolist()} m/s")

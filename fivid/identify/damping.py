@@ -64,6 +64,7 @@ class ModalPeak:
     fit_message: str = ""
 
     def to_json(self) -> dict:
+        """A JSON-ready dict of the fields: frequencies [Hz], damping ratios [-] and their standard errors."""
         return dict(self.__dict__)
 
 
@@ -85,6 +86,7 @@ class RayleighFit:
         return self.alpha / (2 * w) + self.beta * w / 2
 
     def to_json(self) -> dict:
+        """A JSON-ready dict: ``alpha`` [s-1], ``beta`` [s], their standard errors and covariance, fit statistics."""
         return {
             "alpha": self.alpha, "alpha_stderr": self.alpha_stderr, "alpha_units": "s-1",
             "beta": self.beta, "beta_stderr": self.beta_stderr, "beta_units": "s",
@@ -104,6 +106,7 @@ class DampingIdentification:
     messages: list = field(default_factory=list)
 
     def to_json(self) -> dict:
+        """A JSON-ready dict: the method, band [Hz], every peak and the Rayleigh fit."""
         return {
             "method": self.method,
             "band": list(self.band),
@@ -135,6 +138,7 @@ class DampingIdentification:
         return "\n".join(lines)
 
     def summary(self) -> str:
+        """Human-readable lines: each peak's frequency [Hz] and damping ratios [-], then the Rayleigh fit."""
         lines = [f"damping ({self.method}, band {self.band[0]:g}-{self.band[1]:g} Hz):"]
         for p in self.peaks:
             lines.append(f"  f {p.frequency:10.2f} Hz  zeta half-power {p.zeta_half_power:.4g}"

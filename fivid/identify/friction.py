@@ -55,6 +55,7 @@ class FrictionIdentification:
 
     @property
     def used_runs(self) -> list:
+        """The runs kept for the law (not excluded), in input order."""
         return [r for r in self.runs if r.used]
 
     def selection_table(self) -> list:

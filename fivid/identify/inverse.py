@@ -46,6 +46,7 @@ class InverseAmplitude:
     nperseg: int = 0
 
     def to_json(self) -> dict:
+        """A JSON-ready dict: amplitudes [-], band [Hz], PSD levels and the iterations of the search."""
         return {
             "run_id": self.run_id,
             "band": list(self.band),

@@ -69,6 +69,7 @@ class Task:
 
     @property
     def key(self) -> str:
+        """The task's cache key: sha256 over stage, fivid version, parameters and input digests."""
         return digest({"stage": self.stage, "fivid": __version__, "params": self.params, "inputs": self.inputs})
 
 

@@ -84,6 +84,7 @@ class Threshold:
         return x >= self.value
 
     def describe(self) -> str:
+        """The threshold as an inequality for reports, e.g. ``lsd_db <= 6``."""
         return {"max": f"{self.score} <= {self.value:g}", "max_abs": f"|{self.score}| <= {self.value:g}",
                 "min": f"{self.score} >= {self.value:g}"}[self.kind]
 

@@ -81,6 +81,7 @@ class OutputLock:
         return obj if isinstance(obj, dict) else {}
 
     def acquire(self) -> "OutputLock":
+        """Take the folder's lock (taking over a dead run's stale record); raise LockedError if another run holds it."""
         from filelock import FileLock, Timeout
 
         self.folder.mkdir(parents=True, exist_ok=True)
@@ -121,6 +122,7 @@ class OutputLock:
         return self
 
     def release(self) -> None:
+        """Remove the lock record and release the OS lock (no-op when not held)."""
         if self._lock is None:
             return
         try:

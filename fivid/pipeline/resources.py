@@ -95,6 +95,7 @@ class SimulationSize:
         return int(sum(self.parts.values()))
 
     def describe(self) -> str:
+        """One line: output samples, solver steps and time step [s], estimated memory by part [bytes, human units]."""
         parts = ", ".join(f"{k} {format_bytes(v)}" for k, v in self.parts.items())
         return (f"{self.output_samples:,} output samples, {self.steps:,} solver steps of {self.time_step:.3g} s; "
                 f"memory about {format_bytes(self.bytes)} ({parts})")

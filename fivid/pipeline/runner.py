@@ -50,6 +50,7 @@ class StageStats:
     note: str = ""
 
     def as_dict(self) -> dict:
+        """A JSON-ready dict of the stage's counts and wall time [s] (rounded to ms)."""
         return {"name": self.name, "tasks": self.tasks, "cached": self.cached, "ran": self.ran,
                 "seconds": round(self.seconds, 3), "note": self.note}
 
@@ -77,6 +78,7 @@ class Context:
 
     @property
     def config(self):
+        """The run configuration of the plan."""
         return self.plan.config
 
     def finish(self, task: Task, seconds: float) -> None:
@@ -86,6 +88,7 @@ class Context:
         Interrupted.raise_if_received()
 
     def output(self, stage: str, task: str, label: str) -> Path:
+        """Path of the output ``label`` of task ``task`` of stage ``stage``."""
         return Path(self.tasks[stage][task].outputs[label])
 
 

@@ -67,25 +67,31 @@ class Page:
         self.n_figures = 0
 
     def heading(self, text: str, level: int = 2) -> None:
+        """Append a heading ``<hN>`` with an anchor made from its text."""
         anchor = "".join(c if c.isalnum() else "-" for c in text.lower()).strip("-")
         self.parts.append(f'<h{level} id="{anchor}">{html.escape(text)}</h{level}>')
 
     def paragraph(self, text: str, cls: str | None = None) -> None:
+        """Append a paragraph of text (HTML-escaped), with an optional CSS class."""
         c = f' class="{cls}"' if cls else ""
         self.parts.append(f"<p{c}>{html.escape(text)}</p>")
 
     def raw(self, fragment: str) -> None:
+        """Append an HTML fragment as is (the caller escapes it)."""
         self.parts.append(fragment)
 
     def pre(self, text: str) -> None:
+        """Append preformatted text (HTML-escaped)."""
         self.parts.append(f"<pre>{html.escape(text)}</pre>")
 
     def figure(self, uri: str, caption: str, alt: str) -> None:
+        """Append a numbered figure: an image URI with its caption and alt text."""
         self.n_figures += 1
         self.parts.append(f'<figure><img src="{uri}" alt="{html.escape(alt)}">'
                           f"<figcaption>Figure {self.n_figures}. {html.escape(caption)}</figcaption></figure>")
 
     def render(self) -> str:
+        """The whole self-contained HTML document."""
         return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
                 f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
                 f"<title>{html.escape(self.title)}</title><style>{_CSS}</style></head><body>"

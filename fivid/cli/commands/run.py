@@ -19,6 +19,7 @@ exit status: 0 pass, 3 scores below the configured thresholds, 2 bad input or co
 
 
 def register(subparsers) -> None:
+    """Add the ``run`` sub-command."""
     import argparse
 
     p = subparsers.add_parser("run", help="run the calibration pipeline (cached, locked, on dask)",

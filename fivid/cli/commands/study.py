@@ -17,6 +17,7 @@ or an unexpected failure."""
 
 
 def register(subparsers) -> None:
+    """Add the ``study`` sub-command."""
     import argparse
 
     p = subparsers.add_parser("study", help="run a parametric study (sweep, per-point analyses, regimes, report)",
