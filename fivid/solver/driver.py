@@ -1,6 +1,6 @@
 """The explicit transient solver's driver: validate, choose the step, allocate, run the kernel, wrap the result.
 
-See DESIGN §5 for the method and :mod:`fivid.solver._kernels` for the time loop. The public entry
+See DESIGN §5 for the method and :mod:`fivid.solver._loop_kernels` for the time loop. The public entry
 point is :func:`simulate`.
 """
 

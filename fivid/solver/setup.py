@@ -58,7 +58,8 @@ class Schedule:
 
 @dataclass
 class KernelArrays:
-    """Everything :func:`fivid.solver._kernels.run_steps` needs besides the state and outputs."""
+    """The model's arrays of :func:`fivid.solver._loop_kernels.run_steps` (grouped by
+    :func:`fivid.solver.integrate.loop_arguments`) besides the stencils, the state and the outputs."""
 
     mass: np.ndarray
     minv: np.ndarray
