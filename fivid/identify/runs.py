@@ -30,15 +30,14 @@ import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
 
-__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
-           "default_nperseg", "mains_lines_resolved",
-           "NPERSEG_RULE"]
+__all__ = ["RunAnalysisSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins",
+           "batch_means_interval", "default_nperseg", "mains_lines_resolved", "NPERSEG_RULE"]
 
 _log = logging.getLogger("fivid")
 
 
 @dataclass(frozen=True)
-class RunSettings:
+class RunAnalysisSettings:
     """Settings of the per-run analysis (all recorded in the law file); the band is passed separately.
 
     Parameters
@@ -299,14 +298,14 @@ def _check_units(ds, label):
             )
 
 
-def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=None) -> RunAnalysis:
+def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_function=None) -> RunAnalysis:
     """μ(t) on the steady window of one run: mean with CI, PSD of μp in ``band``, band RMS with stderr.
 
     Parameters
     ----------
     ds : xarray.Dataset
         A RunDataset (SI units).
-    settings : RunSettings
+    settings : RunAnalysisSettings
     band : (float, float)
         Valid band [Hz] (checked against the run's Nyquist frequency).
     transfer_function : xarray.DataArray, optional
