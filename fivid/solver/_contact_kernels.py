@@ -157,30 +157,10 @@ def _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt):
 
 
 @kernel
-def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
-                  pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol):
-    """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
-
-    On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that every active slave
-    node obeys its pair's normal law (rigid: no penetration of its master; linear/power: the multiplier equals
-    ``A p(d)`` at the corrected penetration ``d``, ``A`` its tributary area ``s_area``) and the tangential
-    multiplier obeys Coulomb's law with static and kinetic coefficients (stick: zero relative tangential
-    increment over the step while ``|lam_t| <= mu_s lam_n``; slip: ``|lam_t| = mu(v) lam_n``). Normal and
-    tangential multipliers of all slave nodes are iterated together by projected Gauss-Seidel until the
-    largest correction of a sweep moves no node pair by more than ``tol`` [m]. ``mu[k]`` is the kinetic
-    coefficient of slave ``k`` now (``mu0 + mu_p(t)``); ``pair_par`` the pairs' law rows and ``law_tab`` their
-    tables (:mod:`fivid.contact._kernels`); a rigid master (line, circle) moves its surface at the ramped speed at
-    ``t_new`` [s], the end of the step. ``wmat`` empty: lumped inverse mass ``minv_c``; else the dense inverse
-    mass of the contact dofs of a reduced system (:func:`_apply_contact_force`).
-
-    Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
-    force on slave ``k`` along ``n`` and ``t``, on entry the previous step's values (warm start: applied first,
-    then projected and iterated, so the converged result does not depend on it beyond the tolerance) (the master
-    nodes get ``-N_j`` times it); ``cstate[k]`` 0 open, 1 stick, 2 slip; ``geo[k] = (N0, N1, nx, ny, tx, ty,
-    inside, penetration, surface velocity along t)``. Returns the number of sweeps.
-    """
+def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, pair_par, seg, geo):
+    """Master segment ``seg[k]`` and geometry ``geo[k]`` of every slave in the predicted configuration ``u`` (see
+    :func:`contact_solve`); a rigid master's surface velocity at ``t_new`` [s]."""
     ns = slave_node.shape[0]
-    dt2 = dt * dt
     for k in range(ns):
         p = slave_pair[k]
         mk = int(pair_par[p, 6])
@@ -208,8 +188,14 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair,
         geo[k, 5] = ty
         geo[k, 6] = 1.0 if inside else 0.0
         geo[k, 7] = 0.0
-    # warm start: apply the previous step's multipliers (re-projected by the first sweep); in steady sliding
-    # they change little per step, so the projected Gauss-Seidel needs a few sweeps instead of tens
+
+
+@kernel
+def _warm_start(u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par, seg, geo, lam,
+                cstate):
+    """Apply the previous step's multipliers ``lam`` (re-projected by the first sweep) to the slaves still facing
+    their master; release the others (state open)."""
+    ns = slave_node.shape[0]
     for k in range(ns):
         ln = lam[k, 0]
         lt = lam[k, 1]
@@ -223,60 +209,103 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair,
         n1 = geo[k, 1]
         _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
                              ln * geo[k, 3] + lt * geo[k, 5])
+
+
+@kernel
+def _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par,
+                        law_tab, s_area, seg, geo, lam, cstate, mu):
+    """One projected Gauss-Seidel sweep over the slaves facing their master (see :func:`contact_solve`): update
+    each multiplier pair and apply its increment at once. Returns the largest displacement [m] an increment
+    moved a node pair by."""
+    ns = slave_node.shape[0]
+    dt2 = dt * dt
+    change = 0.0
+    for k in range(ns):
+        if geo[k, 6] == 0.0:
+            continue
+        p = slave_pair[k]
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
+        n0 = geo[k, 0]
+        n1 = geo[k, 1]
+        nx = geo[k, 2]
+        ny = geo[k, 3]
+        tx = geo[k, 4]
+        ty = geo[k, 5]
+        # effective inverse masses along x and y of the relative motion slave - (N0 a + N1 b)
+        wx, wxy, wy = _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1)
+        # normal: gap in the current (predicted + corrected) configuration
+        if pair_par[p, 6] == MASTER_EDGE:
+            gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
+            gy = (X[sn + npd] + u[sn + npd] - n0 * (X[a + npd] + u[a + npd])
+                  - n1 * (X[b + npd] + u[b + npd]))
+            g = gx * nx + gy * ny
+        else:
+            g = rigid_geometry(int(pair_par[p, 6]), pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
+                               pair_par[p, 10], 0.0, 0.0, X[sn], X[sn + npd], X[sn] + u[sn],
+                               X[sn + npd] + u[sn + npd])[0]
+        wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
+        ln = lam[k, 0]
+        ln_new = _normal_update(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], law_tab[p], s_area[k], g,
+                                ln, wn)
+        dn = ln_new - ln
+        # tangential: relative tangential increment over the step (the master's surface velocity removed),
+        # including the normal correction
+        rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx + dt * dn * ny * wxy
+        ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy + dt * dn * nx * wxy
+        st = dt * (rx * tx + ry * ty - geo[k, 8])
+        wt = dt2 * (tx * tx * wx + ty * ty * wy + 2.0 * tx * ty * wxy)
+        lt = lam[k, 1]
+        lt_new, state = _tangential_update(lt, st, wt, ln_new, mu[k], pair_par[p], dt)
+        if ln_new == 0.0:
+            state = 0
+        dtn = lt_new - lt
+        if dn != 0.0 or dtn != 0.0:  # an open node far from its master (most of them) moves nothing
+            _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, dn * nx + dtn * tx,
+                                 dn * ny + dtn * ty)
+        lam[k, 0] = ln_new
+        lam[k, 1] = lt_new
+        cstate[k] = state
+        geo[k, 7] = -(g + dn * wn) if pair_par[p, 0] != LAW_RIGID else 0.0
+        # convergence measured as the displacement the last increments moved the node pair by: the
+        # positions carry round-off eps |x| ~ 1e-17 m, i.e. multiplier noise eps |x| / (dt^2 w), so a
+        # relative multiplier tolerance can be unreachable at small dt
+        change = max(change, abs(dn) * wn, abs(dtn) * wt)
+    return change
+
+
+@kernel
+def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                  pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol):
+    """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
+
+    On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that every active slave
+    node obeys its pair's normal law (rigid: no penetration of its master; linear/power: the multiplier equals
+    ``A p(d)`` at the corrected penetration ``d``, ``A`` its tributary area ``s_area``) and the tangential
+    multiplier obeys Coulomb's law with static and kinetic coefficients (stick: zero relative tangential
+    increment over the step while ``|lam_t| <= mu_s lam_n``; slip: ``|lam_t| = mu(v) lam_n``). Normal and
+    tangential multipliers of all slave nodes are iterated together by projected Gauss-Seidel until the
+    largest correction of a sweep moves no node pair by more than ``tol`` [m]. ``mu[k]`` is the kinetic
+    coefficient of slave ``k`` now (``mu0 + mu_p(t)``); ``pair_par`` the pairs' law rows and ``law_tab`` their
+    tables (:mod:`fivid.contact._kernels`); a rigid master (line, circle) moves its surface at the ramped speed at
+    ``t_new`` [s], the end of the step. ``wmat`` empty: lumped inverse mass ``minv_c``; else the dense inverse
+    mass of the contact dofs of a reduced system (:func:`_apply_contact_force`).
+
+    Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
+    force on slave ``k`` along ``n`` and ``t``, on entry the previous step's values (warm start: applied first,
+    then projected and iterated, so the converged result does not depend on it beyond the tolerance) (the master
+    nodes get ``-N_j`` times it); ``cstate[k]`` 0 open, 1 stick, 2 slip; ``geo[k] = (N0, N1, nx, ny, tx, ty,
+    inside, penetration, surface velocity along t)``. Returns the number of sweeps.
+    """
+    _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, pair_par, seg, geo)
+    # warm start: in steady sliding the multipliers change little per step, so the projected Gauss-Seidel needs a
+    # few sweeps instead of tens
+    _warm_start(u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par, seg, geo, lam,
+                cstate)
     sweeps = 0
     for it in range(max_iter):
         sweeps = it + 1
-        change = 0.0
-        for k in range(ns):
-            if geo[k, 6] == 0.0:
-                continue
-            p = slave_pair[k]
-            sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
-            n0 = geo[k, 0]
-            n1 = geo[k, 1]
-            nx = geo[k, 2]
-            ny = geo[k, 3]
-            tx = geo[k, 4]
-            ty = geo[k, 5]
-            # effective inverse masses along x and y of the relative motion slave - (N0 a + N1 b)
-            wx, wxy, wy = _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1)
-            # normal: gap in the current (predicted + corrected) configuration
-            if pair_par[p, 6] == MASTER_EDGE:
-                gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
-                gy = (X[sn + npd] + u[sn + npd] - n0 * (X[a + npd] + u[a + npd])
-                      - n1 * (X[b + npd] + u[b + npd]))
-                g = gx * nx + gy * ny
-            else:
-                g = rigid_geometry(int(pair_par[p, 6]), pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
-                                   pair_par[p, 10], 0.0, 0.0, X[sn], X[sn + npd], X[sn] + u[sn],
-                                   X[sn + npd] + u[sn + npd])[0]
-            wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
-            ln = lam[k, 0]
-            ln_new = _normal_update(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], law_tab[p], s_area[k], g,
-                                    ln, wn)
-            dn = ln_new - ln
-            # tangential: relative tangential increment over the step (the master's surface velocity removed),
-            # including the normal correction
-            rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx + dt * dn * ny * wxy
-            ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy + dt * dn * nx * wxy
-            st = dt * (rx * tx + ry * ty - geo[k, 8])
-            wt = dt2 * (tx * tx * wx + ty * ty * wy + 2.0 * tx * ty * wxy)
-            lt = lam[k, 1]
-            lt_new, state = _tangential_update(lt, st, wt, ln_new, mu[k], pair_par[p], dt)
-            if ln_new == 0.0:
-                state = 0
-            dtn = lt_new - lt
-            if dn != 0.0 or dtn != 0.0:  # an open node far from its master (most of them) moves nothing
-                _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, dn * nx + dtn * tx,
-                                     dn * ny + dtn * ty)
-            lam[k, 0] = ln_new
-            lam[k, 1] = lt_new
-            cstate[k] = state
-            geo[k, 7] = -(g + dn * wn) if pair_par[p, 0] != LAW_RIGID else 0.0
-            # convergence measured as the displacement the last increments moved the node pair by: the
-            # positions carry round-off eps |x| ~ 1e-17 m, i.e. multiplier noise eps |x| / (dt^2 w), so a
-            # relative multiplier tolerance can be unreachable at small dt
-            change = max(change, abs(dn) * wn, abs(dtn) * wt)
+        change = _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                                     pair_par, law_tab, s_area, seg, geo, lam, cstate, mu)
         if change <= tol:
             break
     return sweeps
