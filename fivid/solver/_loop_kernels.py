@@ -225,15 +225,8 @@ def _impose_motions(t, dt, motions, structure, state, wint, dal):
     """Constrained dofs: undo the predictor's free update, impose the motion and replace the dof's share of the
     work sums ``wint``, ``dal``; the reaction ``m a + f + alpha m v`` is summed for the force transducer. Returns
     ``(wint, dal, wext, rt, rn)``: the corrected sums, the reactions' power [W] and transducer sums [N]."""
-    u = state.u
-    v = state.v
-    w = state.w
-    vf = state.vf
-    f = state.f
-    mass = structure.mass
-    alpha = structure.alpha
-    beta = structure.beta
-    a_filt = structure.a_filt
+    u, v, w, vf, f = state.u, state.v, state.w, state.vf, state.f
+    mass, alpha, beta, a_filt = structure.mass, structure.alpha, structure.beta, structure.a_filt
     grp_v = motions.grp_v
     wext = 0.0
     rt = 0.0
@@ -266,15 +259,8 @@ def _contact_correction(t, dt, npd, structure, contact, friction, cs, state, rec
     """The contact correction of a step (constraints at ``t + dt``), then the internal-force and alpha-damping
     work completed with the velocity change it made at the contact nodes, the contact's work and
     ``w = u + beta v`` (or ``u + beta vf``) where it moved nodes. Returns ``(wint, dal, wcn, wct, wdr)``."""
-    u = state.u
-    v = state.v
-    w = state.w
-    vf = state.vf
-    f = state.f
-    mass = structure.mass
-    alpha = structure.alpha
-    beta = structure.beta
-    a_filt = structure.a_filt
+    u, v, w, vf, f = state.u, state.v, state.w, state.vf, state.f
+    mass, alpha, beta, a_filt = structure.mass, structure.alpha, structure.beta, structure.a_filt
     cnodes = contact.cnodes
     vold_c = cs.vold_c
     _keep_contact_velocities(v, npd, cnodes, vold_c, 2)
