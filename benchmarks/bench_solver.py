@@ -51,7 +51,7 @@ def _bare_kernels():
     in the serial compilation)."""
     from numba import njit, prange
 
-    from fivid.solver._kernels import _rect_component
+    from fivid.solver._stencil_kernels import _rect_component
 
     def steps(nsteps, dt, alpha, beta, npd, blocks, c_uni, minv, u, v, w, f):
         n = u.shape[0]

@@ -53,7 +53,13 @@ def _fivid_imports(path: Path, parts: tuple[str, ...]):
                 for alias in node.names:
                     yield node.lineno, (alias.name,)
             elif mod.startswith("fivid."):
-                yield node.lineno, tuple(mod.split(".")[1:])
+                base = tuple(mod.split(".")[1:])
+                # ``from fivid.solver import _kernels``: the module imported is the kernel module itself
+                kernels = [a.name for a in node.names if a.name.endswith("_kernels")]
+                for name in kernels:
+                    yield node.lineno, base + (name,)
+                if len(kernels) < len(node.names):
+                    yield node.lineno, base
 
 
 def test_imports_flow_down_the_layers():
@@ -79,11 +85,22 @@ def test_imports_flow_down_the_layers():
     assert not bad, "imports against the layers of DESIGN §1:\n" + "\n".join(bad)
 
 
+def _kernel_modules():
+    return [(path, parts) for path, parts in _modules() if _layer(parts) == 0]
+
+
+def test_kernel_modules_are_found():
+    """The kernel checks below see the solver's kernel modules (one per concern): a rename cannot empty them."""
+    names = {".".join(parts) for _, parts in _kernel_modules()}
+    assert {"solver._kernels", "solver._stencil_kernels", "solver._contact_kernels", "solver._loop_kernels",
+            "solver._reduced_kernels", "contact._kernels"} <= names, names
+
+
 def test_kernels_import_only_numpy_and_numba():
+    """Kernel modules (``_kernels.py``, ``_*_kernels.py``) import numpy, numba, math and, for the kernels' argument
+    groups, collections (namedtuple); from fivid only other kernel modules."""
     bad = []
-    for path, parts in _modules():
-        if _layer(parts) != 0:
-            continue
+    for path, parts in _kernel_modules():
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             names = []
@@ -92,9 +109,30 @@ def test_kernels_import_only_numpy_and_numba():
             elif isinstance(node, ast.ImportFrom):
                 names = [node.module or ""]
             for n in names:
-                if n.split(".")[0] not in {"numpy", "numba", "math", "__future__"} and not (
+                if n.split(".")[0] not in {"numpy", "numba", "math", "collections", "__future__"} and not (
                         n.startswith("fivid.") and n.endswith("_kernels")):
                     bad.append(f"{path}:{node.lineno}: imports {n}")
+    assert not bad, "\n".join(bad)
+
+
+#: kernel modules still passing their own fastmath/parallel options (being edited in parallel: move them to
+#: the shared decorators of fivid/solver/_kernels.py when that work lands)
+_OWN_JIT_OPTIONS = {"solver._reduced_kernels"}
+
+
+def test_kernel_compilation_setting_is_defined_once():
+    """fastmath and parallel are chosen once, by the decorators of fivid/solver/_kernels.py; no other kernel module
+    passes them to numba itself (STYLE: no fastmath flags scattered per function)."""
+    bad = []
+    for path, parts in _kernel_modules():
+        name = ".".join(parts)
+        if name == "solver._kernels" or name in _OWN_JIT_OPTIONS:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call):
+                for kw in node.keywords:
+                    if kw.arg in {"fastmath", "parallel"}:
+                        bad.append(f"{path}:{node.lineno}: {kw.arg}= (use the decorators of fivid.solver._kernels)")
     assert not bad, "\n".join(bad)
 
 

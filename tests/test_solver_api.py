@@ -70,7 +70,7 @@ def test_divergence_is_diagnosed():
     model = load_model(cantilever(nx=8, ny=2))
     prep = driver.prepare_run(model, duration=2e-4, sample_rate=2e5)
     s = prep.settings
-    bad = driver.RunSettings(2.5 * s.critical_time_step, s.critical_time_step, s.omega_max,
+    bad = driver.IntegrationSettings(2.5 * s.critical_time_step, s.critical_time_step, s.omega_max,
                              s.steps_per_interval, s.oversample, s.n_intervals, s.gs_max_iterations, s.gs_tolerance)
     with pytest.raises(SimulationDiverged, match=r"diverged at step \d+ \(t = .* node \d+ \(body 'beam'"):
         driver.PreparedRun(prep.model, prep.stencils, prep.arrays, prep.friction, bad, prep.schedule,

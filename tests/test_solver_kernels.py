@@ -61,30 +61,19 @@ def _prepare(model, n_int, n_sub, dt):
 
 def _run(fn, model, st, ka, fric, n_int, n_sub, dt, u0, v0):
     from fivid.solver import _kernels as K
-    from fivid.solver.integrate import velocity_filter_gain
+    from fivid.solver import _loop_kernels as L
+    from fivid.solver.integrate import loop_arguments, loop_state
 
     u = st.to_kernel(u0)
     v = st.to_kernel(v0)
-    w = u + model.rayleigh_beta * v
-    vf = v.copy()
-    ns = ka.slave_node.size
     npairs = ka.master_ptr.size - 1
     rec = np.zeros((n_int, K.N_REC))
     sens = np.zeros((n_int, ka.sens_node.size, 2))
     contact = np.zeros((n_int, npairs, 5))
-    status, done = fn(
-        0, n_int * n_sub, dt, model.rayleigh_alpha, model.rayleigh_beta,
-        velocity_filter_gain(model.damping_cutoff, dt), n_sub, st.npd,
-        *st.kernel_args, ka.mass, ka.minv, ka.spr_dof, ka.spr_kc,
-        ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
-        ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
-        ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.pair_par, ka.law_tab,
-        ka.s_area,
-        ka.minv_c, ka.seg.copy(), np.zeros((ns, 9)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
-        100, 1e-12, fric.mu, fric.rate, np.zeros(ns), np.zeros((ka.cnodes.size, 4)), ka.cnode_slot, ka.cnodes,
-        ka.sens_node, ka.sens_dir, u, v, w, vf, np.zeros_like(u), np.zeros_like(u), np.zeros(K.N_ACC), np.zeros(2),
-        rec, sens, contact, 2.0, np.zeros(2, dtype=np.int64),
-    )
+    fixed = loop_arguments(model, st, ka, fric, dt, 100, 1e-12)
+    cs, state = loop_state(st, ka, u, v, model.rayleigh_beta)
+    records = L.Records(rec, sens, contact, np.zeros(2, dtype=np.int64), ka.sens_node, ka.sens_dir)
+    status, done = fn(0, n_int * n_sub, dt, n_sub, 2.0, *fixed, cs, state, records)
     assert status == K.OK and done == n_int
     return st.to_global(u), st.to_global(v), rec, contact
 
@@ -114,9 +103,9 @@ def test_time_loop_equals_naive_numpy_central_difference(cutoff):
     u0[model.fixed_dofs] = 0.0
     v0 = model.initial_velocity()
     v0[model.fixed_dofs] = 0.0
-    from fivid.solver import _kernels as K
+    from fivid.solver import _loop_kernels as L
 
-    u, v, rec, _ = _run(K.run_steps, model, st, ka, fric, n_int, n_sub, dt, u0, v0)
+    u, v, rec, _ = _run(L.run_steps, model, st, ka, fric, n_int, n_sub, dt, u0, v0)
     # naive reference
     Kfull = stiffness_matrix(model, include_springs=True)
     m = lumped_mass(model)
@@ -143,7 +132,7 @@ def test_time_loop_equals_naive_numpy_central_difference(cutoff):
 
 def test_kernel_equals_py_func_with_contact_and_friction():
     """The jitted time loop and its pure-Python version agree to round-off on a contact run with slip."""
-    from fivid.solver import _kernels as K
+    from fivid.solver import _loop_kernels as L
     from fivid.solver.timestep import stable_step
 
     model = load_model(block_on_base(v0=0.5))
@@ -156,8 +145,8 @@ def test_kernel_equals_py_func_with_contact_and_friction():
     u0[2 * block.node_numbers().ravel() + 1] = -5e-9
     v0 = model.initial_velocity()
     v0[model.fixed_dofs] = 0.0
-    out_jit = _run(K.run_steps, model, st, ka, fric, n_int, n_sub, dt, u0, v0)
-    out_py = _run(getattr(K.run_steps, "py_func", K.run_steps), model, st, ka, fric, n_int, n_sub, dt, u0, v0)
+    out_jit = _run(L.run_steps, model, st, ka, fric, n_int, n_sub, dt, u0, v0)
+    out_py = _run(getattr(L.run_steps, "py_func", L.run_steps), model, st, ka, fric, n_int, n_sub, dt, u0, v0)
     for a, b in zip(out_jit, out_py):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
     contact = out_jit[3]
@@ -171,6 +160,7 @@ def test_time_loop_with_pressure_equals_naive_numpy_central_difference():
     as the load-free comparison (~ N eps |u|); the load work recorded by the kernel equals sum_n dt F_n . v_mid."""
     from fivid.fe import external_load_vector
     from fivid.solver import _kernels as K
+    from fivid.solver import _loop_kernels as L
     from fivid.solver.timestep import stable_step
 
     cfg = cantilever(mapped=True, v0=0.0)
@@ -180,7 +170,7 @@ def test_time_loop_with_pressure_equals_naive_numpy_central_difference():
     n_int, n_sub = 20, 20
     st, ka, fric = _prepare(model, n_int, n_sub, dt)
     zero = np.zeros(model.n_dofs)
-    u, v, rec, _ = _run(K.run_steps, model, st, ka, fric, n_int, n_sub, dt, zero, zero)
+    u, v, rec, _ = _run(L.run_steps, model, st, ka, fric, n_int, n_sub, dt, zero, zero)
     Kfull = stiffness_matrix(model)
     m = lumped_mass(model)
     F = external_load_vector(model)

@@ -55,7 +55,7 @@ def test_reduced_contact_correction_with_a_dense_inverse_mass_closes_the_gap(coa
     projected Gauss-Seidel drives the gap to zero with a compressive multiplier, and the correction it applied
     equals ``dt^2 W G^T lam`` (the kernel's own path, not jitted)."""
     from fivid.contact import kernel_row, kernel_tables
-    from fivid.solver._kernels import contact_solve
+    from fivid.solver._contact_kernels import contact_solve
 
     rng = np.random.default_rng(1)
     nb = 3  # node 0 slave; master segment from node 2 (1, 0) to node 1 (0, 0): outward normal +y

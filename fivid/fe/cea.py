@@ -275,12 +275,10 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         ``critical_mu(mode)`` [1] (NaN when stable over the range), ``partner(mode)`` (-1 if none).
     """
     import scipy.sparse as sp
-    import xarray as xr
 
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
     from fivid.fe.contact import linearise_preloaded_contact
-    from fivid.fe.modal import _contact_state_attrs, constrained_matrices
-    from fivid.schema import apply_cf_attrs, new_history
+    from fivid.fe.modal import constrained_matrices
 
     if not model.contacts:
         raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
@@ -305,7 +303,19 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     # over the cores for such small matrices (measured 10-25x slower on a loaded 2-core machine).
     with threadpool_limits(limits=1, user_api="blas"):
         res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine, progress=progress)
-    n = min(n_modes, proj.n)
+    return _cea_dataset(model, res, proj.n, contact, state, normal_load=normal_load, n_modes=n_modes, damping=damping,
+                        augment=augment, refine=refine)
+
+
+def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, damping, augment, refine):
+    """The CEA sweep ``res`` (:func:`complex_eigenvalue_sweep`) as a Dataset of the lowest ``n_modes`` modes, with
+    the model, the basis size ``n_basis``, the contact state and the analysis settings recorded."""
+    import xarray as xr
+
+    from fivid.fe.modal import _contact_state_attrs
+    from fivid.schema import apply_cf_attrs, new_history
+
+    n = min(n_modes, n_basis)
     lam = res["eigenvalues"][:, :n]
     partner = np.where(res["partner"][:n] < n, res["partner"][:n], -1)
     ds = xr.Dataset(
@@ -325,7 +335,7 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
             "model_source": model.source,
             "model": model.describe(),
             "n_dofs": model.n_dofs,
-            "n_basis": proj.n,
+            "n_basis": n_basis,
             "basis_augmented": int(bool(augment)),
             "damping": int(bool(damping)),
             "rayleigh_alpha": model.rayleigh_alpha,
@@ -333,12 +343,12 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
             "instability_tolerance": res["tolerance"],
             "contact_nodes": int(contact.stiffness.size),
             "history": new_history(f"complex_eigenvalue_analysis(normal_load={normal_load!r}, n_modes={n_modes}, "
-                                   f"n_basis={proj.n}, damping={bool(damping)}, augment={bool(augment)}, "
+                                   f"n_basis={n_basis}, damping={bool(damping)}, augment={bool(augment)}, "
                                    f"refine={bool(refine)})"),
             **_contact_state_attrs(model, state),
         },
     )
-    log.info("CEA: %s, basis %d, %d of %d modes unstable in [%g, %g]", model.describe(), proj.n,
+    log.info("CEA: %s, basis %d, %d of %d modes unstable in [%g, %g]", model.describe(), n_basis,
              int(np.isfinite(res['critical_mu'][:n]).sum()), n, res["mu"][0], res["mu"][-1])
     return apply_cf_attrs(ds)
 

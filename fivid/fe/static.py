@@ -253,9 +253,6 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
     mu : ndarray (n_slave,), optional
         Friction coefficient of each slave node (all pairs, in order); None or 0: frictionless.
     """
-    import scipy.sparse as sp
-    from scipy.sparse.linalg import splu
-
     from fivid.fe.assembly import stiffness_matrix
     from fivid.fe.loads import external_load_vector
 
@@ -288,7 +285,6 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
     d0 = None  # penetrations of the compliant nodes (None: first pass treats them as rigid)
     f_ext = external_load_vector(model)  # pressure loads at full value, part of the zero-clamp solution ua
     Kfc_e = (K[:, fixed] @ e[fixed])[free]
-    nf = free.size
     with_clamp = normal_load is not None
     for it in range(1, max_iterations + 1):
         lag = active & ~pen if d0 is not None else active  # Lagrange rows: rigid nodes (all, in the first pass)
@@ -296,53 +292,10 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
         idx = np.flatnonzero(lag)
         tdx = np.flatnonzero(tied)
         sdx = np.flatnonzero(spring)
-        # compliant nodes: f = k_t d + r, d = -(g0 + G u); force on the dofs (G + s mu Gt)^T f
-        k_t = np.zeros(ns)
-        r = np.zeros(ns)
-        if sdx.size:
-            dl = np.maximum(d0[sdx], 1e-3 * max(float(d0[sdx].max()), 1e-15))
-            pv = np.array([law_of[k].pressure(dl[j]) for j, k in enumerate(sdx)]).ravel()
-            dp = np.array([law_of[k].tangent(dl[j]) for j, k in enumerate(sdx)]).ravel()
-            k_t[sdx] = geo.area[sdx] * dp
-            r[sdx] = geo.area[sdx] * (pv - dp * dl)
-        Dsp = (G[sdx] + sp.diags(slip[sdx] * mu[sdx]) @ Gt[sdx]).tocsr()
-        Kc = (Dsp.T @ sp.diags(k_t[sdx]) @ G[sdx]).tocsr()
-        f_c = Dsp.T @ (r[sdx] - k_t[sdx] * g0[sdx])
-        Kt = (K + Kc).tocsr() if Kc.nnz else K
-        Kff = Kt[free][:, free]
-        C = sp.vstack([G[idx], Gt[tdx]]).tocsr()
-        Cf = C[:, free]
-        # force directions: a slipping node pushes along n + s mu t (lam_t = s mu lam_n), a tied one along n and t
-        D = sp.vstack([G[idx] + sp.diags(slip[idx] * mu[idx]) @ Gt[idx], Gt[tdx]]).tocsr()[:, free]
-        A = sp.bmat([[Kff, -D.T], [Cf, None]], format="csc")
-        reg_f = reg[free]
-        lu = splu((A + sp.diags(np.concatenate([reg_f, np.zeros(A.shape[0] - nf)]))).tocsc()) if reg.any() else \
-            splu(A)
-        rhs = np.zeros((A.shape[0], 2))
-        rhs[nf:nf + idx.size, 0] = -g0[idx]
-        rhs[:nf, 0] = (f_ext + f_c)[free]
-        rhs[:nf, 1] = -(Kt[:, fixed] @ e[fixed])[free] if Kc.nnz else -Kfc_e  # clamp's pull on the free dofs
-        rhs[nf:, 1] = -(C @ e)
-        sol = lu.solve(rhs)
-        if reg.any():  # iterative refinement against the unregularised system: the shift's error shrinks by
-            for _ in range(4):  # eps / (lambda + eps) per pass on every mode the contact restrains
-                sol += lu.solve(rhs - A @ sol)
-        ua = np.zeros(n)
-        ub = e.copy()
-        ua[free] = sol[:nf, 0]
-        ub[free] = sol[:nf, 1]
-        lam_a, lam_b = sol[nf:, 0], sol[nf:, 1]
-        if with_clamp:
-            Fa = float(normal_weights @ (Kt @ ua - f_ext))
-            Fb = float(normal_weights @ (Kt @ ub))
-            if not Fb > 0.0:
-                raise ConfigError(
-                    f"moving the loading clamp by {direction:+.0f} along its component does not press the contact "
-                    f"(dF/d(delta) = {Fb:.3g} N/m); check the load motion's sign and the reaction's normal component"
-                )
-            delta = (normal_load - Fa) / Fb
-        else:
-            delta = 0.0
+        k_t, r = _linearised_compliant_laws(law_of, geo.area, sdx, d0, ns)
+        Kt, ua, ub, lam_a, lam_b = _solve_load_cases(K, G, Gt, idx, tdx, sdx, slip, mu, k_t, r, g0, e, f_ext, Kfc_e,
+                                                     reg, free, fixed)
+        delta = _clamp_displacement(normal_load, normal_weights, Kt, ua, ub, f_ext, direction) if with_clamp else 0.0
         u = ua + delta * ub
         lam = lam_a + delta * lam_b
         gap = np.where(usable, g0 + G @ u, np.inf)
@@ -388,6 +341,76 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
         if not active.any():
             raise ConfigError("the preload active set emptied: the clamp pulls the bodies apart")
     raise ConfigError(f"the preload contact solve did not settle in {max_iterations} active-set iterations")
+
+
+def _clamp_displacement(normal_load, normal_weights, Kt, ua, ub, f_ext, direction) -> float:
+    """Clamp displacement ``delta`` [m] whose solution ``ua + delta ub`` gives the transducer ``normal_load`` [N]
+    (the transducer reads ``Kt u - F`` at its dofs, weighted by ``normal_weights``); a clamp that does not press
+    the contact is a ConfigError."""
+    Fa = float(normal_weights @ (Kt @ ua - f_ext))
+    Fb = float(normal_weights @ (Kt @ ub))
+    if not Fb > 0.0:
+        raise ConfigError(
+            f"moving the loading clamp by {direction:+.0f} along its component does not press the contact "
+            f"(dF/d(delta) = {Fb:.3g} N/m); check the load motion's sign and the reaction's normal component"
+        )
+    return (normal_load - Fa) / Fb
+
+
+def _linearised_compliant_laws(law_of, area, sdx, d0, ns):
+    """The compliant nodes ``sdx`` as springs linearised at their penetrations ``d0`` [m] (Newton): the normal
+    force ``f = k_t d + r`` [N] with ``k_t = A p'(d0)`` [N m-1] and ``r = A (p(d0) - p'(d0) d0)`` [N] (zero on the
+    other nodes; ``d0`` floored at 1e-3 of the largest, where a power law's tangent vanishes)."""
+    k_t = np.zeros(ns)
+    r = np.zeros(ns)
+    if sdx.size:
+        dl = np.maximum(d0[sdx], 1e-3 * max(float(d0[sdx].max()), 1e-15))
+        pv = np.array([law_of[k].pressure(dl[j]) for j, k in enumerate(sdx)]).ravel()
+        dp = np.array([law_of[k].tangent(dl[j]) for j, k in enumerate(sdx)]).ravel()
+        k_t[sdx] = area[sdx] * dp
+        r[sdx] = area[sdx] * (pv - dp * dl)
+    return k_t, r
+
+
+def _solve_load_cases(K, G, Gt, idx, tdx, sdx, slip, mu, k_t, r, g0, e, f_ext, Kfc_e, reg, free, fixed):
+    """One active set's linear solve for two load cases: ``a`` the loads and the initial gaps with the clamp at
+    rest, ``b`` a unit clamp displacement ``e`` (the solution is ``a + delta b``). Rigid nodes ``idx`` close their
+    gap (Lagrange rows), tied nodes ``tdx`` also their tangential motion, compliant nodes ``sdx`` are springs
+    ``k_t d + r``; slipping nodes push along ``n + s mu t``. Returns the tangent stiffness ``Kt`` and the
+    displacements [m] and multipliers [N] of both cases."""
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import splu
+
+    n = K.shape[0]
+    nf = free.size
+    # compliant nodes: f = k_t d + r, d = -(g0 + G u); force on the dofs (G + s mu Gt)^T f
+    Dsp = (G[sdx] + sp.diags(slip[sdx] * mu[sdx]) @ Gt[sdx]).tocsr()
+    Kc = (Dsp.T @ sp.diags(k_t[sdx]) @ G[sdx]).tocsr()
+    f_c = Dsp.T @ (r[sdx] - k_t[sdx] * g0[sdx])
+    Kt = (K + Kc).tocsr() if Kc.nnz else K
+    Kff = Kt[free][:, free]
+    C = sp.vstack([G[idx], Gt[tdx]]).tocsr()
+    Cf = C[:, free]
+    # force directions: a slipping node pushes along n + s mu t (lam_t = s mu lam_n), a tied one along n and t
+    D = sp.vstack([G[idx] + sp.diags(slip[idx] * mu[idx]) @ Gt[idx], Gt[tdx]]).tocsr()[:, free]
+    A = sp.bmat([[Kff, -D.T], [Cf, None]], format="csc")
+    reg_f = reg[free]
+    lu = splu((A + sp.diags(np.concatenate([reg_f, np.zeros(A.shape[0] - nf)]))).tocsc()) if reg.any() else \
+        splu(A)
+    rhs = np.zeros((A.shape[0], 2))
+    rhs[nf:nf + idx.size, 0] = -g0[idx]
+    rhs[:nf, 0] = (f_ext + f_c)[free]
+    rhs[:nf, 1] = -(Kt[:, fixed] @ e[fixed])[free] if Kc.nnz else -Kfc_e  # clamp's pull on the free dofs
+    rhs[nf:, 1] = -(C @ e)
+    sol = lu.solve(rhs)
+    if reg.any():  # iterative refinement against the unregularised system: the shift's error shrinks by
+        for _ in range(4):  # eps / (lambda + eps) per pass on every mode the contact restrains
+            sol += lu.solve(rhs - A @ sol)
+    ua = np.zeros(n)
+    ub = e.copy()
+    ua[free] = sol[:nf, 0]
+    ub[free] = sol[:nf, 1]
+    return Kt, ua, ub, sol[nf:, 0], sol[nf:, 1]
 
 
 def slave_friction(model, mu=None) -> np.ndarray:

@@ -12,7 +12,7 @@ from fivid.identify.inverse import InverseAmplitude, inverse_amplitude_scale
 from fivid.identify.amplitude_fit import (SELECTION_RULE, FormFit, akaike_weights, candidate_forms, choose_form,
                                           fit_amplitude_forms)
 from fivid.identify.friction import FrictionIdentification, identify_friction_law
-from fivid.identify.runs import RunAnalysis, RunSettings, analyse_run
+from fivid.identify.runs import RunAnalysis, RunAnalysisSettings, analyse_run
 
 __all__ = [
     "identify_friction_law",
@@ -30,6 +30,6 @@ __all__ = [
     "FormFit",
     "SELECTION_RULE",
     "RunAnalysis",
-    "RunSettings",
+    "RunAnalysisSettings",
     "analyse_run",
 ]

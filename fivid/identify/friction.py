@@ -23,8 +23,8 @@ from fivid.errors import ConfigError, DataQualityError, FividError
 from fivid.friction import AmplitudeModel, ConditionDomain, PerturbedCoulombLaw, coefficient_units, law_dataset
 from fivid.identify.amplitude_fit import (COOKS_RULE, SELECTION_RULE, FormFit, akaike_weights, candidate_forms,
                                           choose_form, fit_amplitude_forms, influential_runs)
-from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis, RunSettings,
-                                  analyse_run)
+from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis,
+                                  RunAnalysisSettings, analyse_run)
 from fivid.identify.shape import SpectralShape, identify_shape, shape_dependence
 
 __all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
@@ -479,7 +479,7 @@ def identify_friction_law(
     if not datasets:
         raise FividError("no runs given")
     band = _check_band(band, datasets)
-    settings = RunSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
+    settings = RunAnalysisSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
                            tare=None if tare is None else tuple(float(x) for x in tare),
                            mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence)
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)

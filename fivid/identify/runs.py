@@ -31,14 +31,14 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError, SchemaError
 from fivid.signal.welch import NPERSEG_RULE, default_nperseg  # the one segment rule (used by identify.friction)
 
-__all__ = ["RunSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
+__all__ = ["RunAnalysisSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
            "mains_lines_resolved"]
 
 _log = logging.getLogger("fivid")
 
 
 @dataclass(frozen=True)
-class RunSettings:
+class RunAnalysisSettings:
     """Settings of the per-run analysis (all recorded in the law file); the band is passed separately.
 
     Parameters
@@ -266,14 +266,14 @@ def _check_units(ds, label):
             )
 
 
-def analyse_run(ds, settings: RunSettings, *, band: tuple, transfer_function=None) -> RunAnalysis:
+def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_function=None) -> RunAnalysis:
     """μ(t) on the steady window of one run: mean with CI, PSD of μp in ``band``, band RMS with stderr.
 
     Parameters
     ----------
     ds : xarray.Dataset
         A RunDataset (SI units).
-    settings : RunSettings
+    settings : RunAnalysisSettings
     band : (float, float)
         Valid band [Hz] (checked against the run's Nyquist frequency).
     transfer_function : xarray.DataArray, optional

@@ -18,16 +18,9 @@ Nothing is allocated inside the time loop.
 import numpy as np
 from numba import njit
 
-from fivid.solver._kernels import (
-    OK,
-    _segment_nodes,
-    add_step_work,
-    contact_step,
-    contact_work,
-    finish_record,
-    group_velocities,
-    start_record,
-)
+from fivid.solver._contact_kernels import _segment_nodes, contact_step, contact_work
+from fivid.solver._kernels import OK
+from fivid.solver._loop_kernels import add_step_work, finish_record, group_velocities, start_record
 
 __all__ = ["reduced_forces", "run_reduced_steps"]
 

@@ -1,6 +1,6 @@
 """The explicit transient solver's driver: validate, choose the step, allocate, run the kernel, wrap the result.
 
-See DESIGN §5 for the method and :mod:`fivid.solver._kernels` for the time loop. The public entry
+See DESIGN §5 for the method and :mod:`fivid.solver._loop_kernels` for the time loop. The public entry
 point is :func:`simulate`.
 """
 
@@ -14,7 +14,7 @@ import numpy as np
 
 from fivid.errors import ConfigError, FividError
 
-__all__ = ["SimulationDiverged", "RunSettings", "PreparedRun", "simulate", "prepare_run"]
+__all__ = ["SimulationDiverged", "IntegrationSettings", "PreparedRun", "simulate", "prepare_run"]
 
 log = logging.getLogger("fivid")
 
@@ -24,8 +24,9 @@ class SimulationDiverged(FividError):
 
 
 @dataclass(frozen=True)
-class RunSettings:
-    """Numerical settings of a run (recorded in the output attrs)."""
+class IntegrationSettings:
+    """Settings of the time integration of a run: step, output intervals, contact iterations (recorded in the
+    output attrs)."""
 
     time_step: float
     critical_time_step: float
@@ -55,7 +56,7 @@ class PreparedRun:
     stencils: object
     arrays: object
     friction: object
-    settings: RunSettings
+    settings: IntegrationSettings
     schedule: object
     preload: object
     wrap: dict
@@ -238,7 +239,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     fric = friction_table(model, ka.slave_pair, slave_x, law=law, mu=mu, total_time=n_int * t_int, dt=dt,
                           sample_rate=sample_rate, sliding_velocity=v_signed, roughness_ra=roughness_ra,
                           normal_load=normal_load, seed=seed)
-    settings = RunSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int, int(gs_max_iterations),
+    settings = IntegrationSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int, int(gs_max_iterations),
                            float(gs_tolerance))
     return PreparedRun(model, st, ka, fric, settings, schedule, preload, dict(
         law=law, mu=mu, seed=seed, sliding_velocity=abs(v_signed), normal_load=normal_load,

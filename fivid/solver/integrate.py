@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["RawRecords", "integrate", "velocity_filter_gain", "chunked", "shortest_master_segment", "RUNAWAY_FACTOR"]
+__all__ = ["RawRecords", "integrate", "loop_arguments", "loop_state", "velocity_filter_gain", "chunked",
+           "shortest_master_segment", "RUNAWAY_FACTOR"]
 
 #: guard: the stiffness-damping loss inferred as W_int - U may not fall below -RUNAWAY_FACTOR x (KE + U)
 RUNAWAY_FACTOR = 2.0
@@ -18,7 +19,7 @@ RUNAWAY_FACTOR = 2.0
 
 @dataclass
 class RawRecords:
-    """Per-interval records at the oversampled rate (see :func:`fivid.solver._kernels.run_steps`)."""
+    """Per-interval records at the oversampled rate (see :func:`fivid.solver._loop_kernels.run_steps`)."""
 
     rec: np.ndarray
     sens_v: np.ndarray
@@ -43,9 +44,42 @@ def velocity_filter_gain(cutoff: float, dt: float) -> float:
     return float(-math.expm1(-2.0 * math.pi * cutoff * dt))
 
 
+def loop_arguments(model, st, ka, fric, dt: float, gs_max_iterations: int, gs_tol: float) -> tuple:
+    """The argument groups of :func:`fivid.solver._loop_kernels.run_steps` that describe the model and stay
+    fixed over a run: ``(stencil, structure, motions, loads, contact, friction)`` (the motions' and loads'
+    scratch arrays are allocated here). ``gs_tol`` [m] is the absolute Gauss-Seidel tolerance."""
+    from fivid.solver import _loop_kernels as L
+
+    structure = L.Structure(ka.mass, ka.minv, ka.spr_dof, ka.spr_kc, float(model.rayleigh_alpha),
+                            float(model.rayleigh_beta), velocity_filter_gain(model.damping_cutoff, dt))
+    motions = L.Motions(ka.con_dof, ka.con_grp, ka.grp_par, ka.con_react, np.zeros((ka.grp_par.shape[0], 2)))
+    loads = L.Loads(ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]),
+                    np.zeros(ka.ld_dof.size))
+    contact = L.ContactSet(ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign,
+                           ka.pair_par, ka.law_tab, ka.s_area, ka.minv_c, ka.cnodes, ka.cnode_slot,
+                           int(gs_max_iterations), float(gs_tol))
+    friction = L.FrictionTable(np.ascontiguousarray(fric.mu), float(fric.rate))
+    return st.kernel_args, structure, motions, loads, contact, friction
+
+
+def loop_state(st, ka, u, v, beta: float):
+    """The state groups of :func:`fivid.solver._loop_kernels.run_steps` at displacement ``u`` and velocity ``v``
+    (kernel layout; updated in place by the loop): ``(contact state, state)``; ``vf = v``, ``w = u + beta v``."""
+    from fivid.solver import _kernels as K
+    from fivid.solver import _loop_kernels as L
+
+    ns = ka.slave_node.size
+    cs = L.ContactState(ka.seg.copy(), np.zeros((ns, 9)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
+                        np.zeros(ns), np.zeros((ka.cnodes.size, 4)))
+    # the filtered velocity of band-limited damping starts at the initial velocity
+    state = L.State(u, v, u + beta * v, v.copy(), np.zeros_like(u), np.zeros_like(u), np.zeros(K.N_ACC), np.zeros(2))
+    return cs, state
+
+
 def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     """Run the time loop of ``settings.n_intervals`` output intervals; :class:`SimulationDiverged` on failure."""
     from fivid.solver import _kernels as K
+    from fivid.solver import _loop_kernels as L
     from fivid.solver.driver import SimulationDiverged
 
     dt = settings.time_step
@@ -57,21 +91,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     for c, d in enumerate(ka.con_dof):
         p = ka.grp_par[ka.con_grp[c]]
         v[d] = K.constrained_velocity(int(p[0]), p[1], p[2], p[3], -dt, dt)
-    beta = float(model.rayleigh_beta)
-    a_filt = velocity_filter_gain(model.damping_cutoff, dt)
-    vf = v.copy()  # the filtered velocity of band-limited damping starts at the initial velocity
-    w = u + beta * v
-    f = np.zeros_like(u)
-    scratch = np.zeros_like(u)
-    acc = np.zeros(K.N_ACC)
-    react_acc = np.zeros(2)
-    ns = ka.slave_node.size
     n_pairs = ka.master_ptr.size - 1
-    geo = np.zeros((ns, 9))
-    lam = np.zeros((ns, 2))
-    cstate = np.zeros(ns, dtype=np.int64)
-    mu_now = np.zeros(ns)
-    vold_c = np.zeros((ka.cnodes.size, 4))
     diag = np.zeros(2, dtype=np.int64)
     rec = np.full((n_int, K.N_REC), np.nan)
     sens_v = np.full((n_int, ka.sens_node.size, 2), np.nan)
@@ -80,33 +100,21 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     ke0 = float(0.5 * np.sum(ka.mass * v * v))
     # chunk: about 3e7 dof-steps (~0.1-0.3 s of wall time) per kernel call
     chunk = max(1, int(3e7 // max(1, 2 * st.npd * n_sub)))
-    seg = ka.seg.copy()
     # Gauss-Seidel tolerance: relative to the shortest master segment [m]
     gs_tol = settings.gs_tolerance * shortest_master_segment(ka.X, st.npd, ka.master_ptr, ka.master_nodes,
                                                              ka.slave_node, ka.slave_pair)
-    mu_tab = np.ascontiguousarray(fric.mu)
+    fixed = loop_arguments(model, st, ka, fric, dt, settings.gs_max_iterations, gs_tol)
+    cs, state = loop_state(st, ka, u, v, float(model.rayleigh_beta))
 
     def advance(r0, nr):
-        status, _ = K.run_steps(
-            r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, a_filt, n_sub, st.npd,
-            *st.kernel_args, ka.mass, ka.minv,
-            ka.spr_dof, ka.spr_kc,
-            ka.con_dof, ka.con_grp, ka.grp_par, np.zeros((ka.grp_par.shape[0], 2)), ka.con_react,
-            ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]), np.zeros(ka.ld_dof.size),
-            ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign, ka.pair_par,
-            ka.law_tab, ka.s_area, ka.minv_c,
-            seg, geo, lam, cstate,
-            settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate), mu_now, vold_c,
-            ka.cnode_slot, ka.cnodes,
-            ka.sens_node, ka.sens_dir,
-            u, v, w, vf, f, scratch, acc, react_acc,
-            rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], RUNAWAY_FACTOR, diag,
-        )
+        records = L.Records(rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], diag, ka.sens_node,
+                            ka.sens_dir)
+        status, _ = L.run_steps(r0 * n_sub, nr * n_sub, dt, n_sub, RUNAWAY_FACTOR, *fixed, cs, state, records)
         if status != K.OK:
             raise SimulationDiverged(_diagnosis(model, st, status, diag, dt, settings, u, v))
 
     chunked(advance, n_int, chunk, progress, settings.oversample)
-    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, acc, n_int * n_sub)
+    return RawRecords(rec, sens_v, sens_v0, contact, st.to_global(u), st.to_global(v), ke0, state.acc, n_int * n_sub)
 
 
 def chunked(advance, n_int, chunk, progress, oversample: int = 1):

@@ -42,20 +42,39 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     """The RunDataset of a finished run (see the module docstring)."""
     import xarray as xr
 
-    from fivid.schema import apply_cf_attrs, new_history, with_condition_coords
+    from fivid.schema import apply_cf_attrs, with_condition_coords
 
     q = settings.oversample
     t_int = 1.0 / (sample_rate * q)
     n_out = raw.rec.shape[0] // q
     time = (np.arange(n_out) * q + 0.5) * t_int
-    sv = np.concatenate([raw.sens_v0[None, :], raw.sens_v[:, :, 0]], axis=0)
-    sens_u = raw.sens_v[::q, :, 1][:n_out]
-    acc = _decimate(np.diff(sv, axis=0) / t_int, q)
-    vel = _decimate(0.5 * (sv[1:] + sv[:-1]), q)  # interval mean (trapezoid), anti-aliased like acceleration
-    rec = raw.rec
-    ft = _decimate(rec[:, K.R_FT], q)
-    fn = _decimate(rec[:, K.R_FN], q)
-    e = rec[::q][:n_out]
+    ft = _decimate(raw.rec[:, K.R_FT], q)
+    fn = _decimate(raw.rec[:, K.R_FN], q)
+    data = {"friction_force": (("time",), ft), "normal_force": (("time",), fn), **_energy_variables(raw, q, n_out)}
+    coords = {"time": time}
+    sensors = [s.name for s in model.sensors]
+    _add_sensor_variables(data, coords, sensors, raw, q, t_int, n_out)
+    if model.contacts:
+        _add_contact_variables(data, coords, [c.name for c in model.contacts], raw, q)
+    ds = xr.Dataset(data, coords=coords)
+    _describe_variables(ds, sensors)
+    fn_nominal = normal_load if normal_load is not None else float(np.mean(fn[time >= schedule.transient_end])) \
+        if np.any(time >= schedule.transient_end) else 0.0
+    ds.attrs.update(_run_attrs(model, raw, settings, schedule, fric, seed=seed, sliding_velocity=sliding_velocity,
+                               normal_load=fn_nominal, roughness_ra=roughness_ra, sample_rate=sample_rate,
+                               run_id=run_id))
+    if roughness_ra is None:
+        ds.attrs["roughness_ra_note"] = "not given: recorded as 0"
+    if record_state:
+        ds.attrs["final_u"] = raw.u
+        ds.attrs["final_v"] = raw.v
+    return apply_cf_attrs(with_condition_coords(ds))
+
+
+def _energy_variables(raw, q, n_out) -> dict:
+    """The energy balance at the end of the first oversampled interval of each output period [J]: energies,
+    works, dissipations and the balance's closure error."""
+    e = raw.rec[::q][:n_out]
     ke = e[:, K.R_KE]
     strain = e[:, K.R_U]
     damping = e[:, K.R_DA] + (e[:, K.R_WINT] - strain)
@@ -66,9 +85,7 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
     wload = e[:, K.R_WLOAD]
     wdrive = e[:, K.R_WDRIVE]
     closure = wext + wload + wdrive - (ke - raw.ke0 + strain + contact_energy + damping + friction + impact)
-    data = {
-        "friction_force": (("time",), ft),
-        "normal_force": (("time",), fn),
+    return {
         "kinetic_energy": (("time",), ke),
         "strain_energy": (("time",), strain),
         "external_work": (("time",), wext),
@@ -80,8 +97,15 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "impact_dissipation": (("time",), impact),
         "energy_balance_error": (("time",), closure),
     }
-    coords = {"time": time}
-    sensors = [s.name for s in model.sensors]
+
+
+def _add_sensor_variables(data, coords, sensors, raw, q, t_int, n_out):
+    """Acceleration (interval differences of the sensors' velocity, anti-aliased), velocity and displacement of
+    the sensors into ``data`` (dim ``sensor`` when there are several); zero acceleration without sensors."""
+    sv = np.concatenate([raw.sens_v0[None, :], raw.sens_v[:, :, 0]], axis=0)
+    sens_u = raw.sens_v[::q, :, 1][:n_out]
+    acc = _decimate(np.diff(sv, axis=0) / t_int, q)
+    vel = _decimate(0.5 * (sv[1:] + sv[:-1]), q)  # interval mean (trapezoid), anti-aliased like acceleration
     if len(sensors) == 1:
         data["acceleration"] = (("time",), acc[:, 0])
         data["sensor_displacement"] = (("time",), sens_u[:, 0])
@@ -93,18 +117,24 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         coords["sensor"] = np.array(sensors, dtype=object)
     else:
         data["acceleration"] = (("time",), np.zeros(n_out))
-    if model.contacts:
-        cb = _block_mean(raw.contact, q)
-        pairs = [c.name for c in model.contacts]
-        names = ("contact_normal_force", "contact_tangential_force", "stick_fraction", "slip_fraction", "open_fraction")
-        for i, name in enumerate(names):
-            if len(pairs) == 1:
-                data[name] = (("time",), cb[:, 0, i])
-            else:
-                data[name] = (("time", "contact"), cb[:, :, i])
-        if len(pairs) > 1:
-            coords["contact"] = np.array(pairs, dtype=object)
-    ds = xr.Dataset(data, coords=coords)
+
+
+def _add_contact_variables(data, coords, pairs, raw, q):
+    """Per-pair contact forces and stick/slip/open fractions, averaged over each output period, into ``data``
+    (dim ``contact`` when there are several pairs)."""
+    cb = _block_mean(raw.contact, q)
+    names = ("contact_normal_force", "contact_tangential_force", "stick_fraction", "slip_fraction", "open_fraction")
+    for i, name in enumerate(names):
+        if len(pairs) == 1:
+            data[name] = (("time",), cb[:, 0, i])
+        else:
+            data[name] = (("time", "contact"), cb[:, :, i])
+    if len(pairs) > 1:
+        coords["contact"] = np.array(pairs, dtype=object)
+
+
+def _describe_variables(ds, sensors):
+    """The descriptions of the simulation's own variables (beyond the schema's long names)."""
     if "sensor_displacement" in ds:
         ds["sensor_displacement"].attrs.update(
             units="m", long_name="displacement at the sensors along their direction (diagnostic)",
@@ -122,15 +152,22 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "friction + impact); round-off for a correct run")
     if len(sensors) == 1:
         ds["acceleration"].attrs["sensor"] = sensors[0]
+
+
+def _run_attrs(model, raw, settings, schedule, fric, *, seed, sliding_velocity, normal_load, roughness_ra,
+               sample_rate, run_id) -> dict:
+    """The run's attrs: conditions (``normal_load`` the target or the mean transducer force of the steady part
+    [N]), provenance, the integration settings, damping and contact method, Gauss-Seidel statistics."""
+    from fivid.schema import new_history
+
+    q = settings.oversample
     mu_desc = fric.description
     law_part = f"law sha256:{fric.sha256}" if fric.sha256 else "law none"
-    fn_nominal = normal_load if normal_load is not None else float(np.mean(fn[time >= schedule.transient_end])) \
-        if np.any(time >= schedule.transient_end) else 0.0
-    ds.attrs.update({
+    return {
         "run_id": run_id or f"sim-{model.sha256[:8] or 'model'}-s{int(seed)}",
         "rig": str(model.config.get("name", "model")) if isinstance(model.config, dict) else "model",
         "sliding_velocity": float(sliding_velocity),
-        "normal_load": float(fn_nominal),
+        "normal_load": float(normal_load),
         "roughness_ra": float(roughness_ra) if roughness_ra is not None else 0.0,
         "sample_rate": float(sample_rate),
         "source": f"simulation: model {model.source}; {law_part}; seed {int(seed)}",
@@ -162,10 +199,4 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         "contact_gs_max_sweeps": int(raw.acc[K.GS_MAX]),
         "contact_gs_steps_at_limit": int(raw.acc[K.GS_CAPPED]),
         "steps": int(raw.steps),
-    })
-    if roughness_ra is None:
-        ds.attrs["roughness_ra_note"] = "not given: recorded as 0"
-    if record_state:
-        ds.attrs["final_u"] = raw.u
-        ds.attrs["final_v"] = raw.v
-    return apply_cf_attrs(with_condition_coords(ds))
+    }

@@ -58,7 +58,8 @@ class Schedule:
 
 @dataclass
 class KernelArrays:
-    """Everything :func:`fivid.solver._kernels.run_steps` needs besides the state and outputs."""
+    """The model's arrays of :func:`fivid.solver._loop_kernels.run_steps` (grouped by
+    :func:`fivid.solver.integrate.loop_arguments`) besides the stencils, the state and the outputs."""
 
     mass: np.ndarray
     minv: np.ndarray
@@ -104,16 +105,43 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     ``normal_force = normal_sign * sum R_n`` over the reaction nodes of the first Reaction.
     """
     from fivid.fe.assembly import lumped_mass
-    from fivid.fe.loads import pressure_forces
 
-    n_dofs = model.n_dofs
-    mass_g = lumped_mass(model)
-    mass = st.to_kernel(mass_g)
+    mass = st.to_kernel(lumped_mass(model))
     minv = np.zeros_like(mass)
     minv[mass > 0] = 1.0 / mass[mass > 0]
     # ---- constrained dofs: fixed unless a motion drives them
-    kind = np.full(n_dofs, -1, dtype=np.int64)
-    par = np.zeros((n_dofs, 3))
+    kind, par = _motion_parameters(model, schedule)
+    con_global = np.flatnonzero(kind >= 0)
+    con_react = _transducer_weights(model, con_global, tangential_sign, normal_sign)
+    # motion groups: dofs sharing (kind, amplitude, start, ramp) get one velocity evaluation per step
+    rows = np.column_stack([kind[con_global], par[con_global]]).astype(float)
+    grp_par, grp = np.unique(rows, axis=0, return_inverse=True) if rows.size else (np.zeros((0, 4)), np.zeros(0))
+    grp = np.asarray(grp).ravel()
+    minv_c = minv.copy()
+    minv_c[st.dof_index(con_global)] = 0.0
+    # ---- springs
+    spr_dof = np.array([[st.dof_index(2 * s.node_a + s.component),
+                         st.dof_index(2 * s.node_b + s.component) if s.node_b >= 0 else -1] for s in model.springs],
+                       dtype=np.int64).reshape(-1, 2)
+    spr_kc = np.array([[s.stiffness, s.damping] for s in model.springs], dtype=float).reshape(-1, 2)
+    # ---- sensors
+    sens_node = _idx([st.node_index(s.node) for s in model.sensors])
+    sens_dir = np.array([np.asarray(s.direction, float) for s in model.sensors]).reshape(-1, 2)
+    return KernelArrays(
+        mass=mass, minv=minv, minv_c=minv_c, X=st.to_kernel(model.coords.ravel()),
+        spr_dof=_idx(spr_dof), spr_kc=np.ascontiguousarray(spr_kc),
+        con_dof=_idx(st.dof_index(con_global)), con_grp=_idx(grp), grp_par=np.ascontiguousarray(grp_par),
+        con_react=con_react, con_global=con_global,
+        sens_node=sens_node, sens_dir=np.ascontiguousarray(sens_dir),
+        **_contact_arrays(model, st), **_load_arrays(model, st),
+    )
+
+
+def _motion_parameters(model, schedule: Schedule) -> tuple[np.ndarray, np.ndarray]:
+    """Per global dof: the kind of its motion (-1 free, ``KIND_*``) and ``(amplitude, start, ramp time)``, the
+    "load" and "base" motions set by the loading ``schedule``."""
+    kind = np.full(model.n_dofs, -1, dtype=np.int64)
+    par = np.zeros((model.n_dofs, 3))
     kind[model.fixed_dofs] = KIND_FIXED
     for mo in model.motions:
         dofs = mo.dofs
@@ -131,7 +159,12 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
             t0, tr = schedule.base_start, schedule.base_ramp
         kind[dofs] = k
         par[dofs] = (amp, t0, tr)
-    con_global = np.flatnonzero(kind >= 0)
+    return kind, par
+
+
+def _transducer_weights(model, con_global, tangential_sign: float, normal_sign: float) -> np.ndarray:
+    """``(tangential, normal)`` weight of each constrained dof's reaction in the force transducer (the first
+    Reaction's nodes, signed); a transducer node that is not constrained is a ConfigError."""
     con_react = np.zeros((con_global.size, 2))
     if model.reactions:
         r = model.reactions[0]
@@ -144,18 +177,16 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
                         f"reactions.{r.name}: node {int(node)} component {'xy'[comp]} is not constrained; a force "
                         "transducer must sit on clamped or driven dofs")
                 con_react[slot[d], col] = sign
-    # motion groups: dofs sharing (kind, amplitude, start, ramp) get one velocity evaluation per step
-    rows = np.column_stack([kind[con_global], par[con_global]]).astype(float)
-    grp_par, grp = np.unique(rows, axis=0, return_inverse=True) if rows.size else (np.zeros((0, 4)), np.zeros(0))
-    grp = np.asarray(grp).ravel()
-    minv_c = minv.copy()
-    minv_c[st.dof_index(con_global)] = 0.0
-    # ---- springs
-    spr_dof = np.array([[st.dof_index(2 * s.node_a + s.component),
-                         st.dof_index(2 * s.node_b + s.component) if s.node_b >= 0 else -1] for s in model.springs],
-                       dtype=np.int64).reshape(-1, 2)
-    spr_kc = np.array([[s.stiffness, s.damping] for s in model.springs], dtype=float).reshape(-1, 2)
-    # ---- contact
+    return con_react
+
+
+def _contact_arrays(model, st: BlockStencils) -> dict:
+    """The contact fields of :class:`KernelArrays`: slaves, master segments, contact nodes, initial segments,
+    the pairs' law rows and tables, the slaves' tributary areas."""
+    from fivid.contact import kernel_row, kernel_tables
+    from fivid.contact._kernels import NPAR
+    from fivid.fe.contact import slave_areas
+
     slave_nodes, slave_pair, master, ptr = [], [], [], [0]
     for p, pair in enumerate(model.contacts):
         slave_nodes.extend(int(s) for s in pair.slave_nodes)
@@ -174,16 +205,24 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
             continue
         mid = 0.5 * (model.coords[m[:-1]] + model.coords[m[1:]])
         seg[k] = int(np.argmin(np.linalg.norm(mid - model.coords[s], axis=1)))
-    from fivid.contact import kernel_row, kernel_tables
-    from fivid.fe.contact import slave_areas
-
-    from fivid.contact._kernels import NPAR
-
     pair_par = np.array([kernel_row(c.law, c.friction, c.rigid) for c in model.contacts]).reshape(
         len(model.contacts), NPAR)
     s_area = np.concatenate([slave_areas(model, c) for c in model.contacts]) if model.contacts else np.zeros(0)
     law_tab = kernel_tables([c.law for c in model.contacts])
-    # ---- pressure loads: the non-zero nodal forces of each load, ramped from t = 0
+    return dict(
+        slave_node=_idx(st.node_index(slave_global)), slave_pair=_idx(slave_pair), slave_global=slave_global,
+        master_ptr=_idx(ptr), master_nodes=_idx(st.node_index(_idx(master))),
+        pair_sign=np.ones(len(model.contacts)), seg=seg,
+        cnodes=_idx(st.node_index(cnodes_g)), cnode_slot=cnode_slot,
+        pair_par=np.ascontiguousarray(pair_par, dtype=float), s_area=np.ascontiguousarray(s_area, dtype=float),
+        law_tab=np.ascontiguousarray(law_tab, dtype=float),
+    )
+
+
+def _load_arrays(model, st: BlockStencils) -> dict:
+    """The pressure-load fields of :class:`KernelArrays`: the non-zero nodal forces of each load and its ramp."""
+    from fivid.fe.loads import pressure_forces
+
     ld_dof, ld_force, ld_grp = [], [], []
     for g, load in enumerate(model.loads):
         fl = pressure_forces(model, load)
@@ -192,22 +231,8 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
         ld_force.append(fl[nz])
         ld_grp.append(np.full(nz.size, g))
     ld_par = np.array([[float(ld.start), float(ld.ramp_time)] for ld in model.loads]).reshape(-1, 2)
-    # ---- sensors
-    sens_node = _idx([st.node_index(s.node) for s in model.sensors])
-    sens_dir = np.array([np.asarray(s.direction, float) for s in model.sensors]).reshape(-1, 2)
-    return KernelArrays(
-        mass=mass, minv=minv, minv_c=minv_c, X=st.to_kernel(model.coords.ravel()),
-        spr_dof=_idx(spr_dof), spr_kc=np.ascontiguousarray(spr_kc),
-        con_dof=_idx(st.dof_index(con_global)), con_grp=_idx(grp), grp_par=np.ascontiguousarray(grp_par),
-        con_react=con_react, con_global=con_global,
-        slave_node=_idx(st.node_index(slave_global)), slave_pair=_idx(slave_pair), slave_global=slave_global,
-        master_ptr=_idx(ptr), master_nodes=_idx(st.node_index(_idx(master))),
-        pair_sign=np.ones(len(model.contacts)), seg=seg,
-        cnodes=_idx(st.node_index(cnodes_g)), cnode_slot=cnode_slot,
-        sens_node=sens_node, sens_dir=np.ascontiguousarray(sens_dir),
+    return dict(
         ld_dof=_idx(np.concatenate(ld_dof) if ld_dof else []),
         ld_force=np.ascontiguousarray(np.concatenate(ld_force) if ld_force else np.zeros(0)),
         ld_grp=_idx(np.concatenate(ld_grp) if ld_grp else []), ld_par=np.ascontiguousarray(ld_par),
-        pair_par=np.ascontiguousarray(pair_par, dtype=float), s_area=np.ascontiguousarray(s_area, dtype=float),
-        law_tab=np.ascontiguousarray(law_tab, dtype=float),
     )

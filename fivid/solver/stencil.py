@@ -41,7 +41,7 @@ PATCH_MAPPED = 2
 
 @dataclass(frozen=True)
 class BlockStencils:
-    """Stencil data and dof layout of a model for :mod:`fivid.solver._kernels`.
+    """Stencil data and dof layout of a model for :mod:`fivid.solver._stencil_kernels`.
 
     Attributes
     ----------
@@ -79,9 +79,12 @@ class BlockStencils:
     lst_coef: np.ndarray
 
     @property
-    def kernel_args(self) -> tuple:
-        """The stencil arguments of :func:`fivid.solver._kernels.block_forces` after ``npd``, in order."""
-        return self.blocks, self.c_uni, self.c_map, self.lst_idx, self.lst_nbr, self.lst_coef
+    def kernel_args(self):
+        """The stencil argument of :func:`fivid.solver._stencil_kernels.block_forces` (a
+        :class:`fivid.solver._stencil_kernels.StencilArrays`)."""
+        from fivid.solver._stencil_kernels import StencilArrays
+
+        return StencilArrays(self.npd, self.blocks, self.c_uni, self.c_map, self.lst_idx, self.lst_nbr, self.lst_coef)
 
     def dof_index(self, dof) -> np.ndarray:
         """Flat kernel index of global dof(s) ``2*node + c``."""
@@ -199,10 +202,10 @@ def block_stencils(model) -> BlockStencils:
 
 def apply_stencils(stencils: BlockStencils, w: np.ndarray) -> np.ndarray:
     """``K_blocks @ w`` [N] by the stencil kernel, global dof order in and out; ``w`` [m] (n_dofs,)."""
-    from fivid.solver._kernels import block_forces
+    from fivid.solver._stencil_kernels import block_forces
 
     s = stencils
     wk = s.to_kernel(np.asarray(w, dtype=float))
     f = np.zeros_like(wk)
-    block_forces(wk, f, s.npd, *s.kernel_args)
+    block_forces(wk, f, s.kernel_args)
     return s.to_global(f)

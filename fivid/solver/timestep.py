@@ -101,7 +101,7 @@ def _dashpot_limit(model) -> float:
 def amplification_matrix(omega, dt: float, alpha: float, beta: float, cutoff: float) -> np.ndarray:
     """One kernel step for modes of angular frequency ``omega`` [rad s-1]: ``s_{n+1} = A s_n``, shape (..., 3, 3).
 
-    State ``s = (u_n, v_{n-1/2}, vf_n)`` of :func:`fivid.solver._kernels._predictor`:
+    State ``s = (u_n, v_{n-1/2}, vf_n)`` of :func:`fivid.solver._loop_kernels._predictor`:
     ``v' = (1 - alpha dt) v - dt omega^2 (u + beta vf)``, ``u' = u + dt v'``, ``vf' = vf + a (v' - vf)`` with
     ``a = 1 - exp(-2 pi cutoff dt)`` (1 for classic Rayleigh, ``cutoff`` inf: then ``vf`` is ``v``).
     """

@@ -1,0 +1,396 @@
+"""The contact correction of the explicit solver (layer L0): forward-increment Lagrange multipliers with
+Coulomb friction by projected Gauss-Seidel, the friction coefficients now, and the contact's work and record.
+
+Used by the full model's loop (:mod:`fivid.solver._loop_kernels`, lumped inverse mass) and by the reduced
+system's (:mod:`fivid.solver._reduced_kernels`, dense inverse mass ``wmat`` of the contact dofs). The normal
+laws, friction curve and rigid surfaces are those of :mod:`fivid.contact._kernels`. Layout:
+:mod:`fivid.solver._kernels`.
+"""
+
+import math
+
+from fivid.contact._kernels import (
+    LAW_RIGID,
+    MASTER_EDGE,
+    friction_coefficient,
+    normal_energy,
+    normal_pressure,
+    rigid_geometry,
+    surface_ramp,
+)
+from fivid.solver._kernels import GS_CAPPED, GS_MAX, GS_SWEEPS, kernel
+
+__all__ = ["contact_solve", "contact_step", "contact_work", "friction_now", "finish_contact_record"]
+
+
+@kernel
+def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
+    """Find the master segment under slave node ``sn`` starting from ``seg_k`` (local monotone search).
+
+    Returns ``(segment, xi, nx, ny, tx, ty, inside)`` with the unit outward normal ``n`` and tangent ``t``.
+    """
+    xs = X[sn] + u[sn]
+    ys = X[sn + npd] + u[sn + npd]
+    s = min(max(seg_k, 0), nseg - 1)
+    xi = 0.0
+    ex = 0.0
+    ey = 0.0
+    for _ in range(nseg + 1):
+        a = mnodes[m0 + s]
+        bb = mnodes[m0 + s + 1]
+        xa = X[a] + u[a]
+        ya = X[a + npd] + u[a + npd]
+        ex = X[bb] + u[bb] - xa
+        ey = X[bb + npd] + u[bb + npd] - ya
+        xi = ((xs - xa) * ex + (ys - ya) * ey) / (ex * ex + ey * ey)
+        if xi < 0.0 and s > 0:
+            s -= 1
+        elif xi > 1.0 and s < nseg - 1:
+            s += 1
+        else:
+            break
+    L = math.sqrt(ex * ex + ey * ey)
+    tx = ex / L
+    ty = ey / L
+    # a slave node at the very end of the master edge (edges meeting corner to corner) must not flicker
+    # in and out of contact through round-off: accept 1e-6 of a segment beyond the ends, then clamp
+    inside = -1e-6 <= xi <= 1.0 + 1e-6
+    xi = min(max(xi, 0.0), 1.0)
+    return s, xi, sign * ty, -sign * tx, tx, ty, inside
+
+
+@kernel
+def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par):
+    """x-indices of slave ``k`` and of the two nodes of its current master segment (a rigid master has none:
+    the slave itself is returned for both, with shape values 0, so the master terms vanish)."""
+    p = slave_pair[k]
+    if pair_par[p, 6] != MASTER_EDGE:
+        return slave_node[k], slave_node[k], slave_node[k]
+    return slave_node[k], master_nodes[master_ptr[p] + seg[k]], master_nodes[master_ptr[p] + seg[k] + 1]
+
+
+@kernel
+def _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, fx, fy):
+    """Correct position and velocity of slave ``sn`` by the contact force ``(fx, fy)`` [N] over one step and of
+    the master nodes ``a``, ``b`` by ``-N0`` and ``-N1`` times it (zero inverse mass: constrained, not moved).
+
+    ``wmat`` empty: the lumped inverse mass ``minv_c`` (diagonal). Otherwise ``wmat`` is the dense inverse mass
+    of the contact dofs (a reduced system, :mod:`fivid.solver.reduced`): the force moves every dof of
+    ``u[:wmat.shape[0]]`` by ``dt^2 W G^T f``."""
+    dt2 = dt * dt
+    if wmat.shape[0] > 0:
+        for i in range(wmat.shape[0]):
+            s = (wmat[sn, i] * fx + wmat[sn + npd, i] * fy - n0 * (wmat[a, i] * fx + wmat[a + npd, i] * fy)
+                 - n1 * (wmat[b, i] * fx + wmat[b + npd, i] * fy))
+            u[i] += dt2 * s
+            v[i] += dt * s
+        return
+    u[sn] += dt2 * minv_c[sn] * fx
+    v[sn] += dt * minv_c[sn] * fx
+    u[sn + npd] += dt2 * minv_c[sn + npd] * fy
+    v[sn + npd] += dt * minv_c[sn + npd] * fy
+    u[a] -= dt2 * minv_c[a] * n0 * fx
+    v[a] -= dt * minv_c[a] * n0 * fx
+    u[a + npd] -= dt2 * minv_c[a + npd] * n0 * fy
+    v[a + npd] -= dt * minv_c[a + npd] * n0 * fy
+    u[b] -= dt2 * minv_c[b] * n1 * fx
+    v[b] -= dt * minv_c[b] * n1 * fx
+    u[b + npd] -= dt2 * minv_c[b + npd] * n1 * fy
+    v[b + npd] -= dt * minv_c[b + npd] * n1 * fy
+
+
+@kernel
+def _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1):
+    """``(cxx, cxy, cyy)`` [kg-1]: the inverse mass of the relative motion ``slave - (N0 a + N1 b)`` (2x2,
+    symmetric); the lumped mass has no xy term, a reduced system's dense ``wmat`` has."""
+    if wmat.shape[0] == 0:
+        return (minv_c[sn] + n0 * n0 * minv_c[a] + n1 * n1 * minv_c[b], 0.0,
+                minv_c[sn + npd] + n0 * n0 * minv_c[a + npd] + n1 * n1 * minv_c[b + npd])
+    cxx = 0.0
+    cxy = 0.0
+    cyy = 0.0
+    for i in range(3):
+        pi = sn if i == 0 else (a if i == 1 else b)
+        ci = 1.0 if i == 0 else (-n0 if i == 1 else -n1)
+        for j in range(3):
+            pj = sn if j == 0 else (a if j == 1 else b)
+            cj = 1.0 if j == 0 else (-n0 if j == 1 else -n1)
+            cxx += ci * cj * wmat[pi, pj]
+            cxy += ci * cj * wmat[pi, pj + npd]
+            cyy += ci * cj * wmat[pi + npd, pj + npd]
+    return cxx, cxy, cyy
+
+
+@kernel
+def _normal_update(kind, c, nexp, tab, area, g, ln, wn):
+    """New normal multiplier [N] of a slave at gap ``g`` [m] carrying ``ln``: rigid, the multiplier that closes
+    the gap; compliant laws, one Newton step on ``ln = A p(-g)`` with the gap's response ``wn`` [m N-1] to the
+    multiplier (implicit in the contact force: the penalty spring does not lower the stable step)."""
+    if kind == LAW_RIGID:
+        ln_new = ln - g / wn if wn > 0.0 else ln
+    else:
+        p, dp = normal_pressure(kind, c, nexp, -g, tab)
+        ln_new = ln + (area * p - ln) / (1.0 + area * dp * wn)
+    if ln_new < 0.0:
+        ln_new = 0.0
+    return ln_new
+
+
+@kernel
+def _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt):
+    """New tangential multiplier [N] and state (1 stick, 2 slip) from the relative tangential increment ``st``
+    [m] over the step: stick if the multiplier that cancels it stays within ``mu_s ln``, else slip with the
+    kinetic curve ``mu(v)`` at the slip rate ``v`` that force leaves at the end of the step."""
+    lt_stick = lt - st / wt if wt > 0.0 else lt
+    cap = (mu_k + par_p[3]) * ln_new
+    if -cap <= lt_stick <= cap:
+        return lt_stick, 1
+    sgn = 1.0 if lt_stick > 0.0 else -1.0
+    mu = mu_k
+    if par_p[4] > 0.0 or par_p[5] != 0.0:
+        # the slip rate the sliding force leaves at the end of the step, v = (st + wt (lt_new - lt)) / dt, and
+        # mu(v): a fixed point contracting by dt lam_n |mu'| / m_node per pass (~1e-2)
+        for _ in range(4):
+            v_slip = (st + wt * (sgn * mu * ln_new - lt)) / dt
+            mu = friction_coefficient(mu_k, par_p[3], par_p[4], par_p[5], v_slip)
+    return sgn * mu * ln_new, 2
+
+
+@kernel
+def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, pair_par, seg, geo):
+    """Master segment ``seg[k]`` and geometry ``geo[k]`` of every slave in the predicted configuration ``u`` (see
+    :func:`contact_solve`); a rigid master's surface velocity at ``t_new`` [s]."""
+    ns = slave_node.shape[0]
+    for k in range(ns):
+        p = slave_pair[k]
+        mk = int(pair_par[p, 6])
+        if mk == MASTER_EDGE:
+            m0 = master_ptr[p]
+            nseg = master_ptr[p + 1] - m0 - 1
+            s, xi, nx, ny, tx, ty, inside = _locate(X, u, npd, slave_node[k], master_nodes, m0, nseg, seg[k],
+                                                    pair_sign[p])
+            seg[k] = s
+            geo[k, 0] = 1.0 - xi
+            geo[k, 1] = xi
+            geo[k, 8] = 0.0
+        else:
+            sn = slave_node[k]
+            g, nx, ny, tx, ty, vt = rigid_geometry(mk, pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
+                                                   pair_par[p, 10], pair_par[p, 11], pair_par[p, 12], X[sn],
+                                                   X[sn + npd], X[sn] + u[sn], X[sn + npd] + u[sn + npd])
+            inside = math.isfinite(g)
+            geo[k, 0] = 0.0
+            geo[k, 1] = 0.0
+            geo[k, 8] = vt * surface_ramp(t_new, pair_par[p, 13], pair_par[p, 14])
+        geo[k, 2] = nx
+        geo[k, 3] = ny
+        geo[k, 4] = tx
+        geo[k, 5] = ty
+        geo[k, 6] = 1.0 if inside else 0.0
+        geo[k, 7] = 0.0
+
+
+@kernel
+def _warm_start(u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par, seg, geo, lam,
+                cstate):
+    """Apply the previous step's multipliers ``lam`` (re-projected by the first sweep) to the slaves still facing
+    their master; release the others (state open)."""
+    ns = slave_node.shape[0]
+    for k in range(ns):
+        ln = lam[k, 0]
+        lt = lam[k, 1]
+        if geo[k, 6] == 0.0 or ln <= 0.0:
+            lam[k, 0] = 0.0
+            lam[k, 1] = 0.0
+            cstate[k] = 0
+            continue
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
+        n0 = geo[k, 0]
+        n1 = geo[k, 1]
+        _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, ln * geo[k, 2] + lt * geo[k, 4],
+                             ln * geo[k, 3] + lt * geo[k, 5])
+
+
+@kernel
+def _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par,
+                        law_tab, s_area, seg, geo, lam, cstate, mu):
+    """One projected Gauss-Seidel sweep over the slaves facing their master (see :func:`contact_solve`): update
+    each multiplier pair and apply its increment at once. Returns the largest displacement [m] an increment
+    moved a node pair by."""
+    ns = slave_node.shape[0]
+    dt2 = dt * dt
+    change = 0.0
+    for k in range(ns):
+        if geo[k, 6] == 0.0:
+            continue
+        p = slave_pair[k]
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
+        n0 = geo[k, 0]
+        n1 = geo[k, 1]
+        nx = geo[k, 2]
+        ny = geo[k, 3]
+        tx = geo[k, 4]
+        ty = geo[k, 5]
+        # effective inverse masses along x and y of the relative motion slave - (N0 a + N1 b)
+        wx, wxy, wy = _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1)
+        # normal: gap in the current (predicted + corrected) configuration
+        if pair_par[p, 6] == MASTER_EDGE:
+            gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
+            gy = (X[sn + npd] + u[sn + npd] - n0 * (X[a + npd] + u[a + npd])
+                  - n1 * (X[b + npd] + u[b + npd]))
+            g = gx * nx + gy * ny
+        else:
+            g = rigid_geometry(int(pair_par[p, 6]), pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
+                               pair_par[p, 10], 0.0, 0.0, X[sn], X[sn + npd], X[sn] + u[sn],
+                               X[sn + npd] + u[sn + npd])[0]
+        wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
+        ln = lam[k, 0]
+        ln_new = _normal_update(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], law_tab[p], s_area[k], g,
+                                ln, wn)
+        dn = ln_new - ln
+        # tangential: relative tangential increment over the step (the master's surface velocity removed),
+        # including the normal correction
+        rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx + dt * dn * ny * wxy
+        ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy + dt * dn * nx * wxy
+        st = dt * (rx * tx + ry * ty - geo[k, 8])
+        wt = dt2 * (tx * tx * wx + ty * ty * wy + 2.0 * tx * ty * wxy)
+        lt = lam[k, 1]
+        lt_new, state = _tangential_update(lt, st, wt, ln_new, mu[k], pair_par[p], dt)
+        if ln_new == 0.0:
+            state = 0
+        dtn = lt_new - lt
+        if dn != 0.0 or dtn != 0.0:  # an open node far from its master (most of them) moves nothing
+            _apply_contact_force(u, v, npd, dt, minv_c, wmat, sn, a, b, n0, n1, dn * nx + dtn * tx,
+                                 dn * ny + dtn * ty)
+        lam[k, 0] = ln_new
+        lam[k, 1] = lt_new
+        cstate[k] = state
+        geo[k, 7] = -(g + dn * wn) if pair_par[p, 0] != LAW_RIGID else 0.0
+        # convergence measured as the displacement the last increments moved the node pair by: the
+        # positions carry round-off eps |x| ~ 1e-17 m, i.e. multiplier noise eps |x| / (dt^2 w), so a
+        # relative multiplier tolerance can be unreachable at small dt
+        change = max(change, abs(dn) * wn, abs(dtn) * wt)
+    return change
+
+
+@kernel
+def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                  pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol):
+    """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
+
+    On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that every active slave
+    node obeys its pair's normal law (rigid: no penetration of its master; linear/power: the multiplier equals
+    ``A p(d)`` at the corrected penetration ``d``, ``A`` its tributary area ``s_area``) and the tangential
+    multiplier obeys Coulomb's law with static and kinetic coefficients (stick: zero relative tangential
+    increment over the step while ``|lam_t| <= mu_s lam_n``; slip: ``|lam_t| = mu(v) lam_n``). Normal and
+    tangential multipliers of all slave nodes are iterated together by projected Gauss-Seidel until the
+    largest correction of a sweep moves no node pair by more than ``tol`` [m]. ``mu[k]`` is the kinetic
+    coefficient of slave ``k`` now (``mu0 + mu_p(t)``); ``pair_par`` the pairs' law rows and ``law_tab`` their
+    tables (:mod:`fivid.contact._kernels`); a rigid master (line, circle) moves its surface at the ramped speed at
+    ``t_new`` [s], the end of the step. ``wmat`` empty: lumped inverse mass ``minv_c``; else the dense inverse
+    mass of the contact dofs of a reduced system (:func:`_apply_contact_force`).
+
+    Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
+    force on slave ``k`` along ``n`` and ``t``, on entry the previous step's values (warm start: applied first,
+    then projected and iterated, so the converged result does not depend on it beyond the tolerance) (the master
+    nodes get ``-N_j`` times it); ``cstate[k]`` 0 open, 1 stick, 2 slip; ``geo[k] = (N0, N1, nx, ny, tx, ty,
+    inside, penetration, surface velocity along t)``. Returns the number of sweeps.
+    """
+    _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, pair_par, seg, geo)
+    # warm start: in steady sliding the multipliers change little per step, so the projected Gauss-Seidel needs a
+    # few sweeps instead of tens
+    _warm_start(u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par, seg, geo, lam,
+                cstate)
+    sweeps = 0
+    for it in range(max_iter):
+        sweeps = it + 1
+        change = _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                                     pair_par, law_tab, s_area, seg, geo, lam, cstate, mu)
+        if change <= tol:
+            break
+    return sweeps
+
+
+@kernel
+def friction_now(mu_tab, mu_rate, t, mu_now):
+    """Kinetic coefficient of every slave at time ``t`` [s]: the table ``mu_tab`` (rows at ``mu_rate`` [Hz], one
+    row: constant) interpolated linearly, clipped at 0."""
+    n_mu = mu_tab.shape[0]
+    ns = mu_now.shape[0]
+    if n_mu == 1:
+        for k in range(ns):
+            mu_now[k] = mu_tab[0, k]
+    else:
+        x = t * mu_rate
+        i0 = min(int(x), n_mu - 2)
+        fr = x - i0
+        for k in range(ns):
+            mu_now[k] = max(0.0, (1.0 - fr) * mu_tab[i0, k] + fr * mu_tab[i0 + 1, k])
+
+
+@kernel
+def contact_step(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_sign,
+                 pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_tab, mu_rate, mu_now, max_iter, tol, acc):
+    """The friction coefficients at ``t_new`` (:func:`friction_now`), the contact correction
+    (:func:`contact_solve`) and its Gauss-Seidel statistics in ``acc``."""
+    friction_now(mu_tab, mu_rate, t_new, mu_now)
+    sweeps = contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                           pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_now, max_iter, tol)
+    acc[GS_SWEEPS] += sweeps
+    acc[GS_MAX] = max(acc[GS_MAX], sweeps)
+    if sweeps >= max_iter:
+        acc[GS_CAPPED] += 1.0
+
+
+@kernel
+def contact_work(v, npd, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par, geo, lam, cstate,
+                 cnode_slot, vold_c, rec_contact_r):
+    """Work / dt of the normal and tangential contact forces and of the rigid surfaces' drive over a step, with
+    the mid-step velocities of the contact nodes (``vold_c[:, :2]`` before the step, ``v`` after); adds each
+    pair's forces and state counts to ``rec_contact_r``. Returns ``(wcn, wct, wdr)`` [W]."""
+    wcn = 0.0
+    wct = 0.0
+    wdr = 0.0
+    for k in range(slave_node.shape[0]):
+        p = slave_pair[k]
+        if cstate[k] == 0:
+            rec_contact_r[p, 4] += 1.0
+            continue
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
+        n0 = geo[k, 0]
+        n1 = geo[k, 1]
+        qs = cnode_slot[sn]
+        qa = cnode_slot[a]
+        qb = cnode_slot[b]
+        rx = 0.5 * ((vold_c[qs, 0] + v[sn]) - n0 * (vold_c[qa, 0] + v[a]) - n1 * (vold_c[qb, 0] + v[b]))
+        ry = 0.5 * ((vold_c[qs, 1] + v[sn + npd]) - n0 * (vold_c[qa, 1] + v[a + npd])
+                    - n1 * (vold_c[qb, 1] + v[b + npd]))
+        wcn += lam[k, 0] * (rx * geo[k, 2] + ry * geo[k, 3])
+        # a rigid master's surface moves at geo[k, 8] along t: the friction dissipates on the
+        # relative slip and the drive does the rest of the work on the slave
+        wct += lam[k, 1] * (rx * geo[k, 4] + ry * geo[k, 5] - geo[k, 8])
+        wdr += lam[k, 1] * geo[k, 8]
+        rec_contact_r[p, 0] += lam[k, 0]
+        rec_contact_r[p, 1] += lam[k, 1]
+        rec_contact_r[p, 1 + cstate[k]] += 1.0
+    return wcn, wct, wdr
+
+
+@kernel
+def finish_contact_record(slave_pair, pair_par, law_tab, s_area, geo, cstate, n_sub, rec_contact_r):
+    """Turn an interval's contact sums into averages and fractions; returns the energy stored in the compliant
+    normal laws [J]."""
+    epen = 0.0
+    for k in range(slave_pair.shape[0]):
+        p = slave_pair[k]
+        if pair_par[p, 0] != LAW_RIGID and cstate[k] != 0:
+            epen += s_area[k] * normal_energy(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], geo[k, 7],
+                                              law_tab[p])
+    for p in range(rec_contact_r.shape[0]):
+        cnt = rec_contact_r[p, 2] + rec_contact_r[p, 3] + rec_contact_r[p, 4]
+        rec_contact_r[p, 0] /= n_sub
+        rec_contact_r[p, 1] /= n_sub
+        if cnt > 0.0:
+            for c in range(2, 5):
+                rec_contact_r[p, c] /= cnt
+    return epen

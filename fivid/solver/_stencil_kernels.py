@@ -1,0 +1,218 @@
+"""Internal forces of the explicit solver (layer L0): the per-block 3x3 stencils ``f = K w`` and the discrete
+springs and dashpots. Layout and indexing: :mod:`fivid.solver._kernels`."""
+
+from collections import namedtuple
+
+from numba import uint64
+
+from fivid.solver._kernels import fma_kernel, kernel
+
+__all__ = ["StencilArrays", "block_forces", "spring_forces"]
+
+#: the stencil argument of :func:`block_forces` (``block_forces(w, f, stencil)``), built by
+#: :attr:`fivid.solver.stencil.BlockStencils.kernel_args`
+StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "lst_idx", "lst_nbr", "lst_coef"])
+
+
+@fma_kernel
+def _uniform_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
+    """Force component ``a`` on a rectangular patch of nodes sharing one stencil ``c`` (unsigned indices: no
+    negative-index wraparound, so the row loop vectorises)."""
+    st = uint64(stride)
+    one = uint64(1)
+    k = 2 * a
+    c0 = c[k]
+    c1 = c[k + 1]
+    c4 = c[k + 4]
+    c5 = c[k + 5]
+    c8 = c[k + 8]
+    c9 = c[k + 9]
+    c12 = c[k + 12]
+    c13 = c[k + 13]
+    c16 = c[k + 16]
+    c17 = c[k + 17]
+    c20 = c[k + 20]
+    c21 = c[k + 21]
+    c24 = c[k + 24]
+    c25 = c[k + 25]
+    c28 = c[k + 28]
+    c29 = c[k + 29]
+    c32 = c[k + 32]
+    c33 = c[k + 33]
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for i in range(ncols):
+            m = b + uint64(i)
+            s = m - st
+            n = m + st
+            fo[m] = (c0 * wx[s - one] + c1 * wy[s - one] + c4 * wx[s] + c5 * wy[s] + c8 * wx[s + one]
+                     + c9 * wy[s + one] + c12 * wx[m - one] + c13 * wy[m - one] + c16 * wx[m] + c17 * wy[m]
+                     + c20 * wx[m + one] + c21 * wy[m + one] + c24 * wx[n - one] + c25 * wy[n - one]
+                     + c28 * wx[n] + c29 * wy[n] + c32 * wx[n + one] + c33 * wy[n + one])
+
+
+@fma_kernel
+def _rect_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
+    """As :func:`_uniform_component` for a patch of rectangular elements, whose cross-coupling (xy) with the
+    axis neighbours and the node itself vanishes: 13 terms instead of 18."""
+    st = uint64(stride)
+    one = uint64(1)
+    # own-component coefficient of neighbour position p (0..8, row-major from (-1, -1)): c[4p + 3a];
+    # cross-component: c[4p + a + 1], non-zero only at the four corners
+    s0 = c[3 * a]
+    s1 = c[4 + 3 * a]
+    s2 = c[8 + 3 * a]
+    s3 = c[12 + 3 * a]
+    s4 = c[16 + 3 * a]
+    s5 = c[20 + 3 * a]
+    s6 = c[24 + 3 * a]
+    s7 = c[28 + 3 * a]
+    s8 = c[32 + 3 * a]
+    x0 = c[a + 1]
+    x2 = c[8 + a + 1]
+    x6 = c[24 + a + 1]
+    x8 = c[32 + a + 1]
+    if a == 0:
+        ws = wx
+        wo = wy
+    else:
+        ws = wy
+        wo = wx
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for i in range(ncols):
+            m = b + uint64(i)
+            s = m - st
+            n = m + st
+            fo[m] = (s0 * ws[s - one] + x0 * wo[s - one] + s1 * ws[s] + s2 * ws[s + one] + x2 * wo[s + one]
+                     + s3 * ws[m - one] + s4 * ws[m] + s5 * ws[m + one]
+                     + s6 * ws[n - one] + x6 * wo[n - one] + s7 * ws[n] + s8 * ws[n + one] + x8 * wo[n + one])
+
+
+@fma_kernel
+def _mapped_component(wx, wy, fo, cm, col0, a, first, ncols, nrows, stride):
+    """Force component ``a`` on a patch of nodes with per-node stencils ``cm[:, col0 + row*ncols + column]``.
+
+    Component-major storage: each coefficient is contiguous over a row of nodes; taking the 18 row slices
+    first (views, no copy) lets the row loop vectorise (indexing ``cm[k, q]`` inside it measured 2.8x slower:
+    the coefficient loads were not recognised as unit-stride)."""
+    st = uint64(stride)
+    one = uint64(1)
+    k = 2 * a
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        q0 = col0 + j * ncols
+        q1 = q0 + ncols
+        c0 = cm[k, q0:q1]
+        c1 = cm[k + 1, q0:q1]
+        c4 = cm[k + 4, q0:q1]
+        c5 = cm[k + 5, q0:q1]
+        c8 = cm[k + 8, q0:q1]
+        c9 = cm[k + 9, q0:q1]
+        c12 = cm[k + 12, q0:q1]
+        c13 = cm[k + 13, q0:q1]
+        c16 = cm[k + 16, q0:q1]
+        c17 = cm[k + 17, q0:q1]
+        c20 = cm[k + 20, q0:q1]
+        c21 = cm[k + 21, q0:q1]
+        c24 = cm[k + 24, q0:q1]
+        c25 = cm[k + 25, q0:q1]
+        c28 = cm[k + 28, q0:q1]
+        c29 = cm[k + 29, q0:q1]
+        c32 = cm[k + 32, q0:q1]
+        c33 = cm[k + 33, q0:q1]
+        for i in range(ncols):
+            m = b + uint64(i)
+            s = m - st
+            n = m + st
+            fo[m] = (c0[i] * wx[s - one] + c1[i] * wy[s - one] + c4[i] * wx[s] + c5[i] * wy[s]
+                     + c8[i] * wx[s + one] + c9[i] * wy[s + one] + c12[i] * wx[m - one] + c13[i] * wy[m - one]
+                     + c16[i] * wx[m] + c17[i] * wy[m] + c20[i] * wx[m + one] + c21[i] * wy[m + one]
+                     + c24[i] * wx[n - one] + c25[i] * wy[n - one] + c28[i] * wx[n] + c29[i] * wy[n]
+                     + c32[i] * wx[n + one] + c33[i] * wy[n + one])
+
+
+@fma_kernel
+def block_forces(w, f, stencil):
+    """``f = K_blocks w`` by the per-block 3x3 stencils (every node of every block is written).
+
+    Parameters
+    ----------
+    w : ndarray (2*npd,)
+        Generalised displacement ``u + beta v`` [m], x part then y part, node ``p`` at ``pad + p``.
+    f : ndarray (2*npd,)
+        Output forces [N] (same layout).
+    stencil : StencilArrays
+        ``(npd, blocks, c_uni, c_map, lst_idx, lst_nbr, lst_coef)``:
+
+    npd : int
+        Length of one component (nodes plus padding on both sides).
+    blocks : int64 ndarray (n_patch, 6)
+        Patches: ``first x-index, columns, rows, row stride, kind, coefficients``; kind 0: one shared stencil
+        ``c_uni[coefficients]`` (18 terms per force), 1: the same for rectangular elements (the xy couplings
+        with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
+        ``c_map[:, coefficients + row*columns + column]``. Neighbours outside a block have zero coefficients
+        (the padding keeps their indices in bounds).
+    c_uni : ndarray (n_uniform, 36)
+        Shared stencils [N m-1].
+    c_map : ndarray (36, n_mapped)
+        Per-node stencils of mapped patches [N m-1].
+    lst_idx : int64 ndarray (n_list,)
+        Listed nodes (block corners, seam columns of periodic rings): x-index.
+    lst_nbr : int64 ndarray (n_list, 9)
+        x-indices of their 3x3 neighbours, row-major from ``(-1, -1)``.
+    lst_coef : ndarray (n_list, 36)
+        Their stencils [N m-1].
+    """
+    npd, blocks, c_uni, c_map, lst_idx, lst_nbr, lst_coef = stencil
+    wx = w[:npd]
+    wy = w[npd:]
+    fx = f[:npd]
+    fy = f[npd:]
+    for b in range(blocks.shape[0]):
+        kind = blocks[b, 4]
+        if kind == 2:
+            _mapped_component(wx, wy, fx, c_map, blocks[b, 5], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2],
+                              blocks[b, 3])
+            _mapped_component(wx, wy, fy, c_map, blocks[b, 5], 1, blocks[b, 0], blocks[b, 1], blocks[b, 2],
+                              blocks[b, 3])
+            continue
+        c = c_uni[blocks[b, 5]]
+        if kind == 1:
+            _rect_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+            _rect_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+        else:
+            _uniform_component(wx, wy, fx, c, 0, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+            _uniform_component(wx, wy, fy, c, 1, blocks[b, 0], blocks[b, 1], blocks[b, 2], blocks[b, 3])
+    for r in range(lst_idx.shape[0]):
+        p = lst_idx[r]
+        sx = 0.0
+        sy = 0.0
+        for e in range(9):
+            q = lst_nbr[r, e]
+            k = 4 * e
+            ax = wx[q]
+            ay = wy[q]
+            sx += lst_coef[r, k] * ax + lst_coef[r, k + 1] * ay
+            sy += lst_coef[r, k + 2] * ax + lst_coef[r, k + 3] * ay
+        fx[p] = sx
+        fy[p] = sy
+
+
+@kernel
+def spring_forces(u, v, f, spr_dof, spr_kc, with_damping):
+    """Add discrete spring (and dashpot) forces to ``f``; ``spr_dof[s] = (dof_a, dof_b or -1)``, ``spr_kc = (k, c)``."""
+    for s in range(spr_dof.shape[0]):
+        a = spr_dof[s, 0]
+        b = spr_dof[s, 1]
+        du = u[a]
+        dv = v[a]
+        if b >= 0:
+            du -= u[b]
+            dv -= v[b]
+        fs = spr_kc[s, 0] * du
+        if with_damping:
+            fs += spr_kc[s, 1] * dv
+        f[a] += fs
+        if b >= 0:
+            f[b] -= fs
