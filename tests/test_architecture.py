@@ -115,9 +115,8 @@ def test_kernels_import_only_numpy_and_numba():
     assert not bad, "\n".join(bad)
 
 
-#: kernel modules still passing their own fastmath/parallel options (being edited in parallel: move them to
-#: the shared decorators of fivid/solver/_kernels.py when that work lands)
-_OWN_JIT_OPTIONS = {"solver._reduced_kernels"}
+#: kernel modules passing their own fastmath/parallel options (none: every kernel uses the shared decorators)
+_OWN_JIT_OPTIONS: set[str] = set()
 
 
 def test_kernel_compilation_setting_is_defined_once():

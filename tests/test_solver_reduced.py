@@ -210,3 +210,23 @@ def test_mass_scaled_reduction_matches_the_full_run_in_band_at_a_longer_step(coa
     steady = ds_full.time >= ds_full.attrs["transient_end"]
     assert float(ds_fast.friction_force.where(steady).mean()) == pytest.approx(
         float(ds_full.friction_force.where(steady).mean()), rel=0.01)
+
+
+def test_driver_mass_scaling_option():
+    """simulate(reduced=True, reduced_mass_scaling=f) builds the mass-scaled reduced system: the run records the
+    scaling, its step is longer than the unscaled reduced run's (the scaled modes sit at f), and the option is
+    refused without reduced=True or with a mode count (its frequency sets the modes kept)."""
+    from fivid.errors import ConfigError
+    from fivid.fe import load_model
+    from fivid.solver.driver import prepare_run
+
+    model = load_model(COARSE)
+    kw = dict(mu=0.3, duration=2e-3, sample_rate=51200.0)
+    plain = prepare_run(model, reduced=True, **kw)
+    scaled = prepare_run(model, reduced=True, reduced_mass_scaling=153.6e3, **kw)
+    assert scaled.reduced.attrs()["reduced_mass_scaling"] == 153.6e3
+    assert scaled.settings.time_step > plain.settings.time_step
+    with pytest.raises(ConfigError, match="reduced=True"):
+        prepare_run(model, reduced_mass_scaling=153.6e3, **kw)
+    with pytest.raises(ConfigError, match="number of modes"):
+        prepare_run(model, reduced=20, reduced_mass_scaling=153.6e3, **kw)

@@ -1,7 +1,7 @@
 """Contact-law and rigid-surface kernels: the one definition of each law's force, tangent and energy (layer L0).
 
 Every analysis calls these same functions: the explicit solver's contact correction
-(:func:`fivid.solver._kernels.contact_solve`), the static preload solve (:mod:`fivid.fe.static`) and the
+(:func:`fivid.solver._contact_kernels.contact_solve`), the static preload solve (:mod:`fivid.fe.static`) and the
 linearisation for modes/CEA (:mod:`fivid.fe.contact`) -- so the three cannot disagree. They are jitted
 scalar functions, callable from Python too.
 

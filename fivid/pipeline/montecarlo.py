@@ -28,7 +28,8 @@ def _sample_task(model, law, params, spectrum_kw):
 
 def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float, sample_rate: float,
                     sliding_velocity=None, normal_load=None, roughness_ra=None, time_step=None, reduced=None,
-                    variable: str = "acceleration", sensor=None, nperseg: int = 8192, settle: float = 0.0, band=None,
+                    reduced_mass_scaling=None, variable: str = "acceleration", sensor=None, nperseg: int = 8192,
+                    settle: float = 0.0, band=None,
                     workers: int = 2, scheduler: str | None = None, progress=None, attrs: dict | None = None):
     """Simulate ``samples`` draws of ``law`` at one condition and return their PSD envelope (a Dataset).
 
@@ -40,7 +41,7 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
         Number of Monte-Carlo samples (>= 2).
     seed : int
         Seed of the whole Monte-Carlo (coefficient draws and every sample's synthesis seed).
-    duration, sample_rate, sliding_velocity, normal_load, roughness_ra, time_step, reduced
+    duration, sample_rate, sliding_velocity, normal_load, roughness_ra, time_step, reduced, reduced_mass_scaling
         As :func:`fivid.solver.simulate` [s, Hz, m s-1, N, m, s].
     variable, sensor
         The signal whose PSD is taken (as ``fivid score``).
@@ -75,7 +76,8 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
         check_scheduler_address(scheduler)
     draws = monte_carlo_laws(law, samples, seed)
     base = dict(duration=float(duration), sample_rate=float(sample_rate), sliding_velocity=sliding_velocity,
-                normal_load=normal_load, roughness_ra=roughness_ra, time_step=time_step, reduced=reduced)
+                normal_load=normal_load, roughness_ra=roughness_ra, time_step=time_step, reduced=reduced,
+                reduced_mass_scaling=reduced_mass_scaling)
     spectrum_kw = dict(variable=variable, sensor=sensor, nperseg=int(nperseg), settle=float(settle))
     items = {f"mc{i:04d}": (model, draws["laws"][i], {**base, "seed": int(draws["seeds"][i])}, spectrum_kw)
              for i in range(int(samples))}

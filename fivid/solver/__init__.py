@@ -3,7 +3,8 @@
 Central differences with lumped mass and Rayleigh damping (stiffness part folded into one stencil pass),
 node-to-segment contact by forward-increment Lagrange multipliers with Coulomb stick/slip, friction
 coefficients per node and step from a friction-law object, the rig's loading sequence, anti-aliased
-outputs and an energy balance. Numba kernels live in :mod:`fivid.solver._kernels` and are imported only
+outputs and an energy balance. Numba kernels live in :mod:`fivid.solver._stencil_kernels`, ``_contact_kernels``, ``_loop_kernels`` and
+``_reduced_kernels`` (compilation setting in :mod:`fivid.solver._kernels`) and are imported only
 when a simulation runs.
 """
 

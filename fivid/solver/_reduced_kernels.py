@@ -2,7 +2,7 @@
 
 Coordinates ``q`` (length ``n``), in this order: the x then the y displacements of the ``nb`` physical boundary
 nodes (contact and sensor nodes; node ``k`` has x-index ``k`` and y-index ``k + nb``, the layout of
-:mod:`fivid.solver._kernels` with ``npd = nb`` and no padding), the amplitudes of the fixed-interface modes,
+:mod:`fivid.solver._loop_kernels` with ``npd = nb`` and no padding), the amplitudes of the fixed-interface modes,
 then one coordinate per group of constrained dofs moving together (a driven edge, or a held edge whose reaction
 the force transducer sums). The first ``nF = 2 nb + n_modes`` coordinates are free, the last ``ng`` prescribed.
 
@@ -16,16 +16,15 @@ Nothing is allocated inside the time loop.
 """
 
 import numpy as np
-from numba import njit
 
 from fivid.solver._contact_kernels import _segment_nodes, contact_step, contact_work
-from fivid.solver._kernels import OK
+from fivid.solver._kernels import OK, kernel, reassociating_kernel
 from fivid.solver._loop_kernels import add_step_work, finish_record, group_velocities, start_record
 
 __all__ = ["reduced_forces", "run_reduced_steps"]
 
 
-@njit(cache=True, fastmath={"contract", "reassoc"})
+@reassociating_kernel
 def _matvec(a, x, y, i0, i1, ncols):
     """``y[i] = a[i, :ncols] @ x[:ncols]`` for ``i0 <= i < i1`` (the whole double loop in one function, reassociated:
     the inner loop vectorises; a per-row dot helper measured 3x slower)."""
@@ -36,7 +35,7 @@ def _matvec(a, x, y, i0, i1, ncols):
         y[i] = s
 
 
-@njit(cache=True)
+@kernel
 def reduced_forces(w, f, kc, cidx, kdiag, m0, wc, fc):
     """``f = K_r w``: dense ``kc`` over the constraint coordinates ``cidx``, ``kdiag`` over the modes from ``m0``;
     ``wc``, ``fc`` (len(cidx)) are scratch for the gathered constraint coordinates and their forces."""
@@ -50,7 +49,7 @@ def reduced_forces(w, f, kc, cidx, kdiag, m0, wc, fc):
         f[m0 + m] = kdiag[m] * w[m0 + m]
 
 
-@njit(cache=True)
+@kernel
 def run_reduced_steps(
     step0, nsteps, dt, alpha, beta, a_filt, n_sub, nb, nf,
     kc, cidx, kdiag, minv_ff, b_fg, m_g, m, grp_par, grp_v, g_react,
@@ -62,7 +61,7 @@ def run_reduced_steps(
 ):
     """Advance the reduced system ``nsteps`` central-difference steps from step ``step0`` (whole outputs).
 
-    The step of :func:`fivid.solver._kernels.run_steps` with a dense mass: ``f = K_r (q + beta v)`` (band-limited
+    The step of :func:`fivid.solver._loop_kernels.run_steps` with a dense mass: ``f = K_r (q + beta v)`` (band-limited
     damping: ``+ beta vf``); free coordinates
     ``v_F' = v_F - dt M_FF^-1 f_F - alpha dt v_F - B (alpha dt v_G + v_G' - v_G)``, ``B = M_FF^-1 M_FG``
     (alpha M v and the prescribed motions' inertia), prescribed ones follow their motion; the contact correction
