@@ -140,3 +140,18 @@ def test_import_fivid_is_light(heavy):
     code = f"import sys, fivid, fivid.cli; fivid.cli.build_parser(); print({heavy!r} in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False", f"import fivid / fivid --help imports {heavy}"
+
+
+def test_docs_layer_table_matches_the_code():
+    """docs/architecture.md's layer table is the layer map above, and its L0 row names exactly the kernel modules
+    that exist -- so the documented architecture cannot drift from the code."""
+    import re
+
+    text = (PKG.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    rows = dict(re.findall(r"^\| L(\d) \| (.+) \|$", text, flags=re.M))
+    documented = {name: int(layer) for layer, cells in rows.items() if layer != "0"
+                  for name in re.findall(r"`([\w]+)`", cells)}
+    assert documented == LAYERS
+    kernels = set(re.findall(r"`([\w/]+\.py)`", rows["0"]))
+    actual = {str(p.relative_to(PKG)) for p in PKG.rglob("*_kernels.py")}
+    assert kernels == actual
