@@ -128,3 +128,19 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
         assert list(law["run_mains_removal"].values) == ["on"] * len(runs)
         assert law.attrs["setting_welch_frequency_resolution"] == 12.5 and law.attrs["setting_nperseg"] == "auto"
         assert law.attrs["setting_nperseg_rule"].startswith("largest power of two")
+
+
+@pytest.mark.parametrize("tare, match", [
+    ((0.0, 0.5), "overlaps the steady-sliding window"),  # reaches into the loaded, sliding part
+    ((0.0, 5.0), "inside the record"),  # runs past the end of the record
+    ((0.03, 0.01), "increasing interval"),
+])
+def test_tare_must_be_an_unloaded_interval_of_the_record(tare, match):
+    """A tare that holds the load (or lies outside the record) is refused with the run and the allowed range named,
+    not applied: subtracting the loaded forces would leave "contact lost" runs and no error (docs helper, issue 20)."""
+    from fivid.errors import FividError
+
+    _, runs = _edge_runs((0.0, 0.0), (0.0, 0.0))
+    with pytest.raises(FividError, match=match) as err:
+        identify_friction_law(runs[:2], tare=tare)
+    assert "run 'E0'" in str(err.value)

@@ -329,6 +329,11 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
     except DataQualityError as exc:
         res.reason = f"not in steady sliding: {exc.message}"
         return res
+    if settings.tare is not None and settings.tare[0] < t1 and settings.tare[1] > t0:
+        raise FividError(
+            f"{label}: tare interval {settings.tare[0]:g}-{settings.tare[1]:g} s overlaps the steady-sliding window "
+            f"{t0:g}-{t1:g} s, where the load is on: a tare must be an unloaded interval (before the preload); "
+            f"choose --tare inside {t[0]:g}-{t0:g} s")
     res.t_start, res.t_stop = t0, t1
     win = (t >= t0) & (t <= t1)
     fn_w, ft_w = fn[win], ft[win]
@@ -408,9 +413,18 @@ def _mains_removal_state(resolution, mains_frequency, n_samples, fs):
             f"the window has {n_samples}); the hum power stays in A")
 
 
+def _rate_of(t) -> float:
+    """Sample rate [Hz] of the time vector ``t`` [s] (mean step)."""
+    return 1.0 / float(np.mean(np.diff(t)))
+
+
 def _tare(t, ft, fn, settings, label):
     """Subtract the mean forces of the tare interval (cut to whole mains periods, so hum averages out)."""
     lo, hi = settings.tare
+    if not lo < hi or lo < t[0] - 0.5 / _rate_of(t) or hi > t[-1] + 0.5 / _rate_of(t):
+        raise FividError(
+            f"{label}: tare interval {lo:g}-{hi:g} s must be an increasing interval inside the record "
+            f"{t[0]:g}-{t[-1]:g} s")
     if settings.mains_frequency:
         period = 1.0 / settings.mains_frequency
         cycles = np.floor((hi - lo) / period)
