@@ -24,6 +24,7 @@ import numpy as np
 
 __all__ = ["LV_REFERENCE", "synthetic_rough_profiles", "rough_pair_config", "vibration_level", "detect_shocks",
            "dissipated_power", "friction_coefficient_statistics", "roughness_metrics", "identification_run",
+           "build_point_model", "simulate_rough_run",
            "point_profiles_design", "RSM_LEVELS", "RSM_PER_CORRELATION_LENGTH"]
 
 #: seed 003's velocity reference of the vibration level [m s-1]
@@ -321,6 +322,48 @@ def point_profiles_design(spec: dict, conditions: dict) -> dict:
             "correlation_length": xi, "seeds": tuple(int(v) + 100 * r for v in spec["seeds"])}
 
 
+def build_point_model(model_path, spec: dict, conditions: dict):
+    """The rough pair of a study point: ``(model, lower profile, rough_pair_config record, profile design)``
+    for ``conditions`` (``roughness_ra`` [m], ``seed`` (replicate), ``normal_load`` [N]) and the task settings
+    ``spec`` (:data:`ROUGHNESS_TASK` keys). The profiles cover the lower (top-profiled) body's length."""
+    from fivid.fe import load_model
+    from fivid.fe.config import read_config
+
+    spec = {**ROUGHNESS_TASK, **spec}
+    base, ctx, _ = read_config(model_path)
+    corners = next(b["corners"] for b in base["bodies"].values()
+                   if isinstance(b.get("profile"), dict) and b["profile"].get("edge") == "top")
+    length = _si(ctx, corners[1][0], "corners") - _si(ctx, corners[0][0], "corners")
+    design = point_profiles_design(spec, conditions)
+    lower, upper = synthetic_rough_profiles(float(conditions.get("roughness_ra", 0.0)), length,
+                                            correlation_length=design["correlation_length"],
+                                            step=spec["profile_step"], seeds=design["seeds"])
+    load = float(conditions["normal_load"]) if "normal_load" in conditions else None
+    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
+    return load_model(cfg), lower, info, design
+
+
+def simulate_rough_run(model_path, conditions: dict, *, duration: float, sample_rate: float, run_id: str,
+                       **spec):
+    """A rough-pair run as a rig records it, ready for ``fivid identify`` (:func:`identification_run`): the pair
+    of :func:`build_point_model` for ``conditions`` (``roughness_ra`` [m], ``sliding_velocity`` [m s-1],
+    ``normal_load`` [N], ``seed``), simulated for ``duration`` [s] at ``sample_rate`` [Hz]; ``spec`` overrides
+    :data:`ROUGHNESS_TASK`. identify's steady-window search smooths the velocity over 0.05 s, so ``duration``
+    must exceed 0.1 s plus the start-up."""
+    from fivid.solver import simulate
+
+    spec = {**ROUGHNESS_TASK, **spec}
+    model, _, _, design = build_point_model(model_path, spec, conditions)
+    kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
+    ds = simulate(model, duration=duration, sample_rate=sample_rate, progress=False, run_id=run_id,
+                  roughness_ra=float(conditions.get("roughness_ra", 0.0)), settle_time=spec["settle_time"],
+                  gs_tolerance=spec["gs_tolerance"], gs_max_iterations=spec["gs_max_iterations"], **kw)
+    out = identification_run(ds)
+    out.attrs["profile_rsm_target"] = design["rsm"]
+    out.attrs["profile_seeds"] = " ".join(map(str, design["seeds"]))
+    return out
+
+
 def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
     """One roughness-noise study point: synthesise the point's profiles (``roughness_ra``; Rsm level and seeds from
     the replicate, :func:`point_profiles_design`), build the pair, run it for ``tasks["transient"]`` (duration,
@@ -333,26 +376,13 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
     """
     import time
 
-    from fivid.fe import load_model
     from fivid.solver import simulate
     from fivid.surface import evaluate_profile
 
     spec = {**ROUGHNESS_TASK, **tasks["roughness"]}
     tr = tasks["transient"]
-    from fivid.fe.config import read_config
-
-    base, ctx, _ = read_config(model_path)
-    bodies = base["bodies"]  # the profiles' length: the lower (top-profiled) body's
-    corners = next(b["corners"] for b in bodies.values()
-                   if isinstance(b.get("profile"), dict) and b["profile"].get("edge") == "top")
-    length = _si(ctx, corners[1][0], "corners") - _si(ctx, corners[0][0], "corners")
     ra = float(conditions.get("roughness_ra", 0.0))
-    design = point_profiles_design(spec, conditions)
-    lower, upper = synthetic_rough_profiles(ra, length, correlation_length=design["correlation_length"],
-                                            step=spec["profile_step"], seeds=design["seeds"])
-    load = float(conditions["normal_load"]) if "normal_load" in conditions else None
-    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
-    model = load_model(cfg)
+    model, lower, info, design = build_point_model(model_path, spec, conditions)
     n_slave = int(sum(c.slave_nodes.size for c in model.contacts))
     kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
     t0 = time.perf_counter()
