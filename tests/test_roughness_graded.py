@@ -19,6 +19,7 @@ from fivid.study.roughness import (RSM_LEVELS, RSM_PER_CORRELATION_LENGTH, ROUGH
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs/models/rough_pair_graded_quick.yaml"
+COARSE = ROOT / "configs/models/rough_pair_graded_coarse.yaml"  # 100 um: the bridge's 0.1 s runs
 RUN = dict(sample_rate=2e6, progress=False, settle_time=0.05e-3, gs_tolerance=1e-6, gs_max_iterations=30)
 
 
@@ -117,14 +118,14 @@ def test_lv_grows_with_roughness_at_fixed_velocity():
 def test_a_rough_run_with_a_transducer_goes_through_fivid_identify(tmp_path):
     """Item 4's bridge: the transducer's force over the dead load is a mu(t) with dynamics: identify returns
     mu0 = the run's mean |Ft| / Fn and a perturbation amplitude far above round-off (the transducer-less
-    interface forces gave A = 3e-17). identify smooths the velocity over 0.05 s, so the record is 0.1025 s
-    (1.6e7 steps of the quick pair: tens of minutes)."""
+    interface forces gave A = 3e-17). identify smooths the velocity over 0.05 s, so the record is 0.1025 s:
+    8e6 steps of the coarse pair (216 dofs; about a minute of CPU)."""
     from fivid.cli import main
     from fivid.friction import load_law
     from fivid.storage import write_netcdf
     from fivid.study.roughness import simulate_rough_run
 
-    run = simulate_rough_run(QUICK, {"roughness_ra": 4.5e-6, "sliding_velocity": 0.1, "normal_load": 1.0},
+    run = simulate_rough_run(COARSE, {"roughness_ra": 4.5e-6, "sliding_velocity": 0.1, "normal_load": 1.0},
                              duration=0.1025, sample_rate=200e3, run_id="rough-ra4.5um-v100mm")
     assert np.ptp(run.normal_force.values) == 0.0  # the dead load as the interface carries it
     path = tmp_path / "run.nc"
