@@ -12,7 +12,8 @@ time of the whole run), their ratio ``rough_over_default``, the rough model's ``
 ``rough_time_step_s`` (the stable step of its smallest element), ``rough_steps_per_point`` (the study's 4.2 ms
 record, or the quick study's 1.2 ms, over that step) and ``rough_point_projected_s`` (those steps at the measured
 rate: the simulation time of one study point; ``rough_point_projected_cpu_s`` the same from the process's CPU
-time, which a shared machine's load does not inflate), with the contact's mean Gauss-Seidel sweeps per step.
+time, which a shared machine's load does not inflate, as are the ``*_cpu_dof_updates_per_s`` and
+``rough_over_default_cpu``), with the contact's mean Gauss-Seidel sweeps per step.
 """
 
 from __future__ import annotations
@@ -50,15 +51,16 @@ def main(argv=None) -> int:
                                normal_load=5.0, sample_rate=51200.0, preload_time=2e-4, settle_time=0.0,
                                base_ramp_time=1e-4)
     rough_prep.run(progress=False)  # warm-up: load the cached kernels
-    t_rough = t_default = c_rough = float("inf")
+    t_rough = t_default = c_rough = c_default = float("inf")
     for _ in range(2 if args.quick else 3):
         t0, c0 = time.perf_counter(), time.process_time()
         ds = rough_prep.run(progress=False)
         t_rough = min(t_rough, time.perf_counter() - t0)
         c_rough = min(c_rough, time.process_time() - c0)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         default_prep.run(progress=False)
         t_default = min(t_default, time.perf_counter() - t0)
+        c_default = min(c_default, time.process_time() - c0)
     rs, ds_ = rough_prep.settings, default_prep.settings
     rough_steps = rs.n_intervals * rs.steps_per_interval
     default_steps = ds_.n_intervals * ds_.steps_per_interval
@@ -84,6 +86,9 @@ def main(argv=None) -> int:
         "default_dofs": int(default.n_dofs),
         "default_dof_updates_per_s": default_rate,
         "rough_over_default": rough_rate / default_rate,
+        "rough_cpu_dof_updates_per_s": rough.n_dofs * rough_steps / c_rough,
+        "default_cpu_dof_updates_per_s": default.n_dofs * default_steps / c_default,
+        "rough_over_default_cpu": (rough.n_dofs * rough_steps / c_rough) / (default.n_dofs * default_steps / c_default),
     }
     print(json.dumps(out))
     return 0

@@ -114,19 +114,43 @@ def test_lv_grows_with_roughness_at_fixed_velocity():
     assert lv[10e-6] > lv[2e-6]
 
 
+def test_identification_run_takes_the_transducer_force_over_the_dead_load():
+    """A transducer along x only: its y reading is round-off (1e-12 N), so normal_force becomes the steady mean
+    of the contact normal force (a constant: the dead load as the interface carries it) and friction_force its
+    magnitude; without a transducer (friction_force round-off too) the interface's own forces are used."""
+    import xarray as xr
+
+    from fivid.study.roughness import identification_run
+
+    t = np.arange(400) * 1e-5
+    rng = np.random.default_rng(0)
+    fn = 1.0 + 0.3 * rng.standard_normal(t.size)
+    ft = -(0.2 + 0.05 * rng.standard_normal(t.size))
+    ds = xr.Dataset({"friction_force": ("time", ft), "normal_force": ("time", 1e-12 * rng.standard_normal(t.size)),
+                     "contact_normal_force": ("time", fn), "contact_tangential_force": ("time", 0.2 * fn)},
+                    coords={"time": t}, attrs={"transient_end": t[100], "sliding_velocity": 0.01})
+    run = identification_run(ds)
+    assert run.sizes["time"] == 300 and np.all(run.normal_force.values == fn[100:].mean())
+    np.testing.assert_array_equal(run.friction_force.values, np.abs(ft[100:]))
+    bare = identification_run(ds.assign(friction_force=ds.normal_force))
+    np.testing.assert_array_equal(bare.friction_force.values, 0.2 * fn[100:])
+    np.testing.assert_array_equal(bare.normal_force.values, fn[100:])
+
+
 @pytest.mark.slow
 def test_a_rough_run_with_a_transducer_goes_through_fivid_identify(tmp_path):
     """Item 4's bridge: the transducer's force over the dead load is a mu(t) with dynamics: identify returns
     mu0 = the run's mean |Ft| / Fn and a perturbation amplitude far above round-off (the transducer-less
     interface forces gave A = 3e-17). identify smooths the velocity over 0.05 s, so the record is 0.1025 s:
-    8e6 steps of the coarse pair (216 dofs; about a minute of CPU)."""
+    8e6 steps of the coarse pair (216 dofs; about a minute of CPU). At 8 mm/s (the default rig's range) the
+    slider moves 0.8 mm of the lower block's 2.2 mm; at 10 cm/s it slid off its end."""
     from fivid.cli import main
     from fivid.friction import load_law
     from fivid.storage import write_netcdf
     from fivid.study.roughness import simulate_rough_run
 
-    run = simulate_rough_run(COARSE, {"roughness_ra": 4.5e-6, "sliding_velocity": 0.1, "normal_load": 1.0},
-                             duration=0.1025, sample_rate=200e3, run_id="rough-ra4.5um-v100mm")
+    run = simulate_rough_run(COARSE, {"roughness_ra": 4.5e-6, "sliding_velocity": 0.008, "normal_load": 1.0},
+                             duration=0.1025, sample_rate=200e3, run_id="rough-ra4.5um-v8mm")
     assert np.ptp(run.normal_force.values) == 0.0  # the dead load as the interface carries it
     path = tmp_path / "run.nc"
     write_netcdf(run, path)
@@ -134,4 +158,26 @@ def test_a_rough_run_with_a_transducer_goes_through_fivid_identify(tmp_path):
     assert main(["identify", str(path), "-o", str(law_path), "--band", "500", "20000", "--mains-frequency", "0"]) == 0
     law = load_law(law_path)
     assert law.mu0 == pytest.approx(np.mean(run.friction_force.values / run.normal_force.values), rel=0.05)
-    assert float(law.amplitude(velocity=0.1, roughness=4.5e-6)) > 1e-3
+    assert float(law.amplitude(velocity=0.008, roughness=4.5e-6)) > 1e-3
+
+
+@pytest.mark.slow
+def test_the_quick_roughness_study_writes_exponents_fits_and_its_report_section(tmp_path):
+    """Issue 15's done-when on the --quick variant (4 points of the 50 um pair, about a minute on two free
+    cores): summary.json has n and m with their intervals, the Rz/Rsm fit, shock statistics and the settings;
+    report.html has the roughness section with its figures."""
+    import json
+
+    from fivid.cli import main
+
+    assert main(["study", str(ROOT / "configs/studies/roughness_noise.yaml"), "-o", str(tmp_path), "--quick",
+                 "--no-progress"]) == 0
+    s = json.loads((tmp_path / "summary.json").read_text())
+    for key in ("n", "m"):
+        lo, hi = s[key]["ci"]
+        assert lo < s[key]["value"] < hi
+    assert {"vibration_level_vs_rz_rsm", "shock_rate", "dissipated_power"} <= set(s["fits"])
+    assert all(p["shock_count"] >= 0 and np.isfinite(p["vibration_level"]) for p in s["points"])
+    assert s["roughness_settings"]["profiles"]["rsm_levels"] == list(RSM_LEVELS)
+    html = (tmp_path / "report.html").read_text()
+    assert "Roughness noise (seed 003)" in html and html.count("data:image/png") >= 5

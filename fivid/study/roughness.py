@@ -272,12 +272,17 @@ def identification_run(ds):
     import xarray as xr
 
     out = ds.isel(time=_steady(ds))
-    if not np.any(out["friction_force"].values) and "contact_normal_force" in out:  # no transducer in the model
+    scale = float(np.mean(np.abs(out["contact_normal_force"].values))) if "contact_normal_force" in out else 0.0
+
+    def negligible(name):  # a transducer that does not measure this component reads round-off
+        return not np.any(np.abs(out[name].values) > 1e-6 * scale)
+
+    if negligible("friction_force") and "contact_normal_force" in out:  # no transducer in the model
         out["friction_force"] = out["contact_tangential_force"].copy()
         out["normal_force"] = out["contact_normal_force"].copy()
         out.attrs["force_note"] = "friction_force, normal_force: the interface's contact forces (no transducer)"
         out.attrs["normal_load"] = float(np.mean(out["normal_force"].values))
-    elif not np.any(out["normal_force"].values) and "contact_normal_force" in out:  # transducer along x only
+    elif negligible("normal_force") and "contact_normal_force" in out:  # transducer along x only
         w = float(np.mean(out["contact_normal_force"].values))
         out["normal_force"] = xr.full_like(out["contact_normal_force"], w)
         out["normal_force"].attrs.update({"units": "N", "long_name": "normal force (the dead load as the interface "
@@ -349,7 +354,8 @@ def simulate_rough_run(model_path, conditions: dict, *, duration: float, sample_
     of :func:`build_point_model` for ``conditions`` (``roughness_ra`` [m], ``sliding_velocity`` [m s-1],
     ``normal_load`` [N], ``seed``), simulated for ``duration`` [s] at ``sample_rate`` [Hz]; ``spec`` overrides
     :data:`ROUGHNESS_TASK`. identify's steady-window search smooths the velocity over 0.05 s, so ``duration``
-    must exceed 0.1 s plus the start-up."""
+    must exceed 0.1 s plus the start-up; the slider must stay on the lower body meanwhile (rough_pair_graded*:
+    ``sliding_velocity x duration`` below about 1 mm, i.e. <= ~9 mm/s for 0.1 s)."""
     from fivid.solver import simulate
 
     spec = {**ROUGHNESS_TASK, **spec}
