@@ -12,7 +12,7 @@ BENCHMARKS = sorted(p.name for p in (ROOT / "benchmarks").glob("bench_*.py"))
 
 
 def test_there_are_benchmarks():
-    assert {"bench_solver.py", "bench_modes.py", "bench_damping.py"} <= set(BENCHMARKS)
+    assert {"bench_solver.py", "bench_modes.py", "bench_damping.py", "bench_rough.py"} <= set(BENCHMARKS)
 
 
 @pytest.mark.slow

@@ -161,14 +161,17 @@ def test_roughness_noise_fits_recover_known_exponents():
 
 
 def test_roughness_study_config(root):
-    """roughness_noise.yaml validates (default and --quick); a roughness task needs a transient."""
+    """roughness_noise.yaml validates (default: 3 Ra x 3 V x 2 replicates; --quick: 2 x 2 x 1 on the coarser
+    pair, 1.2 ms); a roughness task needs a transient."""
     from fivid.errors import ConfigError
     from fivid.study import load_study
 
     study = load_study(root / "configs/studies/roughness_noise.yaml")
-    assert len(study.point_table()) == 9 and study.points["roughness"]["correlation_length"] == 0.5e-3
+    assert len(study.point_table()) == 18 and "correlation_length" not in study.points["roughness"]
+    assert Path(study.model_path).name == "rough_pair_graded.yaml"
     quick = load_study(root / "configs/studies/roughness_noise.yaml", quick=True)
-    assert len(quick.point_table()) == 4 and quick.points["transient"]["duration"] == 3e-3
+    assert len(quick.point_table()) == 4 and quick.points["transient"]["duration"] == pytest.approx(1.2e-3)
+    assert Path(quick.model_path).name == "rough_pair_graded_quick.yaml"
     with pytest.raises(ConfigError, match="points.roughness"):
         load_study({"fivid-study": 1, "system": {"model": str(root / "configs/models/rough_pair_short.yaml")},
                     "points": {"roughness": {}}})

@@ -53,7 +53,8 @@ def roughness_noise_fits(points: list[dict]) -> dict:
       ``{"value", "ci": [lo, hi]}`` (95 %), null when that axis does not vary;
     * ``fits.vibration_level_vs_rz_rsm``: ``Lv = a log10(Rz / Rsm) + b`` (OLS): ``slope`` [dB per decade], ``ci``,
       ``r2``, ``n`` (Rz, Rsm of the generated lower profiles);
-    * ``fits.shock_rate``, ``fits.shock_impulse``, ``fits.dissipated_power``: power laws over Ra and V.
+    * ``fits.shock_rate``, ``fits.shock_impulse``, ``fits.dissipated_power``, ``fits.friction_coefficient_rms``
+      (the transducer's mu(t) fluctuation: the perturbation amplitude's law A(Ra, V)): power laws over Ra and V.
     """
     import statsmodels.api as sm
 
@@ -74,7 +75,7 @@ def roughness_noise_fits(points: list[dict]) -> dict:
         fits["vibration_level_vs_rz_rsm"] = {"slope": float(res.params[1]), "ci": [float(ci[1, 0]), float(ci[1, 1])],
                                              "intercept": float(res.params[0]), "r2": float(res.rsquared),
                                              "n": int(res.nobs), "units": "dB per decade of Rz/Rsm"}
-    for name in ("shock_rate", "shock_impulse", "dissipated_power"):
+    for name in ("shock_rate", "shock_impulse", "dissipated_power", "friction_coefficient_rms"):
         f = power_law_fit(points, name)
         if f is not None:
             fits[name] = f

@@ -95,6 +95,10 @@ def study_section(page: Page, ds, summary: dict) -> None:
         if "level_db" in ds:
             page.figure(_response_figure(ds, axis, "level_db", "acceleration level [dB re 1e-6 m/s²]"),
                         "Response level of each point's steady part.", "levels")
+    if "vibration_level" in ds:  # seed 003's roughness noise
+        from fivid.study.roughness_report import roughness_section
+
+        roughness_section(page, ds, summary)
     if "cea_mu" in ds.coords:
         page.figure(_cea_figure(ds), "CEA: frequencies and real parts of the eigenvalues against μ.", "CEA")
     _convergence_tables(page, summary.get("convergence"))

@@ -23,7 +23,9 @@ import copy
 import numpy as np
 
 __all__ = ["LV_REFERENCE", "synthetic_rough_profiles", "rough_pair_config", "vibration_level", "detect_shocks",
-           "dissipated_power", "roughness_metrics", "identification_run"]
+           "dissipated_power", "friction_coefficient_statistics", "roughness_metrics", "identification_run",
+           "build_point_model", "simulate_rough_run",
+           "point_profiles_design", "RSM_LEVELS", "RSM_PER_CORRELATION_LENGTH"]
 
 #: seed 003's velocity reference of the vibration level [m s-1]
 LV_REFERENCE = 1e-9
@@ -104,12 +106,25 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     zu = np.interp(xs - uc[0, 0], upper["x"].values, upper.values)
     lift = float(np.max(zl - zu))
     top = lc[2, 1]
+    up_corners_y0 = up["corners"][0][1]
     depth_up = uc[2, 1] - uc[1, 1]
     uc[:, 1] = [top + lift, top + lift, top + lift + depth_up, top + lift + depth_up]
     for body, prof, edge in ((lo, lower, "top"), (up, upper, "bottom")):
         body["profile"] = {"edge": edge, "x": np.asarray(prof["x"].values, float),
                            "z": np.asarray(prof.values, float)}
     up["corners"] = [[f"{float(x)!r} m", f"{float(y)!r} m"] for x, y in uc]
+    # whatever rides with the upper body (a carriage block, transducer springs, point masses) rises with it
+    dy = top + lift - _si(ctx, up_corners_y0, f"bodies.{up_name}.corners")
+    for name, b in bodies.items():
+        if name not in (lo_name, up_name) and "corners" in b:
+            b["corners"] = [[c[0], f"{float(_si(ctx, c[1], f'bodies.{name}.corners') + dy)!r} m"] for c in b["corners"]]
+    for group in ("springs", "point_masses"):
+        for item in data.get(group) or []:
+            for end in ("a", "b", None):
+                ref = item if end is None else item.get(end)
+                if isinstance(ref, dict) and ref.get("body") not in (None, lo_name) and "at" in ref:
+                    y = _si(ctx, ref["at"][1], f"{group}.{item.get('name')}.at") + dy
+                    ref["at"] = [ref["at"][0], f"{float(y)!r} m"]
     # the slave edge without its two end nodes: the carriage-held one (prescribed dofs) and the one facing the lower
     # body's clamped corner would tie prescribed dofs through the rigid contact (a flat pair diverges with them)
     h = (uc[1, 0] - uc[0, 0]) / nu
@@ -221,24 +236,63 @@ def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
             "shock_count": sh["count"], "dissipated_power": dissipated_power(ds, start=start),
             "mean_normal_force": float(np.mean(ds["contact_normal_force"].values[sel])),
             "mean_friction_force": float(np.mean(ds["friction_force"].values[sel])),
-            "open_fraction": float(np.mean(ds["open_fraction"].values[sel])), "shocks": sh}
+            "open_fraction": float(np.mean(ds["open_fraction"].values[sel])), "shocks": sh,
+            **friction_coefficient_statistics(ds, start=start)}
+
+
+def friction_coefficient_statistics(ds, *, start=None) -> dict:
+    """mu(t) = |friction_force(t)| / mean normal force over the steady part: the transducer's force over the
+    dead load as the interface carries it (the mean of ``contact_normal_force``; momentary losses of contact,
+    frequent on rough surfaces at a few cm/s, would make a pointwise Ft/Fn diverge). ``friction_coefficient``:
+    its mean; ``friction_coefficient_rms``: RMS of mu - mean (the perturbation's amplitude over all frequencies
+    up to the output Nyquist). The same mu(t) as :func:`identification_run` hands to ``fivid identify``. NaN
+    without a transducer (a zero friction_force)."""
+    sel = _steady(ds, start)
+    ft = np.abs(np.asarray(ds["friction_force"].values, float)[sel])
+    fn = float(np.mean(np.asarray(ds["contact_normal_force"].values, float)[sel])) if np.any(sel) else 0.0
+    if not np.any(ft) or not fn > 0:
+        return {"friction_coefficient": np.nan, "friction_coefficient_rms": np.nan}
+    mu = ft / fn
+    return {"friction_coefficient": float(np.mean(mu)), "friction_coefficient_rms": float(np.std(mu))}
 
 
 def identification_run(ds):
     """The run as ``fivid identify`` reads it: its steady part (``time >= transient_end``) with the carriage
     ``velocity`` [m s-1], the imposed sliding velocity, which a simulation does not record as an encoder would.
-    A model without a force transducer (a dead-loaded slider) gets the interface's ``contact_tangential_force``
-    and ``contact_normal_force`` as ``friction_force`` and ``normal_force``.
+    A model whose transducer measures along x only (rough_pair_graded.yaml: the carriage's spring) gets the
+    dead load as the interface carries it (the steady mean of ``contact_normal_force``) as a constant
+    ``normal_force`` and ``|friction_force|`` (:func:`friction_coefficient_statistics`); a model without
+    a force transducer (a dead-loaded slider, zero ``friction_force``) gets the interface's
+    ``contact_tangential_force`` and ``contact_normal_force`` as ``friction_force`` and ``normal_force``: then
+    ``Ft = mu Fn`` holds exactly at sliding Coulomb nodes and mu(t) carries no dynamics.
 
     ``mu(t) = friction_force / normal_force`` of this dataset is what identify turns into mu0 and the
     perturbation's spectrum and amplitude (docs/roughness.md, "From a profile to a friction law").
     """
+    import xarray as xr
+
     out = ds.isel(time=_steady(ds))
-    if not np.any(out["normal_force"].values) and "contact_normal_force" in out:  # no transducer in the model
+    scale = float(np.mean(np.abs(out["contact_normal_force"].values))) if "contact_normal_force" in out else 0.0
+
+    def negligible(name):  # a transducer that does not measure this component reads round-off
+        return not np.any(np.abs(out[name].values) > 1e-6 * scale)
+
+    if negligible("friction_force") and "contact_normal_force" in out:  # no transducer in the model
         out["friction_force"] = out["contact_tangential_force"].copy()
         out["normal_force"] = out["contact_normal_force"].copy()
         out.attrs["force_note"] = "friction_force, normal_force: the interface's contact forces (no transducer)"
         out.attrs["normal_load"] = float(np.mean(out["normal_force"].values))
+    elif negligible("normal_force") and "contact_normal_force" in out:  # transducer along x only
+        w = float(np.mean(out["contact_normal_force"].values))
+        out["normal_force"] = xr.full_like(out["contact_normal_force"], w)
+        out["normal_force"].attrs.update({"units": "N", "long_name": "normal force (the dead load as the interface "
+                                                                     "carries it: mean contact normal force)"})
+        out["friction_force"] = np.abs(out["friction_force"])
+        out["friction_force"].attrs.update({"units": "N", "long_name": "friction force (transducer spring)"})
+        out.attrs["force_note"] = ("friction_force: |the transducer spring's force| (the carriage reaction); "
+                                   "normal_force: the dead load as the interface carries it (mean contact normal "
+                                   "force), as friction_coefficient_statistics")
+        out.attrs["normal_load"] = w
     v = np.full(out.sizes["time"], float(ds.attrs["sliding_velocity"]))
     out["velocity"] = (("time",), v, {"units": "m s-1", "long_name": "sliding velocity (encoder)",
                                       "description": "imposed carriage velocity (the simulation's base motion)"})
@@ -246,40 +300,95 @@ def identification_run(ds):
     return out
 
 
-#: study task defaults (``points: roughness:``; docs/roughness.md)
-ROUGHNESS_TASK = {"correlation_length": 0.5e-3, "profile_step": 50e-6, "seeds": (3, 4), "sensor_every": 4,
-                  "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.1e-3}
+#: Rsm levels [m] of the study's profiles, one per replicate (sweep axis ``seed``: replicate r takes level
+#: r mod 2): inside seed 003's Table 1 range (92-516 um) and resolved by >= 8 elements of rough_pair_graded.yaml
+RSM_LEVELS = (200e-6, 300e-6)
+#: Rsm / correlation length of a Gaussian-ACF profile (ACF exp(-x^2/xi^2)): an element is a peak and a valley,
+#: twice the mean zero-crossing spacing pi sqrt(-R(0)/R''(0)) = pi xi / sqrt(2) (Rice 1944)
+RSM_PER_CORRELATION_LENGTH = float(np.sqrt(2.0) * np.pi)
+
+#: study task defaults (``points: roughness:``; docs/roughness.md). ``correlation_length`` None: from the
+#: replicate's Rsm level (``rsm``, read with this default until the study config accepts the key)
+ROUGHNESS_TASK = {"correlation_length": None, "rsm": RSM_LEVELS, "profile_step": 5e-6, "seeds": (3, 4),
+                  "sensor_every": 4, "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.05e-3}
+
+
+def point_profiles_design(spec: dict, conditions: dict) -> dict:
+    """The profile synthesis of a study point: ``replicate`` (the ``seed`` condition, default 0), its target
+    ``rsm`` [m] (``spec["rsm"][replicate mod len]``), ``correlation_length`` [m] (``rsm /`` :data:`RSM_PER_CORRELATION_LENGTH`,
+    or ``spec["correlation_length"]`` when given) and the two profile ``seeds`` (``spec["seeds"] + 100 replicate``:
+    each replicate its own realisation)."""
+    r = int(round(float(conditions.get("seed", 0))))
+    levels = tuple(spec.get("rsm") or RSM_LEVELS)
+    rsm = float(levels[r % len(levels)])
+    xi = spec.get("correlation_length")
+    xi = float(xi) if xi else rsm / RSM_PER_CORRELATION_LENGTH
+    return {"replicate": r, "rsm": rsm if not spec.get("correlation_length") else xi * RSM_PER_CORRELATION_LENGTH,
+            "correlation_length": xi, "seeds": tuple(int(v) + 100 * r for v in spec["seeds"])}
+
+
+def build_point_model(model_path, spec: dict, conditions: dict):
+    """The rough pair of a study point: ``(model, lower profile, rough_pair_config record, profile design)``
+    for ``conditions`` (``roughness_ra`` [m], ``seed`` (replicate), ``normal_load`` [N]) and the task settings
+    ``spec`` (:data:`ROUGHNESS_TASK` keys). The profiles cover the lower (top-profiled) body's length."""
+    from fivid.fe import load_model
+    from fivid.fe.config import read_config
+
+    spec = {**ROUGHNESS_TASK, **spec}
+    base, ctx, _ = read_config(model_path)
+    corners = next(b["corners"] for b in base["bodies"].values()
+                   if isinstance(b.get("profile"), dict) and b["profile"].get("edge") == "top")
+    length = _si(ctx, corners[1][0], "corners") - _si(ctx, corners[0][0], "corners")
+    design = point_profiles_design(spec, conditions)
+    lower, upper = synthetic_rough_profiles(float(conditions.get("roughness_ra", 0.0)), length,
+                                            correlation_length=design["correlation_length"],
+                                            step=spec["profile_step"], seeds=design["seeds"])
+    load = float(conditions["normal_load"]) if "normal_load" in conditions else None
+    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
+    return load_model(cfg), lower, info, design
+
+
+def simulate_rough_run(model_path, conditions: dict, *, duration: float, sample_rate: float, run_id: str,
+                       **spec):
+    """A rough-pair run as a rig records it, ready for ``fivid identify`` (:func:`identification_run`): the pair
+    of :func:`build_point_model` for ``conditions`` (``roughness_ra`` [m], ``sliding_velocity`` [m s-1],
+    ``normal_load`` [N], ``seed``), simulated for ``duration`` [s] at ``sample_rate`` [Hz]; ``spec`` overrides
+    :data:`ROUGHNESS_TASK`. identify's steady-window search smooths the velocity over 0.05 s, so ``duration``
+    must exceed 0.1 s plus the start-up; the slider must stay on the lower body meanwhile (rough_pair_graded*:
+    ``sliding_velocity x duration`` below about 1 mm, i.e. <= ~9 mm/s for 0.1 s)."""
+    from fivid.solver import simulate
+
+    spec = {**ROUGHNESS_TASK, **spec}
+    model, _, _, design = build_point_model(model_path, spec, conditions)
+    kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
+    ds = simulate(model, duration=duration, sample_rate=sample_rate, progress=False, run_id=run_id,
+                  roughness_ra=float(conditions.get("roughness_ra", 0.0)), settle_time=spec["settle_time"],
+                  gs_tolerance=spec["gs_tolerance"], gs_max_iterations=spec["gs_max_iterations"], **kw)
+    out = identification_run(ds)
+    out.attrs["profile_rsm_target"] = design["rsm"]
+    out.attrs["profile_seeds"] = " ".join(map(str, design["seeds"]))
+    return out
 
 
 def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
-    """One roughness-noise study point: synthesise the point's profiles (``roughness_ra``), build the pair, run it
-    for ``tasks["transient"]`` (duration, sample rate) at the point's ``sliding_velocity``, and measure it.
+    """One roughness-noise study point: synthesise the point's profiles (``roughness_ra``; Rsm level and seeds from
+    the replicate, :func:`point_profiles_design`), build the pair, run it for ``tasks["transient"]`` (duration,
+    sample rate) at the point's ``sliding_velocity``, and measure it.
 
     Returns ``{name: (dims, value, attrs)}`` for the point Dataset: Lv, V_RMS, shock rate and impulse, dissipated
-    power, mean forces, open fraction, and the generated profiles' Ra, Rq, Rz, Rsm (lower body,
-    :func:`fivid.surface.evaluate_profile`, line form removed, no filter) with the run's cost.
+    power, mean forces, the transducer's friction coefficient (mean and RMS fluctuation), open fraction, and the
+    generated profiles' Ra, Rq, Rz, Rsm (lower body, :func:`fivid.surface.evaluate_profile`, line form removed, no
+    filter, the body's length) with the run's cost.
     """
     import time
 
-    from fivid.fe import load_model
     from fivid.solver import simulate
     from fivid.surface import evaluate_profile
 
     spec = {**ROUGHNESS_TASK, **tasks["roughness"]}
     tr = tasks["transient"]
-    from fivid.fe.config import read_config
-
-    base, ctx, _ = read_config(model_path)
-    bodies = base["bodies"]  # the profiles' length: the lower (top-profiled) body's
-    corners = next(b["corners"] for b in bodies.values()
-                   if isinstance(b.get("profile"), dict) and b["profile"].get("edge") == "top")
-    length = _si(ctx, corners[1][0], "corners") - _si(ctx, corners[0][0], "corners")
     ra = float(conditions.get("roughness_ra", 0.0))
-    lower, upper = synthetic_rough_profiles(ra, length, correlation_length=spec["correlation_length"],
-                                            step=spec["profile_step"], seeds=spec["seeds"])
-    load = float(conditions["normal_load"]) if "normal_load" in conditions else None
-    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
-    model = load_model(cfg)
+    model, lower, info, design = build_point_model(model_path, spec, conditions)
     n_slave = int(sum(c.slave_nodes.size for c in model.contacts))
     kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
     t0 = time.perf_counter()
@@ -304,6 +413,12 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
         "mean_friction_force": ((), r["mean_friction_force"], {"units": "N", "long_name": "mean friction force "
                                                                "(transducer)"}),
         "open_fraction": ((), r["open_fraction"], {"units": "1", "long_name": "mean share of open slave nodes"}),
+        "friction_coefficient": ((), r["friction_coefficient"], {"units": "1", "long_name": "mean of mu(t) = "
+                                                                 "|transducer force| / mean contact normal force"}),
+        "friction_coefficient_rms": ((), r["friction_coefficient_rms"], {
+            "units": "1", "long_name": "RMS fluctuation of mu(t) (the perturbation amplitude, all frequencies)"}),
+        "profile_rsm_target": ((), design["rsm"], {"units": "m", "long_name": "Rsm level of the point's profiles "
+                                                   "(replicate)", "replicate": design["replicate"]}),
         "simulation_seconds": ((), seconds, {"units": "s", "long_name": "wall time of the simulation"}),
         "dof_updates_per_second": ((), model.coords.size * ds.attrs["steps"] / seconds,
                                    {"units": "s-1", "long_name": "degrees of freedom x steps / wall time"}),
@@ -318,8 +433,8 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
     out["upper_lift"] = ((), info["lift"], {"units": "m", "long_name": "upper body lift to first touch",
                                             "back_face_sensors": info["back_face_sensors"],
                                             "sensor_every": info["sensor_every"],
-                                            "correlation_length": spec["correlation_length"],
-                                            "profile_seeds": " ".join(map(str, spec["seeds"]))})
+                                            "correlation_length": design["correlation_length"],
+                                            "profile_seeds": " ".join(map(str, design["seeds"]))})
     return out
 
 
@@ -335,12 +450,21 @@ def roughness_settings(study) -> dict:
         "mesh": {name: {"divisions": list(b["divisions"]), "grading": b.get("grading")}
                  for name, b in data["bodies"].items()},
         "profiles": {"generator": "fivid.surface.gaussian_random_profile", "acf": "gaussian",
-                     "rq_per_ra": RQ_PER_RA, "correlation_length": spec["correlation_length"],
-                     "step": spec["profile_step"], "seeds": {"lower": spec["seeds"][0], "upper": spec["seeds"][1]}},
+                     "rq_per_ra": RQ_PER_RA,
+                     "rsm_levels": list(spec["rsm"]) if not spec["correlation_length"] else None,
+                     "correlation_length": (spec["correlation_length"] or
+                                            [float(v) / RSM_PER_CORRELATION_LENGTH for v in spec["rsm"]]),
+                     "rsm_per_correlation_length": RSM_PER_CORRELATION_LENGTH,
+                     "replicates": "sweep axis seed: replicate r takes Rsm level r mod len(levels) and profile seeds "
+                                   "(lower, upper) + 100 r",
+                     "step": spec["profile_step"], "seeds": {"lower": spec["seeds"][0], "upper": spec["seeds"][1]},
+                     "metrology": "lower profile, line removed, no filter, the body's length "
+                                  "(fivid.surface.evaluate_profile)"},
         "record": {"duration": study.points["transient"]["duration"],
                    "sample_rate": study.points["transient"]["sample_rate"],
                    "window": "steady part: time >= transient_end (preload ramp, settle_time, base ramp excluded)",
                    "settle_time": spec["settle_time"]},
+        "friction_coefficient": "mu(t) = |friction_force (transducer)| / mean contact_normal_force, steady part",
         "sensors": f"velocity (y) on every {spec['sensor_every']}th node of the lower body's back face",
         "lv_reference": LV_REFERENCE,
         "shock_detector": {"min_closing_nodes": SHOCK_MIN_CLOSING, "baseline_time": SHOCK_BASELINE},

@@ -37,7 +37,8 @@ __all__ = ["run_study", "open_study", "point_key"]
 
 #: per-point results of a roughness-noise point (fivid.study.roughness) copied into summary.json
 ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impulse", "shock_count", "dissipated_power",
-                  "mean_normal_force", "mean_friction_force", "open_fraction", "profile_Ra", "profile_Rq",
+                  "mean_normal_force", "mean_friction_force", "open_fraction", "friction_coefficient",
+                  "friction_coefficient_rms", "profile_rsm_target", "profile_Ra", "profile_Rq",
                   "profile_Rz", "profile_Rsm", "simulation_seconds", "dof_updates_per_second", "n_dof", "time_step")
 
 log = logging.getLogger("fivid")
