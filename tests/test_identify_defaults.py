@@ -144,3 +144,20 @@ def test_tare_must_be_an_unloaded_interval_of_the_record(tare, match):
     with pytest.raises(FividError, match=match) as err:
         identify_friction_law(runs[:2], tare=tare)
     assert "run 'E0'" in str(err.value)
+
+
+def test_glitch_repair_is_for_measured_runs_only():
+    """A spike in the force channel is repaired in a measured run and kept in a simulated one (attribute
+    transient_end: no DAQ; a rough contact's asperity impacts are physics), unless asked for."""
+    from fivid.identify.runs import RunAnalysisSettings, analyse_run
+
+    _, runs = _edge_runs((0.0, 0.0), (0.0, 0.0))
+    ds = runs[0].copy(deep=True)
+    ds["friction_force"].values[30000] += 50.0  # a 50 N spike on a ~1.5 N signal
+    band = (DEFAULT_BAND_LOW, DEFAULT_BAND_HIGH)
+    measured = analyse_run(ds, RunAnalysisSettings(), band=band)
+    sim = ds.assign_attrs(transient_end=0.05)
+    simulated = analyse_run(sim, RunAnalysisSettings(), band=band)
+    forced = analyse_run(sim, RunAnalysisSettings(glitch_repair=True), band=band)
+    assert measured.glitches_replaced >= 1 and forced.glitches_replaced == measured.glitches_replaced
+    assert simulated.glitches_replaced == 0 and simulated.mu_rms > measured.mu_rms

@@ -399,6 +399,7 @@ def identify_friction_law(
     tare=None,
     mains_frequency: float | None = 50.0,
     noise_correction: bool = True,
+    glitch_repair: bool | None = None,
     transfer_function=None,
     shape_method: str = "smoothed",
     smoothing_octaves: float = 1.0 / 6.0,
@@ -434,6 +435,9 @@ def identify_friction_law(
         are <= mains/4 (else left in, with a message); None disables.
     noise_correction : bool, default True
         With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
+    glitch_repair : bool or None, default None
+        Replace force-channel DAQ glitches before the analysis; None: on for measured runs, off for simulated
+        ones (:class:`fivid.identify.runs.RunAnalysisSettings`).
     transfer_function : xarray.DataArray, optional
         Force-chain transfer function on dim ``frequency`` [Hz]; the μp PSD is divided by ``|H|^2``.
     shape_method : {"smoothed", "rolloff"}
@@ -481,7 +485,8 @@ def identify_friction_law(
     band = _check_band(band, datasets)
     settings = RunAnalysisSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
                            tare=None if tare is None else tuple(float(x) for x in tare),
-                           mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence)
+                           mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence,
+                           glitch_repair=glitch_repair)
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
                                    for ds in datasets]
     used = [r for r in analyses if r.used]

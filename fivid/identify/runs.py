@@ -56,6 +56,10 @@ class RunAnalysisSettings:
     noise_correction : bool
         With a tare interval, subtract the force-sensor noise PSD measured on it (see
         :func:`analyse_run`).
+    glitch_repair : bool or None
+        Replace DAQ glitches (spikes, dropouts) of the force channels (:mod:`fivid.identify.glitches`). None (the
+        default): on for measured runs, off for simulated runs (attribute ``transient_end``) -- a simulation has no
+        DAQ, and the asperity impacts of a rough contact are physics that the spike detector would take for glitches.
     n_batches : int
         Batches of the batch-means interval of the mean μ.
     confidence : float
@@ -68,6 +72,7 @@ class RunAnalysisSettings:
     tare: tuple | None = None
     mains_frequency: float | None = 50.0
     noise_correction: bool = True
+    glitch_repair: bool | None = None
     n_batches: int = 20
     confidence: float = 0.95
 
@@ -80,6 +85,7 @@ class RunAnalysisSettings:
             "tare": self.tare,
             "mains_frequency": self.mains_frequency,
             "noise_correction": self.noise_correction,
+            "glitch_repair": "auto" if self.glitch_repair is None else self.glitch_repair,
             "n_batches": self.n_batches,
             "confidence": self.confidence,
         }
@@ -319,8 +325,12 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
         return res
     from fivid.identify.glitches import replace_glitches
 
-    (ft, fn), glitch = replace_glitches(ds["friction_force"].values, ds["normal_force"].values)
-    res.glitches_replaced = int(glitch.sum())
+    repair = settings.glitch_repair if settings.glitch_repair is not None else "transient_end" not in ds.attrs
+    if repair:
+        (ft, fn), glitch = replace_glitches(ds["friction_force"].values, ds["normal_force"].values)
+        res.glitches_replaced = int(glitch.sum())
+    else:
+        ft, fn = (np.asarray(ds[v].values, float) for v in ("friction_force", "normal_force"))
     tare_sel = None
     if settings.tare is not None:
         ft, fn, tare_sel = _tare(t, ft, fn, settings, label)
