@@ -117,18 +117,14 @@ DECISIONS: dict[str, Decision] = {
     'python -m pip install -e ".[all,test]" -c constraints.txt': skip("pip install needs the network"),
     # docs/roughness.md
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness --quick": slow(
-        "4 rough-pair transients of 3 ms (minutes)"),
+        "4 rough-pair transients of 1.2 ms (under 2 min)"),
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness": skip(
-        "the full seed-003 study is about 20 min for its 9 points (docs/roughness.md); the --quick line above "
-        "runs the same study in the slow test"),
-    "fivid identify runs/rough-*.nc -o law.nc --band 500 10000 --mains-frequency 0 --json > identify.json": skip(
-        "needs runs/rough-*.nc, written by the Python example above (0.12 s rough-pair simulations); "
-        "tests/test_roughness.py::test_a_rough_run_goes_through_fivid_identify (slow) runs that route"),
-    "fivid simulate configs/models/triboair_coarse.yaml --law law.nc ...": skip(
-        "'...': the options of docs/solver.md's command, with the law of the skipped command above"),
-    "python: from fivid.fe import load_model": skip(
-        "needs the reader's profilometer traces (lower_trace.csv, upper_trace.csv) and 0.12 s rough-pair "
-        "simulations; tests/test_roughness.py::test_a_rough_run_goes_through_fivid_identify (slow) runs it"),
+        "the full seed-003 study is 15-45 min for its 18 points on the shared 2 cores (docs/roughness.md); the "
+        "--quick line above runs the same study in the slow test"),
+    "fivid identify rough-ra2.nc rough-ra4.5.nc rough-ra10.nc -o law.nc --band 500 20000 --mains-frequency 0 --json":
+        skip("needs three 0.1025 s rough-pair runs (about 8 min of solver time each, simulate_rough_run); "
+             "tests/test_roughness_graded.py::test_a_rough_run_with_a_transducer_goes_through_fivid_identify (slow) "
+             "runs that route on one of them"),
     # docs/solver.md
     _SIM: slow(_QUICK_SIM, quick=_SIM.replace("triboair.yaml", "triboair_coarse.yaml").replace('"0.1 s"', '"5 ms"')),
     _SIM_LAW: slow(_QUICK_SIM, quick=_SIM_LAW.replace("triboair.yaml", "triboair_coarse.yaml")
