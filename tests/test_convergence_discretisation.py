@@ -13,18 +13,20 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from fivid.study.convergence import band_levels_db, convergence_summary, octave_bands, psd_peaks
+from fivid.study.convergence import band_levels_db, convergence_summary, psd_peaks, third_octave_bands
 
 ROOT = Path(__file__).resolve().parents[1]
 COARSE = ROOT / "configs" / "models" / "triboair_coarse.yaml"
 
 
-def test_octave_bands_are_clipped_base_2_octaves():
-    bands = octave_bands(100.0, 10_000.0)
+def test_third_octave_bands_are_clipped_base_2_thirds():
+    bands = third_octave_bands(100.0, 10_000.0)
     assert bands[0][0] == 100.0 and bands[-1][1] == 10_000.0
     for lo, hi in bands[1:-1]:
-        assert hi / lo == pytest.approx(2.0, rel=1e-12)
-        assert np.log2(np.sqrt(lo * hi) / 1000.0) == pytest.approx(round(np.log2(np.sqrt(lo * hi) / 1000.0)), abs=1e-12)
+        assert hi / lo == pytest.approx(2.0 ** (1 / 3), rel=1e-12)
+        k = 3 * np.log2(np.sqrt(lo * hi) / 1000.0)  # centres 1000 * 2^(k/3), k integer
+        assert k == pytest.approx(round(k), abs=1e-9)
+    assert all(a[1] == pytest.approx(b[0], rel=1e-12) for a, b in zip(bands, bands[1:]))  # contiguous
 
 
 def test_band_level_of_a_white_psd_is_density_times_width():
@@ -75,11 +77,13 @@ def test_convergence_summary_recovers_the_orders_of_peaks_and_band_levels():
     assert peak["order"] == pytest.approx(2.0, rel=1e-6) and peak["extrapolated"] == pytest.approx(4000.0, abs=1e-5)
     # the 2 mm mesh's shift: 1e7 * (2e-3)^2 = 40 Hz
     assert peak["deviation"][2] == pytest.approx(40.0, abs=1e-4)
-    for b in entry["band_level_db"]:
-        if b["band"][0] <= 3000.0 and b["band"][1] >= 5000.0:  # the octave holding the whole peak, and all
-            # a uniform scale 10^(C h^1.5 / 10): the level is L_inf + C h^1.5 exactly (the peak stays inside)
-            assert b["order"] == pytest.approx(1.5, rel=1e-6)
-            assert b["deviation"][2] == pytest.approx(2e3 * (2e-3) ** 1.5, rel=1e-6)
+    # a uniform scale 10^(C h^1.5 / 10): the level is L_inf + C h^1.5 exactly where the peak does not cross the
+    # band's edges: the floor-only bands below 3 kHz (the Gaussian is below 1e-200 there) and the whole range
+    exact = [b for b in entry["band_level_db"] if b["band"][1] < 3000.0] + [entry["band_level_db"][-1]]
+    assert len(exact) > 10 and entry["band_level_db"][-1]["band"] == [100.0, 9975.0]
+    for b in exact:
+        assert b["order"] == pytest.approx(1.5, rel=1e-6), b
+        assert b["deviation"][2] == pytest.approx(2e3 * (2e-3) ** 1.5, rel=1e-6)
 
 
 def test_time_step_orders_with_three_steps():
@@ -95,13 +99,18 @@ def test_time_step_orders_with_three_steps():
     assert len(conv["time_step"]) == 2 and all(s["lsd_db"] < 0.01 for s in conv["time_step"])
 
 
-def _table(tmp_path, **models):
-    """A convergence table from the fake study (2, 1, 0.5 mm) for the named models."""
+def _table(tmp_path, *, psd=False, **models):
+    """A convergence table from the fake study (2, 1, 0.5 mm) for the named models (with the PSDs at the largest
+    step, as write_convergence_table stores them, when ``psd``)."""
     ds, table = _fake_study((0.25, 0.5, 1.0), _gaussian_psd, steps=(0.9, 0.45))
     conv = convergence_summary(ds, table, list(range(len(table))))
-    path = tmp_path / "convergence.json"
-    path.write_text(json.dumps({"fivid-convergence": 1, "source": {"study": "fake"}, "models": models,
-                                "convergence": conv}))
+    data = {"fivid-convergence": 1, "source": {"study": "fake"}, "models": models, "convergence": conv}
+    if psd:
+        at = [k for k, c in enumerate(table) if c["time_step"] == 0.9][::-1]  # finest first
+        data["psd"] = {"time_step": 0.9, "element_size": ds["element_size"].values[at].tolist(),
+                       "frequency": ds["frequency"].values.tolist(), "psd": ds["psd"].values[at].tolist()}
+    path = tmp_path / ("convergence_psd.json" if psd else "convergence.json")
+    path.write_text(json.dumps(data))
     return path
 
 
@@ -112,12 +121,27 @@ def test_discretisation_estimate_of_the_coarse_model(tmp_path):
     est = discretisation_estimate(COARSE, (800.0, 5000.0), path, bin_width=25.0)
     assert est["covered"] and est["model"]["element_size"] == pytest.approx(0.002, rel=1e-9)
     assert est["model"]["dofs"] == 984 and est["model"]["name"] == "triboair_coarse"
-    # octaves overlapping 800-5000 Hz: 707-1414, 1414-2828, 2828-5657; a uniform scale: the same error in each
-    assert [round(o["band"][0]) for o in est["octave_bands"]] == [707, 1414, 2828]
-    assert est["band_level_error_db"] == pytest.approx(2e3 * 0.002**1.5, rel=1e-6)
+    # thirds overlapping 800-5000 Hz: from 707-891 to 4490-5657; the peak moves inside 3564-4490 (1e7 h^2 Hz)
+    parts = est["third_octaves"]
+    assert round(parts[0]["band"][0]) == 707 and round(parts[-1]["band"][0]) == 4490 and len(parts) == 9
+    assert est["band_level_error_db"] == pytest.approx(2e3 * 0.002**1.5, rel=1e-3)  # the uniform scale's error
+    assert est["band_level_deviation_db"] is None  # no PSDs in this table: the bound over the thirds only
     (peak,) = est["peaks"]
     assert peak["frequency"] == pytest.approx(4000.0, abs=1e-5) and peak["shift_bins"] == pytest.approx(1.6, rel=1e-5)
     assert est["time_step_lsd_db"] == pytest.approx(0.0, abs=1e-9)  # the fake PSD does not depend on the step
+
+
+def test_discretisation_estimate_from_the_tables_psds_is_exact_for_the_band(tmp_path):
+    """With the meshes' PSDs the band level of exactly the scoring band is extrapolated: the fake PSD's whole
+    peak is inside 800-5000 Hz, so the level is L_inf + C h^1.5 exactly and the order comes back."""
+    from fivid.pipeline.discretisation import discretisation_estimate
+
+    path = _table(tmp_path, psd=True, **{COARSE.name: {"element_size": 0.002, "mesh": 0.25}})
+    est = discretisation_estimate(COARSE, (800.0, 5000.0), path, bin_width=25.0)
+    assert est["band_level_order"] == pytest.approx(1.5, rel=1e-6)
+    assert est["band_level_deviation_db"] == pytest.approx(2e3 * 0.002**1.5, rel=1e-6)
+    assert est["band_level_error_db"] == pytest.approx(est["band_level_deviation_db"])
+    assert est["band_lsd_db"] > 2e3 * (0.002**1.5 - 0.0005**1.5)  # the floor's offset, plus the shifted peak
 
 
 def test_uncovered_model_or_missing_table_is_said_not_guessed(tmp_path):
@@ -144,4 +168,8 @@ def test_report_states_the_mesh_and_its_error(tmp_path):
     _discretisation(page, est)  # the provenance section's mesh and error lines
     html = page.render()
     assert "largest element side 2 mm, 984 dofs" in html and "band level within 0.18 dB" in html
+    path = _table(tmp_path, psd=True, **{COARSE.name: {"element_size": 0.002, "mesh": 0.25}})
+    page = Page("t")
+    _discretisation(page, discretisation_estimate(COARSE, (800.0, 5000.0), path, bin_width=25.0))
+    assert "band level +0.18 dB, PSD log-spectral distance to the finest mesh" in page.render()
     assert "4000 Hz: +40.0 Hz (1.6 bins)" in html

@@ -9,11 +9,15 @@ model files it covers. The calibration pipeline looks for ``convergence.json`` n
 For the pipeline's model (matched by file name, then checked by its largest element side ``h``) and scoring band
 ``[f1, f2]``:
 
-- ``band_level_error_db``: the largest ``|deviation|`` of the model's mesh from the Richardson-extrapolated level
-  (from the finest mesh where the three levels do not converge monotonically) over the octave bands that
-  overlap the scoring band. A band's power is the sum of its octaves' powers, so if every octave's power is off
-  by a factor within ``[a, b]`` the band's is too: the largest octave error bounds the band level's error (the
-  clipped edge octaves counted with their whole-octave error);
+- ``band_level_error_db``: ``|band_level_deviation_db|``, the model's mesh's level of the scoring band minus
+  the Richardson-extrapolated level (the finest mesh's where the three levels do not converge monotonically),
+  computed from the study's PSDs of the three meshes (at the solver's step) that the table carries;
+  ``band_lsd_db``: the log-spectral distance between the model's mesh's PSD and the finest mesh's over the
+  band's bins (the study's record: one realisation, the same seed on every mesh). A table without PSDs gives
+  instead the largest error over the one-third-octave bands the scoring band overlaps: a band's power is the
+  sum of its parts' powers, so if every part is off by a factor within ``[a, b]`` the band is too;
+- ``third_octaves``: the breakdown, each one-third-octave band overlapping the scoring band with its level error
+  on the model's mesh, observed order and reference;
 - ``peaks``: each prominent PSD peak inside the band, its frequency shift on the model's mesh [Hz] and that shift
   in Welch bins of the scoring (``sample_rate / nperseg``); ``peak_shift_bins`` the largest;
 - ``time_step``: the largest PSD log-spectral distance [dB] between the solver's step and the smallest step of
@@ -82,8 +86,9 @@ def discretisation_estimate(model_path, band, table_path, *, bin_width: float) -
     -------
     dict
         ``model`` (:func:`model_mesh`), ``band`` [Hz], ``covered`` (the table has this model's mesh), ``table``
-        (path, sha256, source), and when covered ``band_level_error_db``, ``octave_bands``, ``peaks``,
-        ``peak_shift_bins``, ``time_step_lsd_db``, ``reference`` (what the errors are measured against).
+        (path, sha256, source), and when covered ``band_level_error_db``, ``band_level_deviation_db``,
+        ``band_level_order``, ``band_lsd_db``, ``third_octaves``, ``peaks``, ``peak_shift_bins``,
+        ``time_step_lsd_db``, ``reference`` (what the errors are measured against).
     """
     mesh = model_mesh(model_path)
     out = {"model": mesh, "band": [float(band[0]), float(band[1])], "covered": False, "table": None}
@@ -106,11 +111,27 @@ def discretisation_estimate(model_path, band, table_path, *, bin_width: float) -
         out["reason"] = f"element size {h * 1e3:.4g} mm is not among the study's meshes"
         return out
     lo, hi = band
-    octaves = []
+    parts = []
     for b in m.get("band_level_db", [])[:-1]:  # the last entry is the whole PSD range
         if b["band"][1] > lo and b["band"][0] < hi:
-            octaves.append({"band": b["band"], "deviation_db": _pick(b["deviation"], b["h"], h), "order": b["order"],
-                            "reference": "extrapolated" if b["order"] is not None else "finest mesh"})
+            parts.append({"band": b["band"], "deviation_db": _pick(b["deviation"], b["h"], h), "order": b["order"],
+                          "reference": "extrapolated" if b["order"] is not None else "finest mesh"})
+    level = {"band_level_error_db": max((abs(o["deviation_db"]) for o in parts), default=None),
+             "band_level_deviation_db": None, "band_level_order": None, "band_lsd_db": None}
+    spectra = table.get("psd")
+    if spectra and _pick(spectra["element_size"], spectra["element_size"], h) is not None:
+        from fivid.study.convergence import band_levels_db, observed_order
+
+        f = np.asarray(spectra["frequency"], float)
+        psd = np.asarray(spectra["psd"], float)  # (mesh, frequency)
+        hs = [float(x) for x in spectra["element_size"]]
+        oo = observed_order(hs, [band_levels_db(f, p, [(lo, hi)])[0] for p in psd])
+        dev = _pick(oo["deviation"], oo["h"], h)
+        sel = (f >= lo) & (f <= hi)
+        k_model = next(k for k, x in enumerate(hs) if abs(x - h) <= H_TOLERANCE * h)
+        d = 10.0 * np.log10(psd[k_model, sel] / psd[int(np.argmin(hs)), sel])
+        level = {"band_level_error_db": abs(dev), "band_level_deviation_db": dev, "band_level_order": oo["order"],
+                 "band_lsd_db": float(np.sqrt(np.mean(d * d))) if d.size else None}
     peaks = []
     for p in m.get("psd_peak_frequency", []):
         if lo <= p["peak"] <= hi:
@@ -120,8 +141,7 @@ def discretisation_estimate(model_path, band, table_path, *, bin_width: float) -
     lsd = [s["lsd_db"] for s in conv.get("time_step", [])
            if abs(float(s["conditions"].get("mesh", 0.0)) - float(entry.get("mesh", np.nan))) < 1e-12]
     out.update(
-        covered=True, element_sizes=m["element_size"], conditions=m["conditions"], octave_bands=octaves,
-        band_level_error_db=max((abs(o["deviation_db"]) for o in octaves), default=None),
+        covered=True, element_sizes=m["element_size"], conditions=m["conditions"], third_octaves=parts, **level,
         peaks=peaks, peak_shift_bins=max((p["shift_bins"] for p in peaks), default=0.0),
         time_step_lsd_db=max(lsd, default=None),
         reference="Richardson extrapolation over the study's three meshes where they converge monotonically, "
@@ -136,13 +156,25 @@ def write_convergence_table(study_dir, out, models: dict[str, dict]) -> Path:
     """
     from fivid.storage import write_json
 
+    import xarray as xr
+
     summary = json.loads((Path(study_dir) / "summary.json").read_text(encoding="utf-8"))
     if "convergence" not in summary:
         raise ValueError(f"{study_dir}/summary.json has no 'convergence' block: not a mesh or time-step study")
     source = {k: summary.get(k) for k in ("study", "description", "source", "fivid_version", "quick", "n_done")
               if summary.get(k) is not None}
-    return write_json(out, {"fivid-convergence": 1, "source": source, "models": models,
-                            "convergence": summary["convergence"]})
+    table = {"fivid-convergence": 1, "source": source, "models": models, "convergence": summary["convergence"]}
+    with xr.open_dataset(Path(study_dir) / "study.nc") as ds:
+        if "psd" in ds and "time_step" in ds.coords and "mesh" in ds.coords:
+            step = float(ds["time_step"].max())  # the solver's step: the largest of the study
+            idx = np.flatnonzero(ds["time_step"].values == step)
+            h = ds["element_size"].values[idx]
+            if np.unique(h).size == idx.size:  # one point per mesh (no other swept condition): PSDs by mesh
+                idx = idx[np.argsort(h)]
+                table["psd"] = {"time_step": step, "element_size": ds["element_size"].values[idx].tolist(),
+                                "frequency": ds["frequency"].values.tolist(), "units": ds["psd"].attrs.get("units"),
+                                "psd": ds["psd"].values[idx].tolist()}
+    return write_json(out, table)
 
 
 def main(argv=None) -> None:

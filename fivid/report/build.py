@@ -305,19 +305,24 @@ def _discretisation(page: Page, est) -> None:
                        f"({est.get('reason', 'no convergence table')}).")
         return
     h = ", ".join(f"{x * 1e3:.3g}" for x in est["element_sizes"])
-    err = "n/a" if est["band_level_error_db"] is None else f"{est['band_level_error_db']:.2g}"
-    lsd = "n/a" if est["time_step_lsd_db"] is None else f"{est['time_step_lsd_db']:.2g}"
+
+    def num(key):
+        return "n/a" if est.get(key) is None else f"{est[key]:.2g}"
     peaks = "; ".join(f"{p['frequency']:.0f} Hz: {p['shift_hz']:+.1f} Hz ({p['shift_bins']:.2g} bins)"
                       for p in est["peaks"]) or "none in the band"
+    level = (f"band level {est['band_level_deviation_db']:+.2f} dB, PSD log-spectral distance to the finest mesh "
+             f"{num('band_lsd_db')} dB" if est.get("band_level_deviation_db") is not None else
+             f"band level within {num('band_level_error_db')} dB (the largest error of the one-third octaves the "
+             f"band overlaps)")
     note = f" Note: {est['note']}" if est.get("note") else ""
     page.paragraph(
         f"Estimated discretisation error in the scoring band {lo:g}–{hi:g} Hz (convergence table "
-        f"{est['table']['path']}, meshes {h} mm; against the {est['reference']}): band level within {err} dB "
-        f"(the largest error over the octaves the band overlaps); PSD peak shifts: {peaks}; time step: PSD "
-        f"log-spectral distance {lsd} dB from the study's smallest step.{note}")
+        f"{est['table']['path']}, meshes {h} mm; against the {est['reference']}): {level}; PSD peak shifts: "
+        f"{peaks}; time step: PSD log-spectral distance {num('time_step_lsd_db')} dB from the study's smallest "
+        f"step.{note}")
     rows = [[f"{o['band'][0]:.0f}–{o['band'][1]:.0f}", o["deviation_db"], o["order"], o["reference"]]
-            for o in est["octave_bands"]]
-    page.raw(table(["octave band [Hz]", "level error of this mesh [dB]", "observed order", "against"], rows))
+            for o in est["third_octaves"]]
+    page.raw(table(["one-third octave [Hz]", "level error of this mesh [dB]", "observed order", "against"], rows))
 
 
 def _setting(value):

@@ -11,9 +11,9 @@ can be read off. Applied to the preloaded modal frequencies, the response level 
 dominant frequency (the last is resolution-limited by the Welch bin, ``fs / nperseg``) and, with a ``psd``
 task, to
 
-- ``band_level_db``: the PSD's level [dB re 1e-6 of the response unit, i.e. re 1e-12 (unit)^2] in each octave
-  band (centres 1000 * 2^k Hz, edges centre / sqrt 2 and centre * sqrt 2, clipped to the PSD's frequency range)
-  and over the whole PSD range;
+- ``band_level_db``: the PSD's level [dB re 1e-6 of the response unit, i.e. re 1e-12 (unit)^2] in each
+  one-third-octave band (base 2: centres 1000 * 2^(k/3) Hz, edges centre * 2^(-1/6) and centre * 2^(1/6), clipped
+  to the PSD's frequency range, at least two bins) and, last, over the whole PSD range;
 - ``psd_peak_frequency``: the frequency of each prominent peak of the finest mesh's PSD (prominence >= 20 dB:
   a single Welch bin of broadband noise is chi2 with 2 degrees of freedom, 20 dB above a neighbouring dip has
   probability below 1e-4 per bin pair), located to a fraction of a bin by a parabola through the log PSD at the
@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["observed_order", "convergence_summary", "octave_bands", "band_levels_db", "psd_peaks"]
+__all__ = ["observed_order", "convergence_summary", "third_octave_bands", "band_levels_db", "psd_peaks"]
 
 #: prominence [dB] of a PSD peak that is tracked (module docstring: a noise bin pair reaches it with p < 1e-4)
 PEAK_PROMINENCE_DB = 20.0
@@ -90,17 +90,17 @@ def observed_order(h, q) -> dict:
     return out
 
 
-def octave_bands(f_lo: float, f_hi: float) -> list[tuple[float, float]]:
-    """Octave bands [Hz] (centres 1000 * 2^k, edges centre / sqrt 2 and centre * sqrt 2) overlapping
+def third_octave_bands(f_lo: float, f_hi: float) -> list[tuple[float, float]]:
+    """One-third-octave bands [Hz] (base 2: centres 1000 * 2^(k/3), edges centre * 2^(-+1/6)) overlapping
     ``[f_lo, f_hi]``, clipped to it.
 
-    >>> [(round(a), round(b)) for a, b in octave_bands(100.0, 1000.0)]
-    [(100, 177), (177, 354), (354, 707), (707, 1000)]
+    >>> [(round(a), round(b)) for a, b in third_octave_bands(800.0, 1500.0)]
+    [(800, 891), (891, 1122), (1122, 1414), (1414, 1500)]
     """
     out = []
-    for k in range(-12, 13):
-        c = 1000.0 * 2.0**k
-        lo, hi = c / np.sqrt(2.0), c * np.sqrt(2.0)
+    for k in range(-36, 37):
+        c = 1000.0 * 2.0 ** (k / 3.0)
+        lo, hi = c * 2.0 ** (-1.0 / 6.0), c * 2.0 ** (1.0 / 6.0)
         if hi > f_lo and lo < f_hi:
             out.append((max(lo, f_lo), min(hi, f_hi)))
     return out
@@ -149,7 +149,8 @@ def _spectral_series(ds, idx, x) -> dict:
     ``ds``) whose refinement parameter is ``x`` (element size or time step; any order)."""
     f = ds["frequency"].values
     psd = ds["psd"].values[idx]
-    bands = [*octave_bands(float(f[0]), float(f[-1])), (float(f[0]), float(f[-1]))]
+    bands = [b for b in third_octave_bands(float(f[0]), float(f[-1])) if np.count_nonzero((f >= b[0]) & (f <= b[1])) >= 2]
+    bands.append((float(f[0]), float(f[-1])))
     levels = np.array([band_levels_db(f, p, bands) for p in psd])  # (3, band)
     out = {"band_level_db": [dict(observed_order(x, levels[:, b]), band=list(bands[b])) for b in range(len(bands))]}
     finest = int(np.argmin(x))

@@ -132,7 +132,7 @@ def _convergence_tables(page: Page, conv) -> None:
 
 
 def _spectral_rows(entry) -> list[list]:
-    """Table rows of the octave band levels and PSD peak frequencies of a convergence entry."""
+    """Table rows of the one-third-octave band levels and PSD peak frequencies of a convergence entry."""
     rows = []
     for b in entry.get("band_level_db", []):
         rows.append([f"level {b['band'][0]:.0f}–{b['band'][1]:.0f} Hz [dB]", *(round(v, 3) for v in b["values"]),
