@@ -161,7 +161,7 @@ def write_convergence_table(study_dir, out, models: dict[str, dict]) -> Path:
     summary = json.loads((Path(study_dir) / "summary.json").read_text(encoding="utf-8"))
     if "convergence" not in summary:
         raise ValueError(f"{study_dir}/summary.json has no 'convergence' block: not a mesh or time-step study")
-    source = {k: summary.get(k) for k in ("study", "description", "source", "fivid_version", "quick", "n_done")
+    source = {k: summary.get(k) for k in ("study", "description", "source", "fivid_version", "quick", "n_points", "n_done")
               if summary.get(k) is not None}
     table = {"fivid-convergence": 1, "source": source, "models": models, "convergence": summary["convergence"]}
     with xr.open_dataset(Path(study_dir) / "study.nc") as ds:
