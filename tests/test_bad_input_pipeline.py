@@ -110,7 +110,7 @@ def test_scheduler_check_accepts_a_listening_port():
 # --- A6: a band above the Nyquist frequency of the input files (config-only cases: test_pipeline_config.py)
 
 
-@pytest.mark.parametrize("key, band", [("analysis.band", "band: [800 Hz, 5 kHz]"),
+@pytest.mark.parametrize("key, band", [("analysis.band", "band: [800 Hz, 8 kHz]"),
                                        ("identify.band", "band: [100 Hz, 8 kHz]")])
 def test_band_above_the_nyquist_frequency_of_the_input_files(tmp_path, capsys, key, band):
     """The sample runs are at 51.2 kHz: a 30 kHz band is refused by the plan, before ingest or simulation."""

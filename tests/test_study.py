@@ -314,19 +314,27 @@ def test_committed_sample_law_is_the_ground_truth():
 
 @pytest.mark.slow
 def test_convergence_study_quick(tmp_path):
-    """configs/studies/convergence.yaml --quick: three meshes x two steps; each mode's frequency falls as the
-    mesh is refined (Q4 is too stiff in bending: convergence from above), an order and an error are reported,
-    and halving the step changes the PSD by well under 1 dB."""
+    """configs/studies/convergence.yaml --quick: three meshes x two steps, a third step on two of them, a 10 mm point; each
+    mode's frequency falls as the mesh is refined (Q4 is too stiff in bending: convergence from above), an order
+    and an error are reported, halving the step changes the PSD by well under 1 dB, and the one-third-octave
+    band levels and the PSD peaks are reported against the element size and the step (issue 16 item 5)."""
     summary = run_study(load_study(ROOT / "configs" / "studies" / "convergence.yaml", quick=True), tmp_path / "o",
                         workers=2, progress=False)
-    assert summary["n_done"] == 6
+    assert summary["n_done"] == 9
     mesh = summary["convergence"]["mesh"]
-    assert len(mesh) == 2  # one per time step
+    assert len(mesh) == 2  # one per time step computed on all three meshes
     for m in mesh[0]["mode_frequency"][:3]:
         f1, f2, f3 = m["values"]
         assert f1 < f2 < f3 and m["order"] is not None and m["error"] > 0
     for s in summary["convergence"]["time_step"]:
         assert s["lsd_db"] < 1.0
+    # one-third octaves of 100 Hz - 10 kHz (the study's PSD band, thirds of at least 2 bins of 50 Hz: from
+    # the 281-354 Hz third on) and the whole band; the first mode's peak is tracked
+    assert len(mesh[0]["band_level_db"]) == 16 and mesh[0]["band_level_db"][-1]["band"] == [100.0, 9950.0]
+    modes = [m["values"][0] for m in mesh[0]["mode_frequency"]]
+    assert any(abs(p["values"][0] - modes[0]) < 0.05 * modes[0] for p in mesh[0]["psd_peak_frequency"])
+    steps = summary["convergence"]["time_step_order"]  # one per mesh with three steps
+    assert len(steps) == 2 and steps[0]["time_step"] == [0.225, 0.45, 0.9] and steps[0]["band_level_db"]
 
 
 def test_study_files_pass_the_cf_checker(tmp_path, request):

@@ -314,6 +314,7 @@ def _summary(ctx, stats, checks, status, error, started, seconds, lock) -> dict:
                   "ran": sum(s.ran for s in stats)},
         "inputs": ctx.data.get("input_sha256", {}),
         "law": ctx.data.get("law_summary"),
+        "discretisation": ctx.data.get("discretisation"),
         "scores": ctx.data.get("scores", {}),
         "thresholds": [t.describe() for t in plan.config.thresholds],
         "checks": checks,

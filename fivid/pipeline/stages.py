@@ -325,19 +325,49 @@ class Report:
     def plan(self, ctx) -> list[Task]:
         inputs = {f"{stage}:{task}:{label}": sha for stage, d in sorted(ctx.digests.items())
                   for task, outs in sorted(d.items()) for label, sha in sorted(outs.items())}
+        table = convergence_table(ctx.config)
+        inputs["model"] = file_sha256(ctx.config.model)
+        inputs["convergence_table"] = file_sha256(table) if table is not None and table.is_file() else None
         params = {"thresholds": [t.describe() for t in ctx.config.thresholds], "band": list(ctx.config.band),
-                  "nperseg": ctx.config.nperseg, "config_sha256": ctx.config.sha256}
-        return [Task("report", "report", params, inputs, {"html": str(ctx.out / "report.html")})]
+                  "nperseg": ctx.config.nperseg, "config_sha256": ctx.config.sha256,
+                  "convergence_table": str(table) if table is not None else None}
+        return [Task("report", "report", params, inputs,
+                     {"html": str(ctx.out / "report.html"), "discretisation": str(ctx.out / "discretisation.json")})]
 
     def execute(self, ctx, tasks) -> None:
+        from fivid.pipeline.discretisation import discretisation_estimate
         from fivid.report import render_report
+        from fivid.storage import write_json
 
         task = tasks[0]
         checks = evaluate_thresholds(ctx.data.get("scores", {}), ctx.config.thresholds)
-        _timed(ctx, task, lambda: render_report(task.outputs["html"], ctx_to_report_inputs(ctx, checks)))
+
+        def work():
+            cfg = ctx.config
+            est = discretisation_estimate(cfg.model, cfg.band, convergence_table(cfg),
+                                          bin_width=cfg.sample_rate / cfg.nperseg)
+            write_json(task.outputs["discretisation"], est)
+            ctx.data["discretisation"] = est
+            render_report(task.outputs["html"], ctx_to_report_inputs(ctx, checks))
+        _timed(ctx, task, work)
 
     def collect(self, ctx, tasks) -> None:
         ctx.data["report_path"] = tasks[0].outputs["html"]
+        ctx.data["discretisation"] = json.loads(Path(tasks[0].outputs["discretisation"]).read_text(encoding="utf-8"))
+
+
+def convergence_table(cfg) -> Path | None:
+    """The convergence table of the run: ``discretisation.convergence`` of the run configuration (relative to it;
+    null: none), by default ``convergence.json`` next to it (:mod:`fivid.pipeline.discretisation`)."""
+    from fivid.pipeline.discretisation import DEFAULT_TABLE
+
+    node = cfg.raw.get("discretisation") or {}
+    name = node.get("convergence", DEFAULT_TABLE) if isinstance(node, dict) else DEFAULT_TABLE
+    if name is None:
+        return None
+    path = Path(name)
+    base = Path(cfg.path).resolve().parent if cfg.path is not None else Path.cwd()
+    return path if path.is_absolute() else base / path
 
 
 def ctx_to_report_inputs(ctx, checks) -> dict:
@@ -350,6 +380,7 @@ def ctx_to_report_inputs(ctx, checks) -> dict:
             "pipeline": {"path": str(ctx.plan.path), "sha256": ctx.plan.recipe_sha256, "stages": list(ctx.plan.stages)},
             "config": {"path": str(cfg.path), "sha256": cfg.sha256, "content": cfg.raw},
             "model": {"path": str(cfg.model), "sha256": file_sha256(cfg.model)},
+            "discretisation": ctx.data.get("discretisation"),
             "inputs": ctx.data.get("input_sha256", {}),
             "settings": effective_settings(ctx),
         },

@@ -313,6 +313,7 @@ def _provenance(page: Page, inputs: dict) -> None:
         if what in prov:
             rows.append([what, prov[what].get("path"), prov[what].get("sha256")])
     page.raw(table(["file", "path", "sha256"], rows))
+    _discretisation(page, prov.get("discretisation"))
     if prov.get("inputs"):
         page.paragraph("Input files:")
         page.raw(table(["input file", "sha256"], [[k, v] for k, v in sorted(prov["inputs"].items())]))
@@ -324,6 +325,40 @@ def _provenance(page: Page, inputs: dict) -> None:
         page.paragraph("Run configuration as written in the file" + (" (the effective settings above take "
                        "precedence)" if prov.get("settings") else "") + ":")
         page.pre(yaml.safe_dump(prov["config"]["content"], sort_keys=False))
+
+
+def _discretisation(page: Page, est) -> None:
+    """The simulated model's mesh and its estimated discretisation error in the scoring band
+    (:func:`fivid.pipeline.discretisation.discretisation_estimate`)."""
+    if not est:
+        return
+    m = est["model"]
+    page.paragraph(f"Simulated with model {m['name']} ({m['path']}): largest element side "
+                   f"{m['element_size'] * 1e3:.3g} mm, {m['dofs']} dofs, {m['damping']} damping.")
+    lo, hi = est["band"]
+    if not est.get("covered"):
+        page.paragraph(f"Discretisation error in the scoring band {lo:g}–{hi:g} Hz: not estimated "
+                       f"({est.get('reason', 'no convergence table')}).")
+        return
+    h = ", ".join(f"{x * 1e3:.3g}" for x in est["element_sizes"])
+
+    def num(key):
+        return "n/a" if est.get(key) is None else f"{est[key]:.2g}"
+    peaks = "; ".join(f"{p['frequency']:.0f} Hz: {p['shift_hz']:+.1f} Hz ({p['shift_bins']:.2g} bins)"
+                      for p in est["peaks"]) or "none in the band"
+    level = (f"band level {est['band_level_deviation_db']:+.2f} dB, PSD log-spectral distance to the finest mesh "
+             f"{num('band_lsd_db')} dB" if est.get("band_level_deviation_db") is not None else
+             f"band level within {num('band_level_error_db')} dB (the largest error of the one-third octaves the "
+             f"band overlaps)")
+    note = f" Note: {est['note']}" if est.get("note") else ""
+    page.paragraph(
+        f"Estimated discretisation error in the scoring band {lo:g}–{hi:g} Hz (convergence table "
+        f"{est['table']['path']}, meshes {h} mm; against the {est['reference']}): {level}; PSD peak shifts: "
+        f"{peaks}; time step: PSD log-spectral distance {num('time_step_lsd_db')} dB from the study's smallest "
+        f"step.{note}")
+    rows = [[f"{o['band'][0]:.0f}–{o['band'][1]:.0f}", o["deviation_db"], o["order"], o["reference"]]
+            for o in est["third_octaves"]]
+    page.raw(table(["one-third octave [Hz]", "level error of this mesh [dB]", "observed order", "against"], rows))
 
 
 def _setting(value):

@@ -121,12 +121,30 @@ def _convergence_tables(page: Page, conv) -> None:
                 label = f"mode {it['mode']} [Hz]" if name == "mode" else name
                 rows.append([label, *(round(v, 6) for v in it["values"]), it["order"], it["extrapolated"],
                              it["error"]])
+        rows += _spectral_rows(entry)
         page.raw(table(["quantity", "finest", "middle", "coarsest", "observed order", "extrapolated",
                         "error of finest"], rows))
+    for entry in conv.get("time_step_order", []):
+        page.paragraph("Time steps " + ", ".join(f"{x:g}" for x in entry["time_step"]) + " of the critical step at "
+                       + ", ".join(f"{k} {v:g}" for k, v in entry["conditions"].items()) + ".")
+        page.raw(table(["quantity", "smallest step", "middle", "largest step", "observed order", "extrapolated",
+                        "error of smallest"], _spectral_rows(entry)))
     if conv.get("time_step"):
         rows = [[", ".join(f"{k} {v:g}" for k, v in s["conditions"].items()), s["time_step"], s["reference_time_step"],
                  s["lsd_db"], s["level_diff_db"]] for s in conv["time_step"]]
         page.raw(table(["conditions", "step (x critical)", "reference step", "PSD LSD [dB]", "level diff [dB]"], rows))
+
+
+def _spectral_rows(entry) -> list[list]:
+    """Table rows of the one-third-octave band levels and PSD peak frequencies of a convergence entry."""
+    rows = []
+    for b in entry.get("band_level_db", []):
+        rows.append([f"level {b['band'][0]:.0f}–{b['band'][1]:.0f} Hz [dB]", *(round(v, 3) for v in b["values"]),
+                     b["order"], b["extrapolated"], b["error"]])
+    for p in entry.get("psd_peak_frequency", []):
+        rows.append([f"PSD peak near {p['peak']:.0f} Hz [Hz]", *(round(v, 2) for v in p["values"]), p["order"],
+                     p["extrapolated"], p["error"]])
+    return rows
 
 
 def render_study_report(path, study, ds, summary: dict):
