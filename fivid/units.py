@@ -13,8 +13,8 @@ Two conventions of the field that pint does not know by itself:
 This module is the one place units are parsed and converted (layer L1): quantities with a decimal point or
 comma (:func:`parse_quantity`, :data:`NUMBER`), transducer sensitivities (:func:`sensitivity_factor`) and
 the UDUNITS strings of spectral quantities built from their signals' units (:func:`power_units`,
-:func:`product_units`, :func:`ratio_units`). :mod:`fivid.io.rig_quantities` and
-:mod:`fivid.signal.unit_strings` only call into it.
+:func:`product_units`, :func:`ratio_units`). :mod:`fivid.io.rig_quantities` only calls into it (the former
+``fivid.signal.unit_strings`` is gone: its helpers are defined here).
 
 pint is imported on first use, not at ``import fivid``.
 """

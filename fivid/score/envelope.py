@@ -77,7 +77,7 @@ def envelope_dataset(frequency, psd_samples, units: str, *, band=None, seeds=Non
 
     from fivid.schema import new_history
     from fivid.score.runs import _BAND_HIGH_FRACTION, _BAND_LOW_BINS
-    from fivid.signal.unit_strings import power_units
+    from fivid.units import power_units
 
     f = np.asarray(frequency, dtype=float)
     p = np.asarray(psd_samples, dtype=float)
