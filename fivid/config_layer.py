@@ -401,12 +401,14 @@ class Problems:
         self.items: list[tuple[str, str]] = []
 
     def add(self, key: str, message: str) -> None:
+        """Record a problem at the dotted ``key`` path (its line is looked up when raised)."""
         self.items.append((key, message))
 
     def __bool__(self) -> bool:
         return bool(self.items)
 
     def raise_if_any(self) -> None:
+        """Raise one ConfigError for every problem recorded (the first in full, the others summarised), if any."""
         if not self.items:
             return
         key, message = self.items[0]

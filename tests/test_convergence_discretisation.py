@@ -159,8 +159,8 @@ def test_uncovered_model_or_missing_table_is_said_not_guessed(tmp_path):
 
 def test_shipped_table_covers_the_pipelines_model():
     """configs/runs/convergence.json (from configs/studies/convergence.yaml) covers the sample runs' coarse model;
-    it says how many of the study's points it was made from (6 of 9 when shipped: 5, 2, 1 mm at the solver's
-    step, the 0.5 mm points missing, see docs/pipeline.md)."""
+    it says how many of the study's points it was made from (all 9 when shipped: the three finest meshes 2, 1 and
+    0.5 mm carry the Richardson estimate, see docs/pipeline.md)."""
     from fivid.pipeline.discretisation import discretisation_estimate
 
     table = ROOT / "configs" / "runs" / "convergence.json"
@@ -188,3 +188,21 @@ def test_report_states_the_mesh_and_its_error(tmp_path):
     _discretisation(page, discretisation_estimate(COARSE, (800.0, 5000.0), path, bin_width=25.0))
     assert "band level +0.18 dB, PSD log-spectral distance to the finest mesh" in page.render()
     assert "4000 Hz: +40.0 Hz (1.6 bins)" in html
+
+
+def test_estimate_uses_the_three_finest_meshes_of_a_four_mesh_table(tmp_path):
+    """A table with four meshes (the shipped study adds 5 mm to 2/1/0.5 mm) gives the Richardson estimate of the
+    three finest that include the model's mesh; with exact h^2 levels it recovers the order 2 and the limit."""
+    from fivid.pipeline.discretisation import discretisation_estimate
+
+    table = json.loads((ROOT / "configs" / "runs" / "convergence.json").read_text())
+    f = np.asarray(table["psd"]["frequency"], float)
+    hs = [0.0005, 0.001, 0.002, 0.005]
+    table["psd"]["element_size"] = hs
+    # a white PSD whose level in dB is 100 + 1e6 h^2 (h in m): the 2 mm mesh is 4 dB above the limit
+    table["psd"]["psd"] = [(np.full(f.size, 10 ** ((100 + 1e6 * h * h) / 10))).tolist() for h in hs]
+    path = tmp_path / "convergence.json"
+    path.write_text(json.dumps(table))
+    est = discretisation_estimate(COARSE, (800.0, 8000.0), path, bin_width=25.0)
+    assert est["band_level_order"] == pytest.approx(2.0, abs=1e-6)
+    assert est["band_level_deviation_db"] == pytest.approx(4.0, abs=1e-6)

@@ -53,7 +53,10 @@ REAL_DATA = ROOT.parent / "shared" / "real_data"
 DOCS = [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md"))
 COMMAND_LANGS = {"bash", "sh", "shell", "console", "crontab"}
 YAML_LANGS = {"yaml", "yml"}
-LINKED = ("configs", "pipelines", "sample_data")
+#: copied into each document's temp dir (small; a documented command may rewrite a file there, e.g. the convergence
+#: table, and must not rewrite the repository's) and linked (large, only read)
+COPIED = ("configs", "pipelines")
+LINKED = ("sample_data",)
 
 
 # ------------------------------------------------------------------------------------------------ decisions
@@ -106,6 +109,10 @@ DECISIONS: dict[str, Decision] = {
     "fivid identify runs/*.nc -o law-inverse.nc --inverse configs/models/triboair_coarse.yaml "
     "--inverse-band 1000 15000": slow("the inverse route runs FE simulations per iteration (minutes)"),
     # docs/pipeline.md
+    "fivid study configs/studies/convergence.yaml -o out/convergence": slow(
+        "9 transients of the default rig on 5/2/1/0.5 mm meshes (~3 min on 2 free cores, much more when loaded); "
+        "the fast test runs its --quick variant, which the table writer below reads as well",
+        quick="fivid study configs/studies/convergence.yaml -o out/convergence --quick"),
     _PIPELINE: slow("the whole calibration pipeline (about 2 min on 2 cores, more when loaded)"),
     "fivid run pipelines/calibration.yaml -c configs/runs/lab.yaml --no-progress || mail -s \"fivid exit $?\" "
     "lab@example.org < /dev/null": skip("a crontab entry: the lab's own configs/runs/lab.yaml, and mail"),
@@ -259,6 +266,8 @@ def all_commands() -> list[Command]:
 # ------------------------------------------------------------------------------------------------ running
 
 def _prepare(cwd: Path, doc: str) -> None:
+    for name in COPIED:
+        shutil.copytree(ROOT / name, cwd / name)
     for name in LINKED:
         (cwd / name).symlink_to(ROOT / name, target_is_directory=True)
     for step in SETUP.get(doc, []):

@@ -125,10 +125,14 @@ def discretisation_estimate(model_path, band, table_path, *, bin_width: float) -
         f = np.asarray(spectra["frequency"], float)
         psd = np.asarray(spectra["psd"], float)  # (mesh, frequency)
         hs = [float(x) for x in spectra["element_size"]]
-        oo = observed_order(hs, [band_levels_db(f, p, [(lo, hi)])[0] for p in psd])
+        k_model = next(k for k, x in enumerate(hs) if abs(x - h) <= H_TOLERANCE * h)
+        # Richardson needs three meshes: the three finest, the model's among them (else the two finest and it)
+        three = [int(k) for k in np.argsort(hs)[:3]]
+        if k_model not in three:
+            three = three[:2] + [k_model]
+        oo = observed_order([hs[k] for k in three], [band_levels_db(f, psd[k], [(lo, hi)])[0] for k in three])
         dev = _pick(oo["deviation"], oo["h"], h)
         sel = (f >= lo) & (f <= hi)
-        k_model = next(k for k, x in enumerate(hs) if abs(x - h) <= H_TOLERANCE * h)
         d = 10.0 * np.log10(psd[k_model, sel] / psd[int(np.argmin(hs)), sel])
         level = {"band_level_error_db": abs(dev), "band_level_deviation_db": dev, "band_level_order": oo["order"],
                  "band_lsd_db": float(np.sqrt(np.mean(d * d))) if d.size else None}
