@@ -86,6 +86,20 @@ def test_reduced_contact_correction_with_a_dense_inverse_mass_closes_the_gap(coa
     np.testing.assert_allclose(u - u0, dt * dt * W @ f, rtol=1e-9, atol=1e-18)
 
 
+def _assert_same_in_band(full, red):
+    """The paired check of a reduced run against the full one (tolerances in the tests' docstrings): acceleration
+    PSD over 200 Hz - 10 kHz within 1 dB RMS and 0.5 dB band level, steady mean friction force within 1 %."""
+    from fivid.solver.study import band_distance, steady_psds
+
+    f, (p_full, p_red), _ = steady_psds([full, red], nperseg=256)
+    lsd, level, _ = band_distance(f, p_full, p_red, (200.0, 10e3))
+    assert lsd < 1.0
+    assert abs(level) < 0.5
+    steady = full.time >= full.attrs["transient_end"]
+    assert float(red.friction_force.where(steady).mean()) == pytest.approx(
+        float(full.friction_force.where(steady).mean()), rel=0.01)
+
+
 @pytest.mark.slow
 def test_reduced_psd_matches_the_full_run_in_band(coarse):
     """Coulomb sliding, 50 ms of steady sliding: the acceleration PSDs of the reduced and the full run over
@@ -95,18 +109,11 @@ def test_reduced_psd_matches_the_full_run_in_band(coarse):
     by the truncation only (measured 0.54 dB, band level 0.15 dB; the full model against itself at 0.97 x its step:
     0.003 dB, so the Welch scatter of independent estimates does not enter this paired comparison)."""
     from fivid.solver import simulate
-    from fivid.solver.study import band_distance, steady_psds
 
     kw = dict(RUN, duration=0.05, progress=False)
     full = simulate(coarse, **kw)
     red = simulate(coarse, reduced=True, **kw)
-    f, (p_full, p_red), _ = steady_psds([full, red], nperseg=256)
-    lsd, level, _ = band_distance(f, p_full, p_red, (200.0, 10e3))
-    assert lsd < 1.0
-    assert abs(level) < 0.5
-    steady = red.time >= red.attrs["transient_end"]
-    assert float(red.friction_force.where(steady).mean()) == pytest.approx(
-        float(full.friction_force.where(steady).mean()), rel=0.01)
+    _assert_same_in_band(full, red)
 
 
 def test_cli_simulate_reduced_records_the_truncation_and_the_command(tmp_path, capsys):
@@ -197,19 +204,12 @@ def test_mass_scaled_reduction_matches_the_full_run_in_band_at_a_longer_step(coa
     error), at a step 8x the full model's, mean friction within 1 %."""
     from fivid.solver.driver import prepare_run
     from fivid.solver.reduced import prepare_reduced
-    from fivid.solver.study import band_distance, steady_psds
 
     full = prepare_run(coarse, duration=0.05, **RUN)
     fast = prepare_reduced(full, cutoff=153600.0, mass_scaling=153600.0)
     assert fast.settings.time_step >= 6 * full.settings.time_step
     ds_full, ds_fast = full.run(progress=False), fast.run(progress=False)
-    f, (p_full, p_fast), _ = steady_psds([ds_full, ds_fast], nperseg=256)
-    lsd, level, _ = band_distance(f, p_full, p_fast, (200.0, 10e3))
-    assert lsd < 1.0
-    assert abs(level) < 0.5
-    steady = ds_full.time >= ds_full.attrs["transient_end"]
-    assert float(ds_fast.friction_force.where(steady).mean()) == pytest.approx(
-        float(ds_full.friction_force.where(steady).mean()), rel=0.01)
+    _assert_same_in_band(ds_full, ds_fast)
 
 
 def test_driver_mass_scaling_option():

@@ -39,7 +39,7 @@ import numpy as np
 
 from fivid.pipeline.cache import file_sha256
 
-__all__ = ["DEFAULT_TABLE", "model_mesh", "discretisation_estimate", "write_convergence_table"]
+__all__ = ["DEFAULT_TABLE", "discretisation_estimate", "model_mesh", "write_convergence_table"]
 
 log = logging.getLogger("fivid")
 
@@ -52,12 +52,12 @@ H_TOLERANCE = 1e-6
 def model_mesh(model_path) -> dict:
     """The model the pipeline simulates with: name, path, sha256, largest element side [m], dofs."""
     from fivid.fe import load_model
-    from fivid.study.tasks import _element_size
+    from fivid.study.tasks import element_size
 
     model = load_model(model_path)
     name = model.config.get("name") if isinstance(model.config, dict) else None
     return {"name": name or Path(model_path).stem, "path": str(model_path), "sha256": file_sha256(model_path),
-            "element_size": _element_size(model), "dofs": int(model.n_dofs),
+            "element_size": element_size(model), "dofs": int(model.n_dofs),
             "damping": "band-limited Rayleigh" if np.isfinite(model.damping_cutoff) else "Rayleigh"}
 
 
@@ -158,9 +158,9 @@ def write_convergence_table(study_dir, out, models: dict[str, dict]) -> Path:
 
     ``models``: ``{model file name: {"element_size": h [m], "mesh": study mesh factor, "note": str}}``.
     """
-    from fivid.storage import write_json
-
     import xarray as xr
+
+    from fivid.storage import write_json
 
     summary = json.loads((Path(study_dir) / "summary.json").read_text(encoding="utf-8"))
     if "convergence" not in summary:
@@ -181,10 +181,11 @@ def write_convergence_table(study_dir, out, models: dict[str, dict]) -> Path:
     return write_json(out, table)
 
 
-def main(argv=None) -> None:
+def main(argv=None) -> Path:
+    """``python -m fivid.pipeline.discretisation``: write the convergence table; returns its path (logged)."""
     from fivid.fe import load_model
     from fivid.study import load_study
-    from fivid.study.tasks import _element_size, refined_model
+    from fivid.study.tasks import element_size, refined_model
 
     p = argparse.ArgumentParser(prog="python -m fivid.pipeline.discretisation",
                                 description="Write the pipeline's convergence table from a finished mesh/time-step study.")
@@ -200,13 +201,16 @@ def main(argv=None) -> None:
     study_model = load_study(args.study).model_path
     models = {}
     for path, factor in args.model:
-        h = _element_size(load_model(path))
-        h_study = _element_size(refined_model(study_model, float(factor)))
+        h = element_size(load_model(path))
+        h_study = element_size(refined_model(study_model, float(factor)))
         if abs(h_study - h) > H_TOLERANCE * h:
             p.error(f"{path}: element size {h:g} m differs from the study's mesh x{factor} ({h_study:g} m)")
         models[Path(path).name] = {"element_size": h, "mesh": float(factor), "note": notes.get(Path(path).name)}
-    print(write_convergence_table(args.study_dir, args.output, models))
+    path = write_convergence_table(args.study_dir, args.output, models)
+    log.info("wrote the convergence table %s", path)
+    return path
 
 
 if __name__ == "__main__":
+    logging.basicConfig(level=logging.INFO, format="%(message)s")
     main()

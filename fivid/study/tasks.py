@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["evaluate_point", "refined_model", "REGIMES"]
+__all__ = ["REGIMES", "element_size", "evaluate_point", "refined_model"]
 
 REGIMES = ("stable", "mode_coupling", "stick_slip")
 
@@ -43,7 +43,7 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
 
             return xr.Dataset(evaluate_roughness_point(system["model_path"], tasks, conditions))
         model = refined_model(system["model_path"], conditions.get("mesh", 1.0), conditions.get("roughness_ra"))
-        data["element_size"] = ((), _element_size(model), {"units": "m", "long_name": "largest element side"})
+        data["element_size"] = ((), element_size(model), {"units": "m", "long_name": "largest element side"})
         if "modes" in tasks:
             from fivid.fe.modal import modal_analysis
 
@@ -54,7 +54,10 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
             coords["mode"] = ("mode", np.arange(1, ds.sizes["mode"] + 1), {"units": "1",
                                                                             "long_name": "mode number, by frequency"})
             if "coupling_bounds" in system:
-                from fivid.study.coupling import WEAK_STRONG_THRESHOLD, coupling_indicator
+                from fivid.study.coupling import (
+                    WEAK_STRONG_THRESHOLD,
+                    coupling_indicator,
+                )
 
                 kappa = coupling_indicator(ds["frequency"].values,
                                            *system["coupling_bounds"][repr(float(conditions.get("mesh", 1.0)))])
@@ -157,7 +160,7 @@ def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None):
     return load_model(data)
 
 
-def _element_size(model) -> float:
+def element_size(model) -> float:
     """Largest element side over the model [m] (the h of a convergence study)."""
     h = 0.0
     for block in model.blocks:
