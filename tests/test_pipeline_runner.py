@@ -33,19 +33,25 @@ def _variant(src, dst, run_id, velocity_mm_s):
     return dst
 
 
-@pytest.fixture
-def setup(tmp_path, root):
-    data = tmp_path / "data"
+def make_pipeline(base, root, stages: str, section: str) -> dict:
+    """A two-run pipeline in ``base``: runs A (10 mm/s) and B (12 mm/s) made from the sample CSV, a recipe with
+    ``stages`` (e.g. "ingest, modal") and a run config on the coarse rig with the extra ``section`` line."""
+    data = base / "data"
     data.mkdir()
     src = root / "sample_data" / "R001_v10_ra08.csv"
     _variant(src, data / "A.csv", "A", 10)
     _variant(src, data / "B.csv", "B", 12)
-    recipe = tmp_path / "recipe.yaml"
-    recipe.write_text("fivid-pipeline: 1\nstages: [ingest, modal]\n")
-    config = tmp_path / "run.yaml"
+    recipe = base / "recipe.yaml"
+    recipe.write_text(f"fivid-pipeline: 1\nstages: [{stages}]\n")
+    config = base / "run.yaml"
     config.write_text(f"inputs: {{folder: data}}\nmodel: {root / 'configs/models/triboair_coarse.yaml'}\n"
-                      "output: out\nmodal: {n_modes: 4}\n")
-    return {"dir": tmp_path, "data": data, "src": src, "recipe": recipe, "config": config, "out": tmp_path / "out"}
+                      f"output: out\n{section}\n")
+    return {"dir": base, "data": data, "src": src, "recipe": recipe, "config": config, "out": base / "out"}
+
+
+@pytest.fixture
+def setup(tmp_path, root):
+    return make_pipeline(tmp_path, root, "ingest, modal", "modal: {n_modes: 4}")
 
 
 def _run(s, *extra):

@@ -18,21 +18,11 @@ from fivid.cli import main
 ROOT_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-from test_pipeline_runner import _assert_same_content, _content, _variant  # noqa: E402
+from test_pipeline_runner import _assert_same_content, _content, make_pipeline  # noqa: E402
 
 
 def _make(base, root):
-    data = base / "data"
-    data.mkdir()
-    src = root / "sample_data" / "R001_v10_ra08.csv"
-    _variant(src, data / "A.csv", "A", 10)
-    _variant(src, data / "B.csv", "B", 12)
-    recipe = base / "recipe.yaml"
-    recipe.write_text("fivid-pipeline: 1\nstages: [ingest, identify]\n")
-    config = base / "run.yaml"
-    config.write_text(f"inputs: {{folder: data}}\nmodel: {root / 'configs/models/triboair_coarse.yaml'}\n"
-                      "output: out\nidentify: {band: [100 Hz, 5 kHz]}\n")
-    return {"dir": base, "data": data, "recipe": recipe, "config": config, "out": base / "out"}
+    return make_pipeline(base, root, "ingest, identify", "identify: {band: [100 Hz, 5 kHz]}")
 
 
 @pytest.fixture
