@@ -3,6 +3,7 @@ file, key or value and the fix, and nothing half-written is left behind."""
 
 import numpy as np
 import pytest
+from cli_helpers import fails
 from ingest_helpers import data_line, rig_rows, with_field, write_rig
 from synthetic_friction_runs import synthetic_run, true_law
 
@@ -11,13 +12,7 @@ from fivid.errors import DataQualityError
 from fivid.io import read_rig_csv, write_run
 
 
-def _fails(capsys, argv) -> str:
-    """Run the CLI, check exit 2 without a traceback, return stderr."""
-    status = main(argv)
-    err = capsys.readouterr().err
-    assert "Traceback" not in err, err
-    assert status == 2, err
-    return err
+
 
 
 # --- A1: degenerate time columns -------------------------------------------------------------------
@@ -49,7 +44,7 @@ def test_time_written_with_too_few_decimals(tmp_path):
 def test_ingest_cli_reports_flat_time(tmp_path, capsys):
     rows = [with_field(r, 0, "1.5") for r in rig_rows()]
     path = write_rig(tmp_path / "flat.csv", rows=rows)
-    err = _fails(capsys, ["ingest", str(path), "-o", str(tmp_path / "out")])
+    err = fails(capsys, ["ingest", str(path), "-o", str(tmp_path / "out")])
     assert str(path) in err and "time" in err
     assert not list((tmp_path / "out").glob("*.nc"))
 
@@ -67,7 +62,7 @@ def one_run(tmp_path_factory):
 
 def test_identify_same_run_twice(one_run, tmp_path, capsys):
     out = tmp_path / "law.nc"
-    err = _fails(capsys, ["identify", str(one_run), str(one_run), "-o", str(out)])
+    err = fails(capsys, ["identify", str(one_run), str(one_run), "-o", str(out)])
     assert "run_id 'D1'" in err and str(one_run) in err and "once" in err
     assert not out.exists()
 
@@ -76,7 +71,7 @@ def test_identify_two_files_of_one_run(one_run, tmp_path, capsys):
     copy = tmp_path / "copy.nc"
     copy.write_bytes(one_run.read_bytes())
     out = tmp_path / "law.nc"
-    err = _fails(capsys, ["identify", str(one_run), str(copy), "-o", str(out)])
+    err = fails(capsys, ["identify", str(one_run), str(copy), "-o", str(out)])
     assert str(copy) in err and str(one_run) in err
     assert not out.exists()
 

@@ -118,10 +118,70 @@ def test_velocity_mismatch_is_a_warning(tmp_path, caplog):
     assert "warning: velocity:" in report and "-90 %" in report
 
 
-def test_low_sample_rate_is_a_warning(tmp_path, caplog):
+def test_time_in_ms_labelled_s_without_a_stated_rate(tmp_path):
+    """Issue 32 item 4: no sample_rate line; the stamps' spacing (19.5 Hz) is outside the DAQ range while 1000x
+    it (19.5 kHz) is inside, so the run is refused with the advice the stated-rate case gives."""
     rows = [with_field(r, 0, f"{i * 1e-3 * 51.2:.9f}") for i, r in enumerate(rig_rows(100))]  # ms under 's'
+    err = _reject(tmp_path, rows=rows)
+    assert err.column == "time" and err.line == data_line(0)
+    assert "19.5312 Hz" in err.message and "[1 kHz, 10 MHz]" in err.message
+    stated = _reject(tmp_path, rows=[with_field(r, 0, f"{1e3 * i / 51200:.9f}") for i, r in enumerate(rig_rows(100))],
+                     extra_meta=["# sample_rate: 51.2 kHz"])
+    hint = stated.message[stated.message.index("the ratio is"):]
+    assert hint in err.message  # the header case's message, word for word
+
+
+def test_time_in_ms_labelled_s_can_be_allowed(tmp_path, caplog):
+    rows = [with_field(r, 0, f"{i * 1e-3 * 51.2:.9f}") for i, r in enumerate(rig_rows(100))]
+    path = write_rig(tmp_path / "run.csv", rows=rows)
+    with caplog.at_level(logging.WARNING, logger="fivid"):
+        ds = read_rig_csv(path, allow_implausible=True)
+    assert ds.attrs["allow_implausible"] == "yes"
+    assert ds.attrs["quality_report"].startswith("allowed (--allow-implausible): time: ")
+    assert ds.attrs["sample_rate"] == pytest.approx(1 / 0.0512, rel=1e-6)  # kept as the stamps give it
+
+
+def test_rate_no_factor_explains_stays_a_warning(tmp_path, caplog):
+    """5e-4 Hz: neither 1e3 nor 1e6 times it is a DAQ rate, so it is only the low-rate warning."""
+    rows = [with_field(r, 0, f"{i * 2000.0:.1f}") for i, r in enumerate(rig_rows(100))]
     report = _report(tmp_path, caplog, rows=rows)
-    assert "warning: sample_rate:" in report and "ms" in report
+    assert "warning: sample_rate:" in report and "below 1000 Hz" in report
+
+
+@pytest.mark.parametrize("rate", ["0 Hz", "1e-320 Hz", "-51.2 kHz"])
+def test_stated_rate_that_is_no_rate(tmp_path, rate):
+    """sample_rate 0 Hz was a ZeroDivisionError (issue 32); 1e-320 Hz (denormal) too."""
+    err = _reject(tmp_path, extra_meta=[f"# sample_rate: {rate}"])
+    assert err.key == "sample_rate" and err.line == N_META_LINES + 1
+    if rate != "1e-320 Hz":
+        assert "> 0" in err.message
+    else:
+        assert "does not match the time column" in err.message
+
+
+@pytest.mark.parametrize("load", ["5 kN", "5 mN"])
+def test_thousandfold_load_gap_is_an_error(tmp_path, load):
+    """Measured 5 N against a nominal 5 kN (or 5 mN): a unit error, not a rig (issue 32)."""
+    err = _reject(tmp_path, meta={**GOOD_META, "normal_load": load})
+    assert err.column == "normal_force" and "10x" in err.message and "--allow-implausible" in err.message
+    ds = read_rig_csv(tmp_path / "run.csv", allow_implausible=True)
+    assert ds.attrs["allow_implausible"] == "yes" and "allowed (--allow-implausible): normal_force" in \
+        ds.attrs["quality_report"]
+
+
+def test_spread_median_matches_the_full_median():
+    """The load median over MEDIAN_SAMPLES spread samples: within the spread's sampling error of the exact
+    one (a uniform +-1 N noise on 5 N: the median's standard error is 1/(2 f(m) sqrt(n)) = 1/sqrt(n) N)."""
+    from fivid.io.plausibility import MEDIAN_SAMPLES, plausibility_findings
+
+    rng = np.random.default_rng(3)
+    n = 40 * MEDIAN_SAMPLES
+    fn = 6.5 + rng.uniform(-1, 1, n)  # 30 % above a nominal 5 N: the mismatch warning names the median
+    ft = 0.3 * fn
+    findings = plausibility_findings({"normal_load": 5.0}, {"normal_force": fn, "friction_force": ft})
+    message = next(f.message for f in findings if f.subject == "normal_force")
+    measured = float(message.split("measured normal load ")[1].split(" N")[0])
+    assert abs(measured - np.median(fn)) < 5 / np.sqrt(MEDIAN_SAMPLES) + 5e-4  # 5 sigma + the 4-digit print
 
 
 def test_time_in_ms_labelled_s_against_the_stated_rate(tmp_path):

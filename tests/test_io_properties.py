@@ -67,9 +67,9 @@ def values(lo, hi):
 
 
 # the plausible range (fivid.io.plausibility rejects what no rig produces): |a| <= 1e6 m s-2, |F| <= 1e5 N,
-# and a normal force that is not reversed
+# and a normal force that is not reversed and within 10x of the profile's normal_load (1 N)
 @settings(max_examples=25, deadline=None)
-@given(columns=st.lists(st.tuples(values(-1e6, 1e6), values(-1e5, 1e5), values(0.0, 1e5)), min_size=2, max_size=30),
+@given(columns=st.lists(st.tuples(values(-1e6, 1e6), values(-1e5, 1e5), values(0.2, 9.9)), min_size=2, max_size=30),
        preamble=st.lists(st.sampled_from(["Export;v1", "Operator;X", "", "Note: a;b"]), max_size=4))
 def test_decimal_comma_export_round_trips_exactly(columns, preamble):
     profile = rig_profile_from_mapping(DAQ)
@@ -83,3 +83,29 @@ def test_decimal_comma_export_round_trips_exactly(columns, preamble):
     np.testing.assert_array_equal(ds["time"].values, time)
     for k, name in enumerate(["acceleration", "friction_force", "normal_force"]):
         np.testing.assert_array_equal(ds[name].values, [c[k] for c in columns])
+
+
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(2, 60), seed=st.integers(0, 2**32 - 1),
+       kind=st.sampled_from(["clean", "jitter", "gap", "repeat", "backwards", "coarse"]))
+def test_one_pass_time_checks_agree_with_the_individual_ones(n, seed, kind):
+    """time_finding (one diff, min/max, a spread median) gives exactly the finding of the three checks run
+    in order (the reference: each on the whole column)."""
+    from fivid.io.data_checks import sampling_deviation, time_finding, time_not_increasing, time_without_resolution
+
+    rng = np.random.default_rng(seed)
+    time = np.arange(n) / 51200.0
+    if kind == "jitter":
+        time = time + rng.uniform(-1, 1, n) * 2e-7
+    elif kind == "gap" and n > 3:
+        time[rng.integers(1, n):] += 1 / 51200.0
+    elif kind == "repeat":
+        time[rng.integers(1, n)] = time[rng.integers(0, n - 1)]
+    elif kind == "backwards":
+        time = time[rng.permutation(n)]
+    elif kind == "coarse":
+        time = np.round(time, 4)
+    tolerance = 0.01
+    reference = time_without_resolution(time, tolerance) or time_not_increasing(time) or (
+        sampling_deviation(time, tolerance) if time.size >= 3 else None)
+    assert time_finding(time, tolerance) == reference

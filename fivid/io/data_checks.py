@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Finding", "first_non_finite", "time_without_resolution", "time_not_increasing", "sampling_deviation",
-           "nominal_sample_rate"]
+           "nominal_sample_rate", "time_finding", "column_extremes"]
 
 
 @dataclass(frozen=True)
@@ -31,6 +31,9 @@ class Finding:
         An error rejects the run; a warning goes into its ``quality_report`` (:mod:`fivid.io.plausibility`).
     subject : str or None
         The variable or metadata key concerned, when the finding does not come with its column.
+    overridable : bool
+        An error that ``allow_implausible`` (``fivid ingest --allow-implausible``) turns into a
+        recorded warning: the data are implausible for a friction rig, not impossible.
     """
 
     index: int
@@ -38,6 +41,7 @@ class Finding:
     previous: int | None = None
     severity: str = "error"
     subject: str | None = None
+    overridable: bool = False
 
 
 def first_non_finite(values: np.ndarray) -> Finding | None:
@@ -153,3 +157,46 @@ def sampling_deviation(time: np.ndarray, tolerance: float) -> Finding | None:
         f"(checks.sampling_tolerance); {n_bad} step(s) exceed it",
         previous=worst,
     )
+
+
+def time_finding(time: np.ndarray, tolerance: float) -> Finding | None:
+    """Every check of a time column in one pass over its steps; the first problem found, or None.
+
+    The same findings, in the same order, as :func:`time_without_resolution`, :func:`time_not_increasing`
+    and :func:`sampling_deviation` (each assumes the previous passed), but the steps are computed once
+    and a good column costs one ``diff``, its minimum and maximum and a median of at most 65 536 steps:
+    the largest ``|dt_i - dt|`` is ``max(max_i dt_i - dt, dt - min_i dt_i)``, no temporary needed. Only a
+    column that fails is searched again, by the individual checks, for the message.
+
+    Parameters
+    ----------
+    time : ndarray
+        Times [s], at least 2.
+    tolerance : float
+        The profile's ``checks.sampling_tolerance`` [-].
+    """
+    if time.size < 3:
+        return time_without_resolution(time, tolerance) or time_not_increasing(time)
+    steps = np.diff(time)
+    smallest, largest = float(steps.min()), float(steps.max())
+    if smallest > 0:
+        dt = float(np.median(steps[:: max(1, steps.size // 65536)]))
+        if max(largest - dt, dt - smallest) <= tolerance * dt:
+            return None
+    del steps
+    for check in (lambda: time_without_resolution(time, tolerance), lambda: time_not_increasing(time),
+                  lambda: sampling_deviation(time, tolerance)):
+        finding = check()
+        if finding is not None:
+            return finding
+    return None
+
+
+def column_extremes(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-column minimum and maximum of a 1-D or 2-D ``(time, sensor)`` array (1-D results).
+
+    NaN propagates through both, so ``isfinite`` of the two tells whether the whole column is finite:
+    the finiteness, bounds and clipping checks of a column share these two reductions.
+    """
+    columns = values if values.ndim == 2 else values[:, None]
+    return columns.min(axis=0), columns.max(axis=0)

@@ -88,9 +88,10 @@ def _is_input(path: Path) -> bool:
     return path.suffix.lower() in INPUT_SUFFIXES and path.is_file()
 
 
-def read_recording(path, profile=None):
+def read_recording(path, profile=None, *, allow_implausible: bool = False):
     """Read a rig CSV or a DAQ file (by its suffix: :data:`fivid.io.daq.DAQ_SUFFIXES`) into a RunDataset."""
-    return read_daq_file(path, profile) if is_daq_file(path) else read_rig_csv(path, profile)
+    read = read_daq_file if is_daq_file(path) else read_rig_csv
+    return read(path, profile, allow_implausible=allow_implausible)
 
 
 def _read_head(path, profile):
@@ -116,11 +117,11 @@ def _folders_without_csv(paths) -> list[Path]:
     return [p for p in map(Path, paths) if p.is_dir() and not any(_is_input(q) for q in p.iterdir())]
 
 
-def _convert(path: Path, head, target: Path, profile, overwrite: bool):
+def _convert(path: Path, head, target: Path, profile, overwrite: bool, allow_implausible: bool):
     """Read one file and write its RunDataset to ``target``; raises FividError."""
     if target.exists() and not overwrite:
         raise OutputExistsError(f"output {str(target)!r} exists; pass --overwrite to replace it", file=path)
-    ds = read_recording(path, profile)
+    ds = read_recording(path, profile, allow_implausible=allow_implausible)
     if ds.attrs["run_id"] != head.attrs["run_id"]:
         raise SchemaError(f"the file changed during the ingest (run_id {head.attrs['run_id']!r} became "
                           f"{ds.attrs['run_id']!r}); run the ingest again", file=path, key="run_id")
@@ -132,7 +133,7 @@ def _convert(path: Path, head, target: Path, profile, overwrite: bool):
 
 
 def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_written=None,
-                 on_file_done=None) -> IngestResult:
+                 on_file_done=None, allow_implausible: bool = False) -> IngestResult:
     """Convert rig files to ``<outdir>/<run_id>.nc``, one RunDataset per file.
 
     Parameters
@@ -151,6 +152,9 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
     on_file_done : callable, optional
         Called as ``on_file_done(input_path)`` after each file whose data were converted or
         rejected (for a progress bar; files rejected from their head alone are not counted).
+    allow_implausible : bool, default False
+        Keep runs that fail an overridable plausibility check, recorded in each file (see
+        :func:`fivid.io.read_rig_csv`).
 
     Returns
     -------
@@ -195,7 +199,7 @@ def ingest_files(paths, outdir, *, profile=None, overwrite: bool = False, on_wri
     for path, head in heads.items():
         target = outdir / f"{head.attrs['run_id']}.nc"
         try:
-            ds = _convert(path, head, target, profile, overwrite)
+            ds = _convert(path, head, target, profile, overwrite, allow_implausible)
         except FividError as exc:
             result.rejected.append(Rejection(path, exc.located(file=path)))
         else:

@@ -21,7 +21,7 @@ import numpy as np
 from fivid.errors import DataQualityError, FividError, SchemaError
 from fivid.io.rig_header import RigHead, read_rig_head
 from fivid.io.rig_profile import RigProfile, load_rig_profile
-from fivid.io.run_assembly import assemble_run, by_variable, check_finite
+from fivid.io.run_assembly import assemble_run, by_variable
 from fivid.schema import registry
 
 __all__ = ["read_rig_csv", "as_rig_profile"]
@@ -204,7 +204,7 @@ def _warn_misspelt_columns(head: RigHead) -> None:
                         head.path, head.header_line, label, close[0])
 
 
-def read_rig_csv(path, profile=None):
+def read_rig_csv(path, profile=None, *, allow_implausible: bool = False):
     """Read a rig CSV file into a RunDataset in SI units.
 
     Parameters
@@ -215,6 +215,10 @@ def read_rig_csv(path, profile=None):
         How to read the file: a :class:`~fivid.io.RigProfile`, the name of a profile in
         ``configs/rigs/`` (``"triboair"``, ``"labdaq"``) or the path of one. Default: the built-in
         ``fivid-rig-csv`` format.
+    allow_implausible : bool, default False
+        Keep a run that fails an overridable plausibility check (:mod:`fivid.io.plausibility`: a
+        rate outside the DAQ range, a measured load 10x off the nominal one, ...), recorded in its
+        ``quality_report`` and the attribute ``allow_implausible``; by default it is an error.
 
     Returns
     -------
@@ -236,7 +240,8 @@ def read_rig_csv(path, profile=None):
         An unknown unit or one of the wrong dimension.
     DataQualityError
         NaN, infinite or missing values; time not strictly increasing; sampling not uniform within
-        the profile's ``checks.sampling_tolerance``.
+        the profile's ``checks.sampling_tolerance``; a stated sample rate that is not > 0 or
+        disagrees with the time column; implausible values (:mod:`fivid.io.plausibility`).
     ConfigError
         The profile is not found or invalid.
 
@@ -282,6 +287,5 @@ def read_rig_csv(path, profile=None):
                 _to_si(column, spec.factor, spec.offset, target)
                 del column
                 pa.default_memory_pool().release_unused()  # give the Arrow column back: one copy at a time
-                check_finite(head, lines, target, spec.name)
             arrays[variable] = (values, [spec for _, spec in members])
-        return assemble_run(head, lines, arrays, sha.hexdigest())
+        return assemble_run(head, lines, arrays, sha.hexdigest(), allow_implausible=allow_implausible)

@@ -16,13 +16,12 @@ import logging
 import numpy as np
 
 from fivid.errors import DataQualityError, SchemaError
-from fivid.io.data_checks import (first_non_finite, nominal_sample_rate, sampling_deviation, time_not_increasing,
-                                  time_without_resolution)
-from fivid.io.plausibility import plausibility_findings, quality_report
+from fivid.io.data_checks import column_extremes, first_non_finite, nominal_sample_rate, time_finding
+from fivid.io.plausibility import plausibility_findings, quality_report, sample_rate_error, time_unit_hint
 from fivid.io.rig_header import RigHead
 from fivid.schema import apply_cf_attrs, new_history, registry, validate_run, with_condition_coords
 
-__all__ = ["assemble_run", "finding_error", "by_variable", "check_finite"]
+__all__ = ["assemble_run", "finding_error", "by_variable"]
 
 log = logging.getLogger("fivid")
 
@@ -44,13 +43,6 @@ def finding_error(head: RigHead, locate, finding, column: str | None = None) -> 
     return DataQualityError(message, file=head.path, line=line, column=column)
 
 
-def check_finite(head: RigHead, locate, values: np.ndarray, column: str) -> None:
-    """Raise at the first NaN or infinite value of ``values`` (a column already in SI)."""
-    finding = first_non_finite(values)
-    if finding is not None:
-        raise finding_error(head, locate, finding, column=column)
-
-
 def by_variable(head: RigHead) -> dict:
     """``variable -> [(field index, ColumnSpec), ...]`` in header order (several for sensors)."""
     groups: dict = {}
@@ -63,52 +55,77 @@ def _time_spec(head: RigHead):
     return next(spec for _, spec in head.columns if spec.variable == "time")
 
 
+def _stated_line(head: RigHead, key: str) -> int | None:
+    origin = head.attr_origin.get(key, "")
+    return int(origin.split()[1]) if origin.startswith("line ") else None
+
+
 def _sample_rate(head: RigHead, locate, time: np.ndarray) -> float:
     if time.size < 2:
         raise SchemaError(
             "no data rows after the header" if time.size == 0 else
             "only one data row; a run needs at least two samples", file=head.path, line=head.header_line,
         )
-    column = _time_spec(head).name
-    tolerance = head.profile.sampling_tolerance
-    checks = (lambda: time_without_resolution(time, tolerance), lambda: time_not_increasing(time),
-              lambda: sampling_deviation(time, tolerance))  # in order: each assumes the previous passed
-    for check in checks:
-        finding = check()
-        if finding is not None:
-            raise finding_error(head, locate, finding, column=column)
-    measured = nominal_sample_rate(time)
     stated = head.attrs.get("sample_rate")
+    problem = None if stated is None else sample_rate_error(stated)
+    if problem is not None:  # before any division by it
+        raise DataQualityError(problem, file=head.path, line=_stated_line(head, "sample_rate"), key="sample_rate")
+    finding = time_finding(time, head.profile.sampling_tolerance)
+    if finding is not None:
+        raise finding_error(head, locate, finding, column=_time_spec(head).name)
+    measured = nominal_sample_rate(time)
     if stated is None:
         return measured
-    if abs(stated - measured) > head.profile.sampling_tolerance * measured:
+    tolerance = head.profile.sampling_tolerance
+    if abs(stated - measured) > tolerance * measured:
         hint = ""
         for factor in (1e-3, 1e3, 1e-6, 1e6):
-            if abs(measured / (stated * factor) - 1) <= head.profile.sampling_tolerance:
-                hint = (f"; the ratio is {factor:g}: the time column's unit {_time_spec(head).units!r} looks wrong by "
-                        "that factor (times in ms under a header in s give 0.001); correct the unit in the header")
+            if abs(measured - stated * factor) <= tolerance * stated * factor:  # no division: stated may be tiny
+                hint = "; " + time_unit_hint(factor, _time_spec(head).units)
         raise DataQualityError(
             f"the stated sample rate {stated:.9g} Hz ({head.attr_origin['sample_rate']}) does not match the time "
-            f"column, which gives {measured:.9g} Hz; tolerance {100 * head.profile.sampling_tolerance:.3g} %{hint}",
-            file=head.path, key="sample_rate",
+            f"column, which gives {measured:.9g} Hz; tolerance {100 * tolerance:.3g} %{hint}",
+            file=head.path, line=_stated_line(head, "sample_rate"), key="sample_rate",
         )
     return float(stated)
 
 
-def _check_plausibility(head: RigHead, locate, sample_rate: float, arrays: dict) -> str:
-    """Raise the first plausibility error (file, line, column or key); log the warnings; return the report."""
-    findings = plausibility_findings({**head.attrs, "sample_rate": sample_rate},
-                                     {name: values for name, (values, _) in arrays.items()})
+def _extremes(head: RigHead, locate, arrays: dict) -> dict:
+    """``variable -> (minimum, maximum)`` per column, one pass each; raises at the first non-finite value."""
+    out = {}
+    for name, (values, specs) in arrays.items():
+        lowest, highest = column_extremes(values)
+        for k in np.flatnonzero(~(np.isfinite(lowest) & np.isfinite(highest))):  # NaN/inf reach min or max
+            finding = first_non_finite(values if values.ndim == 1 else values[:, k])
+            raise finding_error(head, locate, finding, column=specs[k].name)
+        out[name] = (lowest, highest)
+    return out
+
+
+def _check_plausibility(head: RigHead, locate, time: np.ndarray, arrays: dict, extremes: dict,
+                        allow_implausible: bool) -> str:
+    """Raise the first plausibility error (file, line, column or key); log the warnings; return the report.
+
+    With ``allow_implausible`` the overridable errors are logged and kept in the report instead.
+    """
+    findings = plausibility_findings(head.attrs, {"time": time, **{n: v for n, (v, _) in arrays.items()}},
+                                     extremes=extremes, time_units=_time_spec(head).units)
+    allowed = []
     for finding in findings:
-        if finding.severity == "error" and finding.subject in arrays:
+        if finding.severity == "error" and finding.overridable and allow_implausible:
+            log.warning("%s: %s: allowed (--allow-implausible): %s", head.path, finding.subject, finding.message)
+            allowed.append(finding)
+        elif finding.severity == "error" and finding.subject == "time":
+            raise finding_error(head, locate, finding, column=_time_spec(head).name)
+        elif finding.severity == "error" and finding.subject in arrays:
             column = ", ".join(spec.name for spec in arrays[finding.subject][1])
             raise finding_error(head, locate, finding, column=column)
-        if finding.severity == "error":
-            origin = head.attr_origin.get(finding.subject, "")
-            line = int(origin.split()[1]) if origin.startswith("line ") else None
-            raise DataQualityError(finding.message, file=head.path, line=line, key=finding.subject)
-        log.warning("%s: %s: %s", head.path, finding.subject, finding.message)
-    return quality_report(findings)
+        elif finding.severity == "error":
+            raise DataQualityError(finding.message, file=head.path, line=_stated_line(head, finding.subject),
+                                   key=finding.subject)
+        else:
+            log.warning("%s: %s: %s", head.path, finding.subject, finding.message)
+    return quality_report(findings, allowed=allowed)
 
 
 def _history(head: RigHead, digest: str, what: str) -> str:
@@ -127,7 +144,8 @@ def _history(head: RigHead, digest: str, what: str) -> str:
         f"metadata: {origin}", timestamp=False)  # same recording, same bytes: see new_history
 
 
-def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_format: str | None = None):
+def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_format: str | None = None,
+                 allow_implausible: bool = False):
     """Check the converted columns and build the RunDataset.
 
     Parameters
@@ -138,13 +156,17 @@ def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_forma
         ``locate(row)``: the file's 1-based line of 0-based sample ``row``, or None when the file has
         no lines (a binary DAQ file); messages then name the sample.
     arrays : dict
-        ``variable -> (values, [ColumnSpec, ...])`` in SI, finite, ``time`` included; ``values`` is
-        1-D, or 2-D ``(time, sensor)`` with one spec per sensor.
+        ``variable -> (values, [ColumnSpec, ...])`` in SI, ``time`` included (finite); ``values`` is
+        1-D, or 2-D ``(time, sensor)`` with one spec per sensor. Their finiteness is checked here,
+        in the same pass as the plausibility bounds.
     digest : str
         sha256 of the file (hex), recorded in ``source`` and ``history``.
     file_format : str, optional
         Name of the file format when it is not a CSV (``"tdms"``); recorded in ``source_format``
         and ``history``.
+    allow_implausible : bool, default False
+        Keep a run whose data fail an overridable plausibility check (:mod:`fivid.io.plausibility`),
+        recording each in ``quality_report`` and the attribute ``allow_implausible = "yes"``.
 
     Returns
     -------
@@ -154,18 +176,21 @@ def assemble_run(head: RigHead, locate, arrays: dict, digest: str, *, file_forma
     Raises
     ------
     DataQualityError, SchemaError
-        The time column fails a check, the stated sample rate disagrees with it, or a value is
-        implausible.
+        A value is not finite, the time column fails a check, the stated sample rate is not a
+        positive number or disagrees with it, or a value is implausible.
     """
     import xarray as xr
 
+    extremes = _extremes(head, locate, arrays)
     arrays = dict(arrays)
     time = arrays.pop("time")[0]
     sample_rate = _sample_rate(head, locate, time)
-    report = _check_plausibility(head, locate, sample_rate, arrays)
+    report = _check_plausibility(head, locate, time, arrays, extremes, allow_implausible)
     attrs = dict(head.attrs)
     attrs["sample_rate"] = sample_rate
     attrs["quality_report"] = report
+    if report.startswith("allowed"):
+        attrs["allow_implausible"] = "yes"
     attrs["source"] = f"{head.path.name} sha256:{digest}"
     if file_format is not None:
         attrs["source_format"] = file_format

@@ -46,6 +46,11 @@ def register(subparsers) -> None:
                         help="rig profile: the name of a built-in profile (triboair, labdaq: shipped with fivid, "
                              "configs/rigs/ in a checkout) or a YAML path; default: the fivid-rig-csv format")
     parser.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    parser.add_argument("--allow-implausible", action="store_true",
+                        help="keep runs that fail an overridable plausibility check (a sample rate outside the DAQ "
+                             "range, a measured load 10x off normal_load, forces beyond 1e5 N, ...; "
+                             "docs/bad-input.md); each is recorded in the file's quality_report and its "
+                             "attribute allow_implausible")
     parser.add_argument("--json", action="store_true",
                         help='print {"written": [{"input", "output", "run_id", "samples", "sample_rate_hz"}, ...], '
                              '"rejected": [{"input", "error"}, ...]} on stdout instead of one line per file')
@@ -75,7 +80,8 @@ def run(args) -> int:
 
     with bar:
         result = ingest_files(args.paths, args.outdir, profile=args.rig, overwrite=args.overwrite,
-                              on_written=written, on_file_done=lambda path: bar.update())
+                              on_written=written, on_file_done=lambda path: bar.update(),
+                              allow_implausible=args.allow_implausible)
     if args.json:
         print(dumps_json({"written": records, "rejected": [{"input": str(r.path), "error": str(r)}
                                                             for r in result.rejected]}))

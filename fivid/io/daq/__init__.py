@@ -60,7 +60,7 @@ def read_daq_head(path, profile=None):
     return channel_head(path, as_rig_profile(profile), read_channels(path))
 
 
-def read_daq_file(path, profile=None):
+def read_daq_file(path, profile=None, *, allow_implausible: bool = False):
     """Read a DAQ file into a RunDataset in SI units, through a rig profile.
 
     Parameters
@@ -71,6 +71,8 @@ def read_daq_file(path, profile=None):
         The rig profile: its ``columns`` name the file's channels (``docs/ingest.md``, "Formats"),
         its ``metadata.in_file.keys`` the file's metadata keys. Default: the ``fivid-rig-csv``
         format, for files whose channels carry canonical names and units.
+    allow_implausible : bool, default False
+        As for :func:`fivid.io.read_rig_csv`.
 
     Returns
     -------
@@ -86,4 +88,4 @@ def read_daq_file(path, profile=None):
         As for a rig CSV; messages name the file and the channel or metadata key, and the sample
         (not a line) of a bad value.
     """
-    return run_from_channels(path, as_rig_profile(profile), read_channels(path))
+    return run_from_channels(path, as_rig_profile(profile), read_channels(path), allow_implausible=allow_implausible)

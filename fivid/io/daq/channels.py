@@ -21,7 +21,7 @@ import numpy as np
 from fivid.errors import FividError, SchemaError, UnitError
 from fivid.io.rig_header import RigHead, metadata_attribute, resolve_metadata, rig_csv_columns, table_columns
 from fivid.io.rig_profile import RigProfile
-from fivid.io.run_assembly import assemble_run, by_variable, check_finite
+from fivid.io.run_assembly import assemble_run, by_variable
 from fivid.schema import registry
 from fivid.units import conversion
 
@@ -148,7 +148,7 @@ def _no_line(row: int) -> None:
     return None
 
 
-def run_from_channels(path, profile: RigProfile, data: ChannelFile):
+def run_from_channels(path, profile: RigProfile, data: ChannelFile, *, allow_implausible: bool = False):
     """Convert, check and assemble a DAQ file's channels into a RunDataset (see :func:`read_daq_file`)."""
     path = Path(path)
     head = channel_head(path, profile, data)
@@ -168,8 +168,7 @@ def run_from_channels(path, profile: RigProfile, data: ChannelFile):
         stacked = np.stack([np.asarray(v, dtype=np.float64) for v in raw], axis=1)
         for k, (_, spec) in enumerate(members):
             stacked[:, k] = stacked[:, k] * spec.factor + spec.offset
-            check_finite(head, _no_line, stacked[:, k], spec.name)
         values = stacked[:, 0].copy() if members[0][1].sensor is None else stacked
         arrays[variable] = (values, [spec for _, spec in members])
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    return assemble_run(head, _no_line, arrays, digest, file_format=data.format)
+    return assemble_run(head, _no_line, arrays, digest, file_format=data.format, allow_implausible=allow_implausible)
