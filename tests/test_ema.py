@@ -149,3 +149,22 @@ def test_error_paths_exit_2(tmp_path, capsys, monkeypatch, args, words):
     err = capsys.readouterr().err
     assert code == 2 and words in err and args[0] in err and "Traceback" not in err
     assert not (tmp_path / "modes.nc").exists()
+
+
+def test_frf_netcdf_input(tmp_path):
+    """The FRF netCDF layout: NAME_real/NAME_imag along (dof, frequency), node/direction attrs, reference."""
+    import xarray as xr
+
+    from fivid.ema import experimental_modal_analysis, modes_json
+
+    f, h, phi = _synthetic(seed=6)
+    ds = xr.Dataset({"h_real": (("dof", "frequency"), h.real, {"units": "m N-1"}),
+                     "h_imag": (("dof", "frequency"), h.imag, {"units": "m N-1"})},
+                    coords={"frequency": ("frequency", f, {"units": "Hz"}), "dof": ["a", "b", "c"]})
+    ds.to_netcdf(tmp_path / "frf.nc")
+    modes, frfs = experimental_modal_analysis([tmp_path / "frf.nc"], band=(20, 180))
+    assert frfs.form == "receptance" and frfs.name == ["h:a", "h:b", "h:c"]
+    s = modes_json(modes)
+    shapes = np.array([[c["re"] + 1j * c["im"] for c in m["shape"]] for m in s["modes"]])
+    _check(modes["frequency"].values, modes["damping_ratio"].values, shapes, phi)
+    assert not s["mass_normalised"]  # no reference given: no driving point
