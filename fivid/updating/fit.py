@@ -246,6 +246,7 @@ def update_model(model_path, targets: Targets):
                         diff_step=predict.diff_step, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
     values = fit.x * p0
     result = _statistics(fit, params, p0, targets, run(fit.x))
+    result.evaluations = len(cache)  # every model solved, finite-difference steps included
     text = _updated_text(msrc, params, values, targets, result)
     return result, text
 
@@ -306,7 +307,7 @@ def _statistics(fit, params, p0, targets, pred) -> UpdateResult:
                             f"says {c.count}")
     return UpdateResult(
         parameters=params, values=fit.x * p0, ci95=ci, correlation=corr, residuals=residuals,
-        cost=float(fit.cost), iterations=int(fit.njev or 0), evaluations=int(fit.nfev),
+        cost=float(fit.cost), iterations=int(fit.njev or 0), evaluations=int(fit.nfev),  # nfev: no FD steps
         converged=bool(fit.status > 0), message=str(fit.message), warnings=warnings, count_below=counts,
         identifiable=not unseen.any(),
     )
