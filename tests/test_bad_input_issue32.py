@@ -36,3 +36,65 @@ def test_allow_implausible_is_recorded_in_the_file(tmp_path, capsys):
     ds = read_run(out / "R001.nc")
     assert ds.attrs["allow_implausible"] == "yes"
     assert "allowed (--allow-implausible): normal_force: " in ds.attrs["quality_report"]
+
+
+# --- export -----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("file_format", ["csv", "uff58"])
+def test_export_of_a_netcdf_fivid_did_not_write(tmp_path, capsys, file_format):
+    """A netCDF without units used to become a CSV with empty units ('a []'): refused, nothing written."""
+    import numpy as np
+    import xarray as xr
+
+    if file_format == "uff58":
+        pytest.importorskip("pyuff")
+    path = tmp_path / "other.nc"
+    xr.Dataset({"a": ("time", np.arange(4.0)), "b": ("time", np.ones(4), {"units": "N"})},
+               coords={"time": np.arange(4) * 1e-3}).to_netcdf(path)
+    out = tmp_path / "out.csv"
+    err = fails(capsys, ["export", str(path), "--format", file_format, "-o", str(out)])
+    assert f"{path}: key 'units': cannot export: 2 variable(s) have no 'units' attribute ('time', 'a')" in err
+    assert "not a fivid dataset" in err and not out.exists() and not list(tmp_path.glob(".*tmp"))
+
+
+# --- built-in names with every option ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("options", [["--json"], ["--points", "3"], ["--points", "3", "--json"],
+                                     ["--arclength", "--json"]])
+def test_damper_frf_by_built_in_name_with_every_option(tmp_path, monkeypatch, capsys, options):
+    """`fivid damper frf seed004_model1 --normal-load 1N --json` hashed the name as a path (FileNotFoundError);
+    the JSON names the file the name resolved to, byte for byte the shipped YAML."""
+    import hashlib
+    import json
+
+    from fivid.builtin import find_builtin
+
+    monkeypatch.chdir(tmp_path)  # no ./configs: the name is resolved by fivid.builtin
+    load = "5N" if "--arclength" in options else "1N"  # at 1 N the arclength continuation stalls (a path too)
+    status = main(["damper", "frf", "seed004_model1", "--normal-load", load, *options])
+    out, err = capsys.readouterr()
+    assert status == 0 and "Traceback" not in err, err
+    if "--json" in options:
+        shipped = find_builtin("dampers", "seed004_model1")
+        sha = hashlib.sha256(shipped.read_bytes()).hexdigest()
+        assert json.loads(out)["model_source"] == f"seed004_model1.yaml sha256:{sha}"
+
+
+# --- reproducible modes ---------------------------------------------------------------------------------
+
+
+def test_modes_are_bit_reproducible():
+    """ARPACK started from its own random vector: the frequencies changed in the last digits from call to
+    call (issue 32). With a fixed start vector two analyses of a sparse-sized model are identical."""
+    import numpy as np
+
+    from fivid.fe import load_model
+    from fivid.fe.modal import DENSE_LIMIT, modal_analysis
+
+    model = load_model("triboair_coarse")
+    first, second = modal_analysis(model, 6), modal_analysis(model, 6)
+    assert first.attrs["n_free_dofs"] > DENSE_LIMIT  # the eigsh path, not the dense one
+    for name in first.data_vars:
+        np.testing.assert_array_equal(first[name].values, second[name].values)

@@ -14,7 +14,7 @@ COARSE = ROOT / "configs" / "models" / "triboair_coarse.yaml"
 RECIPE = ROOT / "pipelines" / "calibration.yaml"
 
 
-from test_bad_input_cli import _fails  # noqa: E402  (run the CLI, expect exit 2 and no traceback)
+from cli_helpers import fails as _fails  # noqa: E402  (run the CLI, expect exit 2 and no traceback)
 
 
 # --- A4: memory of a simulation --------------------------------------------------------------------

@@ -278,11 +278,15 @@ def _prepare(cwd: Path, doc: str) -> None:
 
 
 def _run(text: str, cwd: Path, where: str, status: int, expected: str | None, lang: str = "bash") -> None:
+    # the interpreter running the tests, not the first 'python' on PATH (a venv's python need not be first):
+    # its folder goes first on PATH (pip, dask of the same environment) and python/python3 are functions
+    path = os.pathsep.join([os.path.dirname(sys.executable), os.environ.get("PATH", "")])
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT)] + [p for p in [os.environ.get("PYTHONPATH")] if p]),
-               FIVID_DOC_PYTHON=sys.executable, NO_COLOR="1")
+               FIVID_DOC_PYTHON=sys.executable, NO_COLOR="1", PATH=path)
     if lang == "python":
         text = f'"$FIVID_DOC_PYTHON" - <<\'FIVID_DOC_EOF\'\n{text}\nFIVID_DOC_EOF'
-    script = 'fivid() { "$FIVID_DOC_PYTHON" -m fivid "$@"; }\n' + text + "\n"
+    script = ('fivid() { "$FIVID_DOC_PYTHON" -m fivid "$@"; }\npython() { "$FIVID_DOC_PYTHON" "$@"; }\n'
+              'python3() { "$FIVID_DOC_PYTHON" "$@"; }\nexport -f python python3 fivid\n' + text + "\n")
     proc = subprocess.run(["bash", "-c", script], cwd=cwd, env=env, capture_output=True, text=True,
                           timeout=3600, check=False)
     output = proc.stdout + proc.stderr
@@ -374,3 +378,16 @@ def test_the_parser_reads_each_block_kind():
     assert [(c.text, c.expected) for c in commands(console)] == [("fivid a", "out 1\n  out 2\n"), ("fivid b", "")]
     cron = Block("x.md", 1, "crontab", "0 2 * * *  cd /lab && fivid run x || mail y\n")
     assert [c.text for c in commands(cron)] == ["fivid run x || mail y"]
+
+
+def test_commands_run_with_the_interpreter_running_the_tests(tmp_path, monkeypatch):
+    """Issue 32: a 'python' first on PATH that is not this interpreter (here one that fails) is not used."""
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    for name in ("python", "python3"):
+        (fake / name).write_text("#!/bin/sh\necho wrong python >&2\nexit 97\n")
+        (fake / name).chmod(0o755)
+    monkeypatch.setenv("PATH", f"{fake}{os.pathsep}{os.environ.get('PATH', '')}")
+    probe = "import sys; print(sys.executable)"
+    _run(f"python -c '{probe}' && python3 -c '{probe}' && bash -c \"python -c '{probe}'\"", tmp_path, "probe", 0,
+         f"{sys.executable}\n{sys.executable}\n{sys.executable}\n")

@@ -21,7 +21,7 @@ import numpy as np
 from fivid.errors import SchemaError
 from fivid.io.rig_profile import RESERVED_ATTRIBUTES
 
-__all__ = ["EXPORT_FORMATS", "export_csv", "export_dataset", "export_uff58", "uff58_set"]
+__all__ = ["EXPORT_FORMATS", "check_exportable", "export_csv", "export_dataset", "export_uff58", "uff58_set"]
 
 EXPORT_FORMATS = ("uff58", "csv")
 #: UFF58 function types (dataset 58, record 6 field 1).
@@ -152,9 +152,40 @@ def export_csv(ds, path) -> int:
     return len(columns) - 1
 
 
+def check_exportable(ds) -> None:
+    """Refuse a dataset whose axis or channels carry no CF ``units`` (a netCDF file fivid did not write).
+
+    Export writes a unit into every header and axis label; an empty one would pass silently into the
+    CSV or UFF file. Datasets written by fivid carry ``fivid_version`` and units on every variable.
+
+    Raises
+    ------
+    SchemaError
+        Naming the variables without units, and whether the file was written by fivid.
+    """
+    axis = _axis(ds)
+    names = [axis] if not str(ds[axis].attrs.get("units", "")).strip() else []
+    names += [name.split(":")[0] for name, _, units in _channels(ds, axis) if not units.strip()]
+    if not names:
+        return
+    names = list(dict.fromkeys(names))
+    origin = ("it was written by fivid " + str(ds.attrs["fivid_version"]) if "fivid_version" in ds.attrs else
+              "it is not a fivid dataset (no 'fivid_version' attribute: fivid ingest, simulate, psd and frf write one)")
+    raise SchemaError(f"cannot export: {len(names)} variable(s) have no 'units' attribute ({', '.join(map(repr, names))}) "
+                      f"and {origin}; export writes the unit of every column: give a file written by fivid, or add "
+                      "CF 'units' attributes to those variables", key="units")
+
+
 def export_dataset(ds, path, file_format: str) -> int:
-    """Write ``ds`` to ``path`` in ``file_format`` (``"uff58"`` or ``"csv"``); returns the number of channels."""
+    """Write ``ds`` to ``path`` in ``file_format`` (``"uff58"`` or ``"csv"``); returns the number of channels.
+
+    Raises
+    ------
+    SchemaError
+        An unknown format, or a dataset without units (:func:`check_exportable`), before anything is written.
+    """
     writers = {"uff58": export_uff58, "csv": export_csv}
     if file_format not in writers:
         raise SchemaError(f"unknown export format {file_format!r}; choose one of {', '.join(EXPORT_FORMATS)}")
+    check_exportable(ds)
     return writers[file_format](ds, path)

@@ -98,8 +98,9 @@ def _frf(args: argparse.Namespace) -> int:
         import hashlib
         from pathlib import Path
 
-        sha = hashlib.sha256(Path(args.model).read_bytes()).hexdigest()
-        print(dumps_json({"model": model.name, "model_source": f"{Path(args.model).name} sha256:{sha}",
+        source = Path(model.source)  # the file the name resolved to (a built-in name is no path)
+        sha = hashlib.sha256(source.read_bytes()).hexdigest()
+        print(dumps_json({"model": model.name, "model_source": f"{source.name} sha256:{sha}",
                           "harmonics": list(model.harmonics), "samples_per_period": model.samples_per_period,
                           "frequency": None if args.arclength else freqs, "curves": curves,
                           "units": {"frequency": "Hz", "amplitude": "m", "receptance": "m N-1",

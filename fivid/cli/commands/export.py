@@ -40,7 +40,10 @@ def run(args) -> int:
             ds = ds.load()
     except (OSError, ValueError) as exc:
         raise FividError(f"cannot read {args.path!r} as a netCDF dataset: {exc}") from None
-    with atomic_path(args.output) as tmp:
-        n = export_dataset(ds, tmp, args.file_format)
+    try:
+        with atomic_path(args.output) as tmp:
+            n = export_dataset(ds, tmp, args.file_format)
+    except FividError as exc:
+        raise exc.located(file=args.path) from None
     print(f"{args.path} -> {args.output} ({args.file_format}, {n} channel(s))")
     return 0
