@@ -17,6 +17,7 @@ __all__ = [
     "UnitError",
     "OutputExistsError",
     "Interrupted",
+    "exit_status",
 ]
 
 
@@ -119,3 +120,19 @@ class Interrupted(KeyboardInterrupt):
         self.signum = int(signum)
         self.signame = signal.Signals(self.signum).name
         super().__init__(f"interrupted by {self.signame}" + (f" {detail}" if detail else ""))
+
+
+def exit_status(exc: BaseException) -> int:
+    """The exit status a command ends with when ``exc`` stops it: the one rule the CLI and summaries share.
+
+    2 for bad input (:class:`FividError`) and for :class:`MemoryError` (the problem's size is the input
+    to change), 128 + the signal number for an interrupt (130 Ctrl-C, 143 SIGTERM), 1 for anything else
+    (a bug). ``fivid run`` writes it as ``exit_code`` in summary.json, so the file and the process agree.
+    """
+    if isinstance(exc, (FividError, MemoryError)):
+        return 2
+    if isinstance(exc, KeyboardInterrupt):
+        import signal
+
+        return 128 + int(getattr(exc, "signum", signal.SIGINT))
+    return 1

@@ -98,3 +98,97 @@ def test_modes_are_bit_reproducible():
     assert first.attrs["n_free_dofs"] > DENSE_LIMIT  # the eigsh path, not the dense one
     for name in first.data_vars:
         np.testing.assert_array_equal(first[name].values, second[name].values)
+
+
+# --- files read whole: size, content, links ----------------------------------------------------------------
+
+
+def _utf16(path):
+    path.write_bytes("x [um],z [um]\n0,1\n1,2\n2,3\n".encode("utf-16"))  # with its byte-order mark
+    return path
+
+
+def _loop(path):
+    other = path.with_name("other.csv")
+    other.symlink_to(path.name)
+    path.symlink_to(other.name)
+    return path
+
+
+def _huge(path):
+    with open(path, "wb") as f:  # a sparse 2 GB file: its size is checked before a byte is read
+        f.truncate(2 * 10**9)
+    return path
+
+
+@pytest.mark.parametrize("command", [["profile"], ["damper", "fit"]])
+@pytest.mark.parametrize("make, expected", [
+    (_huge, "the file is 2 GB (2000000000 bytes), larger than the 268 MB"),
+    (_loop, "loop of symbolic links"),
+    (_utf16, "UTF-16 (little-endian) text (byte-order mark FF FE), not UTF-8; save it as UTF-8"),
+])
+def test_files_read_whole_are_checked_first(tmp_path, capsys, command, make, expected):
+    import resource
+
+    path = make(tmp_path / "input.csv")
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    err = fails(capsys, [*command, str(path)])
+    assert f"{path}" in err and expected in err
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 100_000  # KiB: nothing read whole
+
+
+def test_utf16_rig_csv_names_its_encoding(tmp_path, capsys):
+    path = tmp_path / "run.csv"
+    path.write_bytes("# fivid-rig-csv: 1\n".encode("utf-16-le"))  # no byte-order mark
+    err = fails(capsys, ["ingest", str(path), "-o", str(tmp_path / "out")])
+    assert "UTF-16 (little-endian) text without a byte-order mark" in err and "binary" not in err
+    assert "loop of symbolic links" in fails(capsys, ["ingest", str(_loop(tmp_path / "l.csv")), "-o",
+                                                      str(tmp_path / "out")])
+
+
+# --- summary.json agrees with the exit status ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("raised, expected", [
+    (MemoryError("8 EiB requested"), 2),  # was exit_code 1 in summary.json, exit status 2
+    (RuntimeError("a bug"), 1),
+    (KeyboardInterrupt(), 130),
+])
+def test_summary_exit_code_is_the_exit_status(tmp_path, root, monkeypatch, capsys, raised, expected):
+    import json
+
+    import fivid.io
+
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "R001.csv").write_bytes((root / "sample_data" / "R001_v10_ra08.csv").read_bytes())
+    (tmp_path / "recipe.yaml").write_text("fivid-pipeline: 1\nstages: [ingest]\n")
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    (tmp_path / "run.yaml").write_text(f"inputs: {{folder: {data}}}\nmodel: {model}\noutput: {tmp_path / 'out'}\n")
+
+    def read(*args, **kwargs):
+        raise raised
+
+    monkeypatch.setattr(fivid.io, "read_rig_csv", read)
+    status = main(["run", str(tmp_path / "recipe.yaml"), "--config", str(tmp_path / "run.yaml"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert status == expected, err
+    assert ("Traceback" in err) == (expected == 1)
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["exit_code"] == status
+
+
+# --- study --quick validates the base config too -----------------------------------------------------------
+
+
+def test_study_quick_reports_a_wrong_type_the_quick_block_overrides(tmp_path, root, capsys):
+    text = (root / "configs" / "studies" / "weak_strong.yaml").read_text()
+    text = text.replace("../models/", f"{root}/configs/models/").replace("../laws/", f"{root}/configs/laws/")
+    text = text.replace("  modes: {n_modes: 6}", '  modes: {n_modes: "6"}')  # a string where an integer is typed
+    text = text.replace("  points: {transient: {duration: 0.02 s}}",
+                        "  points: {transient: {duration: 0.02 s}, modes: {n_modes: 4}}")  # quick overrides it
+    study = tmp_path / "study.yaml"
+    study.write_text(text)
+    line = text.splitlines().index('  modes: {n_modes: "6"}') + 1
+    err = fails(capsys, ["study", str(study), "--quick", "-o", str(tmp_path / "out")])
+    assert f"{study}:{line}: key 'points.modes.n_modes': expected an integer, found str '6'" in err
+    assert not (tmp_path / "out").exists()

@@ -22,7 +22,7 @@ import sys
 
 from fivid import __version__
 from fivid.cli.types import Quantity, integer_at_least, quantity
-from fivid.errors import FividError, Interrupted
+from fivid.errors import FividError, Interrupted, exit_status
 
 __all__ = ["main", "build_parser", "integer_at_least", "quantity", "Quantity",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD", "exit_status_of_signal"]
@@ -127,7 +127,7 @@ def _logging_to_stderr(verbosity: int):
 
 def exit_status_of_signal(signum: int) -> int:
     """The exit status of a command stopped by signal ``signum``: 128 + its number (130 SIGINT, 143 SIGTERM)."""
-    return 128 + int(signum)
+    return exit_status(Interrupted(signum))
 
 
 @contextlib.contextmanager
@@ -186,18 +186,15 @@ def main(argv: list[str] | None = None) -> int:
             status = args.func(args)
     except FividError as exc:
         print(f"fivid {args.command}: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return exit_status(exc)
     except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM as Interrupted; no traceback
-        import signal
-
-        signum = getattr(exc, "signum", signal.SIGINT)
         print(f"fivid {args.command}: {exc if isinstance(exc, Interrupted) else 'interrupted by SIGINT'}",
               file=sys.stderr)
-        return exit_status_of_signal(signum)
+        return exit_status(exc)
     except MemoryError as exc:  # a problem too large for this machine: its size is the input to change
         print(f"fivid {args.command}: error: out of memory ({exc or 'MemoryError'}); make the problem smaller "
               "(mesh divisions, duration, sample rate, number of runs)", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return exit_status(exc)
     except Exception as exc:
         missing = _missing_optional(exc)
         if missing is not None:

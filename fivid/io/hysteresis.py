@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError, UnitError
+from fivid.io.input_files import check_text_input
 from fivid.io.rig_header import RigHead, _head_lines, _split
 from fivid.io.rig_profile import ColumnSpec, RigProfile
 from fivid.units import conversion
@@ -237,9 +238,7 @@ def read_hysteresis_csv(path) -> HysteresisRecord:
 
 def read_hysteresis(path) -> HysteresisRecord:
     """Read a hysteresis recording, choosing the layout by the file suffix (``.json`` or ``.csv``)."""
-    path = Path(path)
-    if not path.is_file():
-        raise FividError("no such file", file=path)
+    path = check_text_input(path, what="hysteresis recording")  # size, link loops and encoding before reading
     suffix = path.suffix.lower()
     if suffix == ".json":
         return read_hysteresis_json(path)

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid.errors import FividError, SchemaError, UnitError
+from fivid.io.input_files import binary_content, stat_input
 from fivid.io.rig_profile import RESERVED_ATTRIBUTES, ColumnSpec, RigProfile, has_sensor_dim
 from fivid.io.rig_quantities import attribute_units, metadata_value
 from fivid.schema import registry
@@ -80,7 +81,11 @@ def _head_lines(path: Path, encoding: str):
         head = f.read(_MAX_HEAD_BYTES)
     if not head.strip():
         raise SchemaError("the file is empty" if not head else "the file has only blank lines", file=path, line=1)
-    if b"\x00" in head[:65536]:
+    problem = None if encoding.replace("_", "-").lower().startswith(("utf-16", "utf-32")) else binary_content(head[:65536])
+    if problem is not None and "text" in problem:  # UTF-16 (Excel's 'Unicode text'): name it, say how to read it
+        raise SchemaError(f"not 8-bit CSV text: the file is {problem}; save it as UTF-8 (Excel: 'CSV UTF-8'; or "
+                          f"iconv -f {problem.split()[0]} -t UTF-8 {path.name} > new.csv)", file=path, line=1)
+    if problem is not None:
         raise SchemaError(
             "not a CSV text file (it has binary content, NUL bytes); export the DAQ data as CSV text", file=path
         )
@@ -322,8 +327,7 @@ def read_rig_head(path, profile: RigProfile | None = None) -> RigHead:
     """
     path = Path(path)
     profile = profile if profile is not None else RigProfile()
-    if not path.is_file():
-        raise FividError("no such file" if not path.exists() else "not a regular file", file=path)
+    stat_input(path)  # no such file, a link loop, a folder: named before the file is opened
     preamble: list[tuple[int, str]] = []
     target_line = profile.header_line
     time_spec = profile.column("time")

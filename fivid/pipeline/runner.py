@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from fivid import __version__
-from fivid.errors import FividError, Interrupted
+from fivid.errors import FividError, Interrupted, exit_status
 from fivid.pipeline.cache import Task, TaskCache
 from fivid.pipeline.config import Plan
 from fivid.pipeline.lock import OutputLock
@@ -260,8 +260,11 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         raise Interrupted(signum, f"during stage {current!r}; finished tasks are kept: run the same command "
                           "again to resume") from None
     except BaseException as exc:
-        status, error = EXIT_FAILURE, exc
-        log.exception("pipeline failed")
+        status, error = exit_status(exc), exc  # as the CLI will exit (a MemoryError is 2): summary.json agrees
+        if status == EXIT_BAD_INPUT:
+            log.info("stopped: %s: %s", type(exc).__name__, exc)
+        else:
+            log.exception("pipeline failed")
         raise
     finally:
         held = _ignore_signals()  # a second Ctrl-C must not lose the summary or leave the lock

@@ -348,6 +348,7 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
         src, base = read_yaml(source, "study config"), Path(source).resolve().parent
     data = src.data
     if quick and isinstance(data.get("quick"), Mapping):
+        validate(StudyConfig, src)  # the base too: a wrong type there is an error even where 'quick' overrides it
         data = _merge({k: v for k, v in data.items() if k != "quick"}, data["quick"])
     cfg = validate(StudyConfig, src, data=data)
     model_path, lumped = None, None

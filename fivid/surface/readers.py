@@ -11,6 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from fivid.errors import FividError
+from fivid.io.input_files import check_text_input
 from fivid.surface.columns import read_profile_columns
 from fivid.surface.dektak import is_dektak_csv, read_dektak_csv
 from fivid.surface.text import read_lines
@@ -25,12 +26,17 @@ def read_profile(path):
     Raises
     ------
     FividError
-        The file does not exist or cannot be read; or any error of the chosen reader, naming the
-        file, line, column and value.
+        The file does not exist, is a loop of symbolic links, is larger than
+        :data:`fivid.io.input_files.MAX_TEXT_BYTES` or cannot be read; or any error of the chosen
+        reader, naming the file, line, column and value.
+    SchemaError
+        A UTF-16/UTF-32 or binary file (the encoding named).
     """
     path = Path(path)
-    if not path.is_file():
-        raise FividError("profile file not found" if not path.exists() else "not a file", file=path)
+    if not path.exists() and not path.is_symlink():
+        raise FividError("profile file not found", file=path)
+    # size, link loops and encoding before the file is read whole (a 2 GB file took 4 GB of memory first)
+    check_text_input(path, what="profile", text=path.suffix.lower() != ".x3p")
     if path.suffix.lower() == ".x3p":
         return read_x3p(path)
     lines, _ = read_lines(path)
