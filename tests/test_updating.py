@@ -161,7 +161,8 @@ def test_cli_json_keys(tmp_path, capsys):
     p = s["parameters"][0]
     assert p["path"] == "materials.steel.E" and p["unit"] == "GPa" and abs(p["value"] / 205 - 1) < 1e-4
     assert p["ci95"] > 0
-    assert {"target", "model_hz", "error_pct"} <= set(s["residuals"][0])
+    assert {"target", "model", "error_pct"} <= set(s["residuals"][0])
+    assert s["residuals"][0]["target"] == pytest.approx(_true_frequencies(truth, 2)[0])
     assert s["count_below"][0]["satisfied"] and s["count_below"][0]["model_count"] == 2
     assert out.read_text().startswith("# Updated by fivid update")
 
