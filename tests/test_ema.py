@@ -168,3 +168,22 @@ def test_frf_netcdf_input(tmp_path):
     shapes = np.array([[c["re"] + 1j * c["im"] for c in m["shape"]] for m in s["modes"]])
     _check(modes["frequency"].values, modes["damping_ratio"].values, shapes, phi)
     assert not s["mass_normalised"]  # no reference given: no driving point
+
+
+def test_uff_without_units_needs_form(tmp_path, capsys):
+    import pyuff
+
+    from fivid.io.export import uff58_set
+
+    f, h, phi = _synthetic(seed=8)
+    sets = [uff58_set(f"frf{k + 1}", f, h[k], ordinate_units="", abscissa_units="Hz", node=k + 1, func_type=4,
+                      abscissa="frequency") for k in range(3)]
+    pyuff.UFF(str(tmp_path / "f.uff")).write_sets(sets, mode="overwrite")
+    out = str(tmp_path / "modes.nc")
+    assert main(["ema", str(tmp_path / "f.uff"), "--band", "20", "180", "-o", out]) == 2
+    err = capsys.readouterr().err
+    assert "give --form" in err and "f.uff" in err
+    assert main(["ema", str(tmp_path / "f.uff"), "--band", "20", "180", "--form", "receptance", "-o", out,
+                 "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["frf_form"] == "receptance" and len(s["modes"]) == 3

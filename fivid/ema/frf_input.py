@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from fivid.errors import FividError, SchemaError, UnitError
-from fivid.units import unit_registry
+from fivid.units import is_compatible
 
 __all__ = ["FRFSet", "read_frfs", "frf_form_of_units"]
 
@@ -79,24 +79,11 @@ class FRFSet:
 
 def frf_form_of_units(units: str, *, file=None, what: str = "FRF") -> str:
     """``receptance`` (length/force), ``mobility`` (velocity/force) or ``accelerance`` (acceleration/force)."""
-    try:
-        dim = dict(unit_registry().Quantity(1.0, _pint_text(units)).dimensionality)
-    except Exception:
-        dim = None
-    forms = {"receptance": 0, "mobility": -1, "accelerance": -2}
-    if dim is not None:
-        for form, t in forms.items():
-            want = {"[length]": 0, "[mass]": -1, "[time]": 2 + t}
-            if {k: v for k, v in dim.items() if v} == {k: v for k, v in want.items() if v}:
-                return form
+    for form, si in (("receptance", "m N-1"), ("mobility", "m s-1 N-1"), ("accelerance", "m s-2 N-1")):
+        if units and is_compatible(units, si):
+            return form
     raise UnitError(f"the {what}'s unit {units!r} is not a displacement, velocity or acceleration per force "
                     "(m/N, m/s/N, m/s^2/N); give --form", file=file)
-
-
-def _pint_text(units: str) -> str:
-    from fivid.units import _normalise
-
-    return _normalise(units)
 
 
 def read_frfs(paths, *, form: str | None = None, force: str = "friction_force", response: str = "acceleration",
@@ -121,12 +108,14 @@ def read_frfs(paths, *, form: str | None = None, force: str = "friction_force", 
             raise FividError(f"cannot read {str(path)!r}: no such file", file=path)
         suffix = path.suffix.lower()
         if suffix in (".uff", ".unv", ".uf"):
-            sets.append(_read_uff(path))
+            sets.append(_read_uff(path, form))
         elif suffix in (".nc", ".nc4", ".netcdf"):
-            sets.append(_read_netcdf(path, force, response, nperseg))
+            sets.append(_read_netcdf(path, form, force, response, nperseg))
         else:
             raise FividError(f"unknown FRF file type {path.suffix!r}; give UFF58 (.uff, .unv) or netCDF (.nc: an FRF "
                              "dataset or a run dataset)", file=path)
+    if form is not None and form not in ("receptance", "mobility", "accelerance"):
+        raise FividError(f"--form must be receptance, mobility or accelerance, got {form!r}")
     first = sets[0]
     for s in sets[1:]:
         if s.frequency.shape != first.frequency.shape or not np.allclose(s.frequency, first.frequency, rtol=1e-9):
@@ -141,14 +130,12 @@ def read_frfs(paths, *, form: str | None = None, force: str = "friction_force", 
     if all(s.coherence is not None for s in sets):
         coh = np.concatenate([s.coherence for s in sets])
     out = FRFSet(first.frequency, np.concatenate([s.frf for s in sets]), sum((s.node for s in sets), []),
-                 sum((s.direction for s in sets), []), sum((s.name for s in sets), []), form or first.form,
+                 sum((s.direction for s in sets), []), sum((s.name for s in sets), []), first.form,
                  first.units, first.reference, coh, sum((s.sources for s in sets), []))
-    if form is not None and form not in ("receptance", "mobility", "accelerance"):
-        raise FividError(f"--form must be receptance, mobility or accelerance, got {form!r}")
     return out
 
 
-def _read_uff(path: Path) -> FRFSet:
+def _read_uff(path: Path, form) -> FRFSet:
     from fivid.io.daq.channels import require
 
     pyuff = require("pyuff", "pyuff", "UFF58 input")
@@ -174,7 +161,9 @@ def _read_uff(path: Path) -> FRFSet:
                              file=path)
         units = str(r.get("ordinate_axis_units_lab", ""))
         spec = int(r.get("ordinate_spec_data_type", 0))
-        if spec in _FORM_OF_TYPE:
+        if form is not None:
+            forms.add(form)
+        elif spec in _FORM_OF_TYPE:
             forms.add(_FORM_OF_TYPE[spec])
         else:
             forms.add(frf_form_of_units(_uff_units(units), file=path, what=f"record {k + 1}"))
@@ -195,7 +184,7 @@ def _uff_units(label: str) -> str:
     return text if "N" in text else f"({text})/N" if text else "1"
 
 
-def _read_netcdf(path: Path, force: str, response: str, nperseg) -> FRFSet:
+def _read_netcdf(path: Path, form, force: str, response: str, nperseg) -> FRFSet:
     import xarray as xr
 
     try:
@@ -205,7 +194,7 @@ def _read_netcdf(path: Path, force: str, response: str, nperseg) -> FRFSet:
     with ds:
         ds.load()
     if "time" in ds.dims:
-        return _run_frfs(ds, path, force, response, nperseg)
+        return _run_frfs(ds, path, form, force, response, nperseg)
     if "frequency" not in ds.dims:
         raise SchemaError(f"the netCDF has dimensions {dict(ds.sizes)}: expected an FRF dataset (frequency) or a run "
                           "dataset (time)", file=path)
@@ -225,7 +214,7 @@ def _read_netcdf(path: Path, force: str, response: str, nperseg) -> FRFSet:
     rows, nodes, dirs, names, forms, units = [], [], [], [], set(), ""
     for name, var in chans:
         units = str(var.attrs.get("units", ""))
-        forms.add(frf_form_of_units(units, file=path, what=f"variable {name!r}"))
+        forms.add(form or frf_form_of_units(units, file=path, what=f"variable {name!r}"))
         if var.ndim == 1:
             items = [(name, var)]
         else:
@@ -243,7 +232,7 @@ def _read_netcdf(path: Path, force: str, response: str, nperseg) -> FRFSet:
     return FRFSet(f, np.array(rows), nodes, dirs, names, forms.pop(), units, ref, None, [str(path)])
 
 
-def _run_frfs(ds, path, force: str, response: str, nperseg) -> FRFSet:
+def _run_frfs(ds, path, form, force: str, response: str, nperseg) -> FRFSet:
     from fivid.signal import frf
 
     for var, what in ((force, "force"), (response, "response")):
@@ -267,4 +256,4 @@ def _run_frfs(ds, path, force: str, response: str, nperseg) -> FRFSet:
         dirs.append(sensor)
     keep = freq > 0  # the DC line carries the means, not the dynamics
     return FRFSet(freq[keep], np.array(rows)[:, keep], list(range(1, len(rows) + 1)), dirs, names,
-                  frf_form_of_units(units, file=path), units, (None, None), np.array(coh)[:, keep], [str(path)])
+                  form or frf_form_of_units(units, file=path), units, (None, None), np.array(coh)[:, keep], [str(path)])

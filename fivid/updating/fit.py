@@ -284,7 +284,7 @@ def _statistics(fit, params, p0, targets, pred) -> UpdateResult:
     ci = [None if unseen[i] else float(1.96 * sd[i] * abs(p0[i])) for i in range(n)]
     residuals = []
     for t, f, mode, mac in zip(targets.modes, pred.frequency, pred.model_mode, pred.mac):
-        row = {"target": t.name, "frequency_hz": t.frequency, "model_hz": float(f),
+        row = {"name": t.name, "target": t.frequency, "model": float(f),
                "error_pct": float(100 * (f - t.frequency) / t.frequency), "tolerance_hz": t.tolerance}
         if mode is not None:
             row["model_mode"] = mode
@@ -297,7 +297,7 @@ def _statistics(fit, params, p0, targets, pred) -> UpdateResult:
     for c in targets.count_below:
         n_below = int(np.sum((pred.all_frequencies > 0) & (pred.all_frequencies < c.frequency)))
         complete = n_below < pred.all_frequencies.size
-        counts.append({"target": c.key, "frequency_hz": c.frequency, "count": c.count,
+        counts.append({"name": c.key, "frequency_hz": c.frequency, "count": c.count,
                        "model_count": n_below if complete else None, "satisfied": complete and n_below == c.count})
         if not complete:
             warnings.append(f"{c.key}: all {pred.all_frequencies.size} computed modes lie below {c.frequency:g} Hz; "
@@ -327,7 +327,7 @@ def _updated_text(msrc, params, values, targets, result) -> str:
         ci_text = f" +- {ci:.3g}{unit} (95 %)" if ci is not None else " (not identified by the targets)"
         lines.append(f"#   {p.path}: {p.initial:.6g}{unit} -> {v:.6g}{unit}{ci_text}")
     for row in result.residuals:
-        lines.append(f"#   {row['target']}: target {row['frequency_hz']:.6g} Hz, model {row['model_hz']:.6g} Hz "
+        lines.append(f"#   {row['name']}: target {row['target']:.6g} Hz, model {row['model']:.6g} Hz "
                      f"({row['error_pct']:+.3f} %)")
     lines.append(f"# cost {result.cost:.4g}, {result.evaluations} model evaluations, converged: "
                  f"{str(result.converged).lower()}")

@@ -47,7 +47,7 @@ def run(args) -> int:
             ci = "not identified" if p["ci95"] is None else f"+- {p['ci95']:.3g}"
             print(f"{p['path']:32s} {p['initial']:14.6g} {p['value']:14.6g} {ci:>14s} {p['unit']}")
         for r in summary["residuals"]:
-            print(f"  {r['target']}: target {r['frequency_hz']:.5g} Hz, model {r['model_hz']:.5g} Hz "
+            print(f"  {r['name']}: target {r['target']:.5g} Hz, model {r['model']:.5g} Hz "
                   f"({r['error_pct']:+.3f} %)")
         print(f"cost {summary['cost']:.4g}, {summary['evaluations']} model evaluations, converged: "
               f"{summary['converged']}")
