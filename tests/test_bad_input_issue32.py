@@ -192,3 +192,117 @@ def test_study_quick_reports_a_wrong_type_the_quick_block_overrides(tmp_path, ro
     err = fails(capsys, ["study", str(study), "--quick", "-o", str(tmp_path / "out")])
     assert f"{study}:{line}: key 'points.modes.n_modes': expected an integer, found str '6'" in err
     assert not (tmp_path / "out").exists()
+
+
+# --- sizes checked before work -------------------------------------------------------------------------------
+
+
+def test_simulate_of_a_billion_seconds_is_refused_before_work(root, tmp_path, capsys):
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    err = fails(capsys, ["simulate", str(model), "--duration", "1e9 s", "-o", str(tmp_path / "x.nc"), "--dry-run"])
+    assert "key '--duration':" in err and "at most 1e+15 may be planned" in err
+
+
+def test_monte_carlo_samples_are_refused_before_work(root, tmp_path, capsys):
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    law = root / "configs" / "laws" / "sample_truth.nc"
+    out = tmp_path / "env.nc"
+    err = fails(capsys, ["simulate", str(model), "--law", str(law), "--roughness", "1.6 um", "--samples", "100000000",
+                         "-o", str(out)])
+    assert "key '--samples': 100,000,000 samples" in err and not out.exists()
+
+
+def test_run_plan_refuses_a_simulate_stage_that_cannot_fit(tmp_path, root, capsys):
+    text = (root / "configs" / "runs" / "sample.yaml").read_text()
+    text = text.replace("../../", f"{root}/").replace("../models/", f"{root}/configs/models/")
+    text = text.replace("  duration: 0.3 s ", "  duration: 1e9 s ")
+    config = tmp_path / "run.yaml"
+    config.write_text(text)
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if t.startswith("  duration: 1e9 s"))
+    out = tmp_path / "out"
+    err = fails(capsys, ["run", str(root / "pipelines" / "calibration.yaml"), "--config", str(config), "-o", str(out),
+                         "--dry-run"])
+    assert f"{config}:{line}: key 'simulate.duration':" in err and "Shorten simulate.duration" in err
+    assert not out.exists()  # refused at the plan check: nothing ingested, identified or written
+
+
+@pytest.mark.parametrize("command", [["modes"], ["cea", "--load", "5 N", "--mu", "0", "1", "3"]])
+def test_modal_analysis_of_a_huge_mesh_is_refused_before_assembly(tmp_path, root, capsys, command):
+    """50 000 x 5 000 divisions: killed by the OOM killer before (issue 32); refused from the divisions now."""
+    import resource
+
+    text = (root / "configs" / "models" / "triboair_coarse.yaml").read_text()
+    model = tmp_path / "huge.yaml"
+    model.write_text(text.replace("divisions: [50, 5]", "divisions: [50000, 5000]"))
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    err = fails(capsys, [command[0], str(model), *command[1:]])
+    assert f"{model}: key 'bodies': this model has 250,055,187 nodes" in err and "Lower the bodies' divisions" in err
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 200_000  # KiB: no mesh was built
+
+
+# --- physically impossible simulations ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("option, key", [(["--load", "1e30 N"], "normal_load"),
+                                         (["--velocity", "1e30 m/s"], "sliding_velocity"),
+                                         (["--mu", "1e6"], "mu")])
+def test_impossible_simulation_inputs_are_refused(root, tmp_path, capsys, option, key):
+    model = root / "configs" / "models" / "triboair_coarse.yaml"
+    out = tmp_path / "sim.nc"
+    err = fails(capsys, ["simulate", str(model), *option, "--duration", "1 ms", "-o", str(out)])
+    assert f"key '{key}': {key} = 1e+" in err and "plausible range" in err and not out.exists()
+
+
+def test_energy_balance_beyond_its_bound_fails_the_run():
+    """The closure error against the run's energy scale: round-off (1e-14 on the shipped models) passes,
+    an error of 1e-3 of the scale (or a NaN) is no result."""
+    import numpy as np
+    import xarray as xr
+
+    from fivid.solver.inputs import ENERGY_BALANCE_TOLERANCE, EnergyBalanceError, check_energy_balance
+
+    t = np.linspace(0, 1e-3, 11)
+    work = 2e-3 * t / t[-1]  # [J]
+    base = {"external_work": ("time", work), "kinetic_energy": ("time", work / 2),
+            "friction_dissipation": ("time", work / 2)}
+    ok = xr.Dataset({**base, "energy_balance_error": ("time", 1e-14 * work)}, coords={"time": t})
+    check_energy_balance(ok)
+    for error in (1e3 * ENERGY_BALANCE_TOLERANCE * work, np.where(t > 5e-4, np.nan, 0.0)):
+        bad = xr.Dataset({**base, "energy_balance_error": ("time", error)}, coords={"time": t})
+        with pytest.raises(EnergyBalanceError, match="does not close"):
+            check_energy_balance(bad)
+
+
+# --- identify: mu = +-12 ---------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def runs_mu_12(tmp_path_factory):
+    """Two SYNTHETIC runs (tests/synthetic_friction_runs.py) whose friction force is scaled to mean Ft/Fn = +12
+    and -12: the identification took |mu| of both, mu0 11.98, the sign lost (issue 32)."""
+    from synthetic_friction_runs import synthetic_run, true_law
+
+    from fivid.io import write_run
+
+    folder = tmp_path_factory.mktemp("mu12")
+    paths = []
+    for k, sign in enumerate((1, -1)):
+        ds = synthetic_run(true_law(), velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=k, run_id=f"M{k}",
+                           duration=2.0)
+        ds["friction_force"] = ds["friction_force"] * (sign * 12.0 / 0.3)  # the law's mu0 is 0.3
+        paths.append(write_run(ds, folder / f"M{k}.nc"))
+    return paths
+
+
+def test_identify_refuses_mu_beyond_two_and_records_an_override(runs_mu_12, tmp_path, capsys):
+    import xarray as xr
+
+    out = tmp_path / "law.nc"
+    err = fails(capsys, ["identify", *map(str, runs_mu_12), "-o", str(out)])
+    assert "run M0: mean friction coefficient Ft/Fn = +12" in err and "key 'friction_force'" in err
+    assert "--allow-implausible" in err and not out.exists()
+    assert main(["identify", *map(str, runs_mu_12), "-o", str(out), "--allow-implausible"]) == 0
+    assert "negative: taken as the opposite sign convention" in capsys.readouterr().err  # the sign is said
+    with xr.open_dataset(out) as law:
+        recorded = "\n".join(f"{k}={v}" for k, v in law.attrs.items())
+    assert "allow_implausible" in recorded, recorded

@@ -417,6 +417,7 @@ def identify_friction_law(
     weighting: str = "estimator",
     injection: str = "uniform",
     confidence: float = 0.95,
+    allow_implausible: bool = False,
 ) -> FrictionIdentification:
     """Identify μ0, the perturbation spectrum and the amplitude law from measured runs.
 
@@ -468,6 +469,9 @@ def identify_friction_law(
         Injection mode written into the law.
     confidence : float, default 0.95
         Level of every interval.
+    allow_implausible : bool, default False
+        Identify from runs whose mean Ft/Fn is beyond +-2 (an error otherwise: a swapped column or unit,
+        and a sign that would be lost); recorded in the law file's settings.
 
     Returns
     -------
@@ -498,7 +502,7 @@ def identify_friction_law(
                            tare=None if tare is None else tuple(float(x) for x in tare),
                            window=None if window is None else tuple(float(x) for x in window),
                            mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence,
-                           glitch_repair=glitch_repair)
+                           glitch_repair=glitch_repair, allow_implausible=bool(allow_implausible))
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
                                    for ds in datasets]
     used = [r for r in analyses if r.used]

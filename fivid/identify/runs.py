@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
+from fivid.io.plausibility import MU_RANGE
 from fivid.signal.welch import NPERSEG_RULE, default_nperseg  # the one segment rule (used by identify.friction)
 
 __all__ = ["RunAnalysisSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
@@ -68,6 +69,9 @@ class RunAnalysisSettings:
         Batches of the batch-means interval of the mean μ.
     confidence : float
         Level of every interval.
+    allow_implausible : bool
+        Identify from a run whose mean Ft/Fn is outside ``±MU_RANGE[1]`` (:mod:`fivid.io.plausibility`:
+        2); by default that is an error (a swapped column or a unit, and a sign that would be lost).
     """
 
     nperseg: int | None = None
@@ -80,6 +84,7 @@ class RunAnalysisSettings:
     glitch_repair: bool | None = None
     n_batches: int = 20
     confidence: float = 0.95
+    allow_implausible: bool = False
 
     def to_dict(self) -> dict:
         """The settings as plain values (recorded in the law file and the JSON report)."""
@@ -93,6 +98,7 @@ class RunAnalysisSettings:
             "noise_correction": self.noise_correction,
             "glitch_repair": "auto" if self.glitch_repair is None else self.glitch_repair,
             "n_batches": self.n_batches,
+            "allow_implausible": self.allow_implausible,
             "confidence": self.confidence,
         }
 
@@ -280,6 +286,18 @@ def _check_units(ds, label):
             )
 
 
+def _check_mu_plausible(mean_mu: float, run_id, ds, settings) -> None:
+    """Refuse a mean Ft/Fn beyond ``±MU_RANGE[1]`` unless allowed: its magnitude and its sign would be lost."""
+    if abs(mean_mu) <= MU_RANGE[1] or settings.allow_implausible:
+        return
+    raise DataQualityError(
+        f"run {run_id}: mean friction coefficient Ft/Fn = {mean_mu:+.4g} on the steady window is outside the "
+        f"plausible [-{MU_RANGE[1]:g}, {MU_RANGE[1]:g}] (dry friction 0.1-1, rubber up to ~2; fivid.io.plausibility): "
+        "a swapped column, a unit or a sensitivity; correct the run, or pass --allow-implausible (recorded in the "
+        "law file) to identify from it", file=ds.attrs.get("source", "").split(" sha256:")[0] or None,
+        key="friction_force")
+
+
 def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_function=None) -> RunAnalysis:
     """μ(t) on the steady window of one run: mean with CI, PSD of μp in ``band``, band RMS with stderr.
 
@@ -373,7 +391,10 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
         res.reason = f"contact lost: normal force <= 0 N at {lost} of {fn_w.size} samples of the steady window"
         return res
     mu = ft_w / fn_w
+    _check_mu_plausible(float(np.mean(mu)), run_id, ds, settings)
     if np.mean(mu) < 0:  # friction force recorded with the opposite sign convention
+        _log.warning("run %s: mean Ft/Fn = %.4g on the steady window is negative: taken as the opposite sign "
+                     "convention (mu0 > 0)", run_id, float(np.mean(mu)))
         mu = -mu
     res.mu_mean, res.mu_mean_ci = batch_means_interval(mu, settings.n_batches, settings.confidence)
     mup = mu - res.mu_mean

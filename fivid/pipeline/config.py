@@ -397,6 +397,19 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
     )
 
 
+def _check_simulation_size(cfg: RunConfig, model) -> None:
+    """Refuse, at plan time, a simulate stage whose runs cannot fit in memory or time (fivid.pipeline.resources)."""
+    from fivid.pipeline.resources import check_simulation_memory, simulation_memory
+
+    try:
+        size = simulation_memory(model, duration=cfg.duration, sample_rate=cfg.sample_rate)
+        runs = len(cfg.seeds) * max(1, len(cfg.input_files))  # every test condition with every seed
+        check_simulation_memory(size, key="simulate.duration", n_dofs=2 * model.n_nodes, runs=runs)
+    except ConfigError as exc:
+        raise ConfigError(exc.message, file=cfg.path, line=line_of_key(cfg.path, "simulate.duration"),
+                          key="simulate.duration") from None
+
+
 def _check_bands_against_inputs(cfg: RunConfig, stages) -> None:
     """Refuse an identify or analysis band above the Nyquist frequency of an input file's stated sample rate.
 
@@ -472,7 +485,9 @@ def load_plan(recipe: str | os.PathLike, config: str | os.PathLike | None = None
         from fivid.fe import load_model
 
         try:
-            load_model(cfg.model)
+            model = load_model(cfg.model)
         except FividError as exc:
             raise ConfigError(f"model {str(cfg.model)!r}: {exc}", file=config, key="model") from None
+        if "simulate" in stages:
+            _check_simulation_size(cfg, model)
     return Plan(path=Path(recipe), name=name, stages=stages, recipe_sha256=recipe_sha, config=cfg)

@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 from fivid.errors import ConfigError
 
 __all__ = ["SimulationSize", "available_memory", "simulation_memory", "check_simulation_memory", "format_bytes",
-           "MEMORY_FRACTION", "FLOATS_PER_DOF"]
+           "MEMORY_FRACTION", "FLOATS_PER_DOF", "MAX_DOF_STEPS", "DOF_STEPS_PER_SECOND", "check_monte_carlo_size",
+           "modal_memory", "check_modal_memory"]
 
 #: Largest fraction of the available memory a run may be estimated to need. The estimate counts the
 #: large arrays only; the interpreter, numba's compiled code and the libraries take a few hundred MB
@@ -28,6 +29,13 @@ MEMORY_FRACTION = 0.8
 #: i.e. 9 per dof) -- about 20; 24 leaves room for the contact and constraint arrays.
 FLOATS_PER_DOF = 24
 _FLOAT = 8  # bytes
+#: Most solver work planned for one command [degree-of-freedom updates]: 1e15 is about 4 days at
+#: :data:`DOF_STEPS_PER_SECOND`; a larger run is a typo (a duration in ms written as s, 1e9 s) or needs a
+#: coarser model, not a bigger machine.
+MAX_DOF_STEPS = 1e15
+#: Throughput of the full explicit path, measured on an idle 2-core machine (default rig, 13 524 dofs,
+#: 0.1 s in 46 s) [dof updates per second]; used to say how long a refused run would take.
+DOF_STEPS_PER_SECOND = 3e9
 
 
 def format_bytes(n: float) -> str:
@@ -160,15 +168,32 @@ def simulation_memory(model, *, duration: float, sample_rate: float, oversample:
     return SimulationSize(n_out, n_int, n_int * n_sub, 1.0 / (sample_rate * oversample) / n_sub, parts)
 
 
-def check_simulation_memory(size: SimulationSize, *, key: str = "--duration") -> None:
-    """Refuse a run estimated to need more than :data:`MEMORY_FRACTION` of the available memory.
+def _advice(key: str) -> str:
+    if key.startswith("--"):
+        return "Shorten --duration, lower --sample-rate or coarsen the mesh"
+    prefix = key.rpartition(".")[0] + "." if "." in key else ""
+    return f"Shorten {prefix}duration, lower {prefix}sample_rate or coarsen the mesh"
+
+
+def check_simulation_memory(size: SimulationSize, *, key: str = "--duration", n_dofs: int | None = None,
+                            runs: int = 1) -> None:
+    """Refuse a run estimated to need more than :data:`MEMORY_FRACTION` of the available memory, or
+    (with ``n_dofs``) more than :data:`MAX_DOF_STEPS` of solver work over its ``runs`` runs.
 
     Raises
     ------
     ConfigError
-        With the estimate, its parts, the available memory and what to change; ``key`` names the
-        option or config key to change first.
+        With the estimate, its parts, the available memory (or the work and its time) and what to
+        change; ``key`` names the option (``--duration``: the advice names options) or config key
+        (``simulate.duration``: the advice names keys) to change first.
     """
+    if n_dofs is not None and size.steps * float(n_dofs) * runs > MAX_DOF_STEPS:
+        work = size.steps * float(n_dofs) * runs
+        days = work / DOF_STEPS_PER_SECOND / 86400
+        raise ConfigError(
+            f"this simulation would take {runs} run(s) x {size.steps:,} solver steps x {n_dofs:,} dofs = {work:.3g} dof "
+            f"updates, about {days:.3g} days at {DOF_STEPS_PER_SECOND:.0e} per second (the full path on an idle "
+            f"2-core machine); at most {MAX_DOF_STEPS:.0e} may be planned. {_advice(key)}", key=key)
     available = available_memory()
     if available is None:
         return
@@ -177,5 +202,96 @@ def check_simulation_memory(size: SimulationSize, *, key: str = "--duration") ->
         return
     raise ConfigError(
         f"this simulation would need about {format_bytes(size.bytes)} of memory ({size.describe()}), but "
-        f"{format_bytes(free)} available ({source}); at most {MEMORY_FRACTION:.0%} of it may be planned. Shorten "
-        "--duration, lower --sample-rate or coarsen the mesh", key=key)
+        f"{format_bytes(free)} available ({source}); at most {MEMORY_FRACTION:.0%} of it may be planned. "
+        f"{_advice(key)}", key=key)
+
+
+def check_monte_carlo_size(size: SimulationSize, *, samples: int, nperseg: int, n_dofs: int,
+                           workers: int = 1) -> None:
+    """Refuse ``simulate --samples N`` that cannot fit: the N runs' solver work, ``workers`` runs held at
+    once, and the envelope (each sample's PSD of ``nperseg // 2 + 1`` bins, kept for the percentiles).
+
+    Raises
+    ------
+    ConfigError
+        With key ``--samples``, the estimate and the limit.
+    """
+    if samples * size.steps * float(n_dofs) > MAX_DOF_STEPS:
+        work = samples * size.steps * float(n_dofs)
+        raise ConfigError(
+            f"{samples:,} samples x {size.steps:,} solver steps x {n_dofs:,} dofs = {work:.3g} dof updates, about "
+            f"{work / DOF_STEPS_PER_SECOND / 86400:.3g} days at {DOF_STEPS_PER_SECOND:.0e} per second; at most "
+            f"{MAX_DOF_STEPS:.0e} may be planned: use fewer samples (a 5-95 % envelope settles within a few hundred)",
+            key="--samples")
+    envelope = samples * (nperseg // 2 + 1 + 64) * _FLOAT
+    held = max(1, min(int(workers), samples)) * size.bytes + envelope
+    available = available_memory()
+    if available is not None and held > MEMORY_FRACTION * available[0]:
+        raise ConfigError(
+            f"{samples:,} samples would need about {format_bytes(held)} of memory ({max(1, min(int(workers), samples))} "
+            f"run(s) at once of {format_bytes(size.bytes)} each, and {format_bytes(envelope)} of PSDs for the "
+            f"envelope), but {format_bytes(available[0])} available ({available[1]}); use fewer samples or workers",
+            key="--samples")
+
+
+def modal_memory(n_dofs: int, n_modes: int, band: int) -> int:
+    """Bytes a modal analysis (shift-invert Lanczos) of ``n_dofs`` free dofs holds, about [bytes].
+
+    The mesh and its arrays (:data:`FLOATS_PER_DOF` per dof), the sparse stiffness and mass (18 entries per
+    row each for bilinear Q4 elements, 12 bytes an entry), the sparse LU factors of ``K - sigma M``
+    (``band`` dofs either side of the diagonal: the half-bandwidth of a structured block ordered across
+    its short side, 2 (short divisions + 1)) and the Lanczos vectors (``2 n_modes + 1``). The dense
+    path below 600 dofs holds two dense matrices.
+    """
+    if n_dofs <= 600:
+        return 2 * n_dofs * n_dofs * _FLOAT
+    return int(n_dofs * (FLOATS_PER_DOF * _FLOAT + 2 * 18 * 12 + 2 * band * _FLOAT + (2 * n_modes + 1) * _FLOAT))
+
+
+def _mesh_counts(model_source) -> tuple[int, int] | None:
+    """``(nodes, band)`` from a model config's bodies' ``divisions``, read without meshing; None if unreadable."""
+    from fivid.builtin import find_builtin
+    from fivid.config_layer import read_yaml
+
+    path = model_source
+    if not os.path.exists(str(path)):
+        path = find_builtin("models", str(path)) or path
+    try:
+        data = read_yaml(path, "model config").data
+        nodes, band = 0, 0
+        for body in (data.get("bodies") or {}).values():
+            nx, ny = (int(v) for v in body["divisions"])
+            if nx < 1 or ny < 1:
+                return None
+            nodes += (nx + 1) * (ny + 1)
+            band = max(band, 2 * (min(nx, ny) + 1))
+        return nodes, band
+    except (ConfigError, KeyError, TypeError, ValueError, AttributeError, OSError):
+        return None  # the model's own validation reports it, with its line
+
+
+def check_modal_memory(model_source, n_modes: int) -> None:
+    """Refuse a modal analysis (``fivid modes``, ``fivid cea``) whose mesh cannot fit, before it is built.
+
+    The node count comes from the config's ``divisions`` (no mesh is built): a 50 000 x 5 000 block is
+    refused in a second instead of being killed by the kernel's out-of-memory killer.
+
+    Raises
+    ------
+    ConfigError
+        Naming the model file, the estimate and the available memory.
+    """
+    counts = _mesh_counts(model_source)
+    available = available_memory()
+    if counts is None or available is None:
+        return
+    nodes, band = counts
+    need = modal_memory(2 * nodes, n_modes, band)
+    if need <= MEMORY_FRACTION * available[0]:
+        return
+    raise ConfigError(
+        f"this model has {nodes:,} nodes ({2 * nodes:,} dofs, from the bodies' divisions); its modal "
+        f"analysis would need about {format_bytes(need)} of memory (mesh, K and M, the sparse factorisation, the "
+        f"Lanczos vectors), but {format_bytes(available[0])} available ({available[1]}); at most "
+        f"{MEMORY_FRACTION:.0%} of it may be planned. Lower the bodies' divisions", file=str(model_source),
+        key="bodies")

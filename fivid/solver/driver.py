@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError, FividError
+from fivid.solver.inputs import check_energy_balance, check_simulation_inputs
 
 __all__ = ["SimulationDiverged", "IntegrationSettings", "PreparedRun", "simulate", "prepare_run"]
 
@@ -76,6 +77,7 @@ class PreparedRun:
         ds = run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
         if self.reduced is not None:
             ds.attrs.update(self.reduced.attrs())
+        check_energy_balance(ds)  # a run whose balance does not close is no result (fivid.solver.inputs)
         return ds
 
 
@@ -181,6 +183,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
         normal_load = _positive("normal_load", normal_load)
     if roughness_ra is not None:
         roughness_ra = _positive("roughness_ra", roughness_ra, allow_zero=True)
+    check_simulation_inputs(model, law=law, mu=mu, sliding_velocity=sliding_velocity, normal_load=normal_load)
     if not (0.0 < float(safety) <= 1.0):
         raise ConfigError(f"safety must be in (0, 1], got {safety!r}")
     oversample = int(oversample)

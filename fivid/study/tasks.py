@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.pipeline.resources import check_simulation_memory, simulation_memory
+
 __all__ = ["REGIMES", "element_size", "evaluate_point", "refined_model"]
 
 REGIMES = ("stable", "mode_coupling", "stick_slip")
@@ -43,6 +45,10 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
 
             return xr.Dataset(evaluate_roughness_point(system["model_path"], tasks, conditions))
         model = refined_model(system["model_path"], conditions.get("mesh", 1.0), conditions.get("roughness_ra"))
+        if "transient" in tasks:  # its size before any work (the modes first), as fivid simulate and fivid run do
+            check_simulation_memory(simulation_memory(model, duration=tasks["transient"]["duration"],
+                                                      sample_rate=tasks["transient"]["sample_rate"]),
+                                    key="points.transient.duration", n_dofs=2 * model.n_nodes)
         data["element_size"] = ((), element_size(model), {"units": "m", "long_name": "largest element side"})
         if "modes" in tasks:
             from fivid.fe.modal import modal_analysis

@@ -60,6 +60,7 @@ def run(args) -> int:
     from fivid.errors import ConfigError
     from fivid.fe import load_model
     from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
+    from fivid.pipeline.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
     mu = _mu_grid(args.mu)
@@ -70,6 +71,7 @@ def run(args) -> int:
     if args.output:
         check_writable(args.output, overwrite=args.overwrite)
     load = None if args.load is None else float(args.load)
+    check_modal_memory(args.model, args.basis or max(3 * args.n_modes, 40))  # before the mesh is built
     model = load_model(args.model)
     if load is None and not model.loads:
         raise ConfigError("--load Q is needed (e.g. --load '5 N'): the contact is linearised about the nodes closed "

@@ -62,6 +62,9 @@ def register(subparsers) -> None:
                    help="also identify modal damping from the acceleration and write a Rayleigh fragment here")
     p.add_argument("--damping-band", nargs=2, type=quantity("Hz", nonnegative=True), metavar=("F_LO", "F_HI"),
                    help="band [Hz] searched for resonance peaks (default: the friction band)")
+    p.add_argument("--allow-implausible", action="store_true",
+                   help="identify from runs whose mean Ft/Fn is beyond +-2 (refused otherwise: a swapped column, a "
+                        "unit, and a sign that would be lost); recorded in the law file")
     p.add_argument("--damping-peaks", type=int, default=4, help="number of resonance peaks to use (default 4)")
     p.add_argument("--inverse", metavar="MODEL.yaml",
                    help="also run the inverse route of seed 001 with this FE model: scale the amplitude until the "
@@ -109,6 +112,7 @@ def _run(args) -> int:
         weighting=args.weighting,
         interaction=args.interaction,
         categorical=args.categorical,
+        allow_implausible=args.allow_implausible,
     )
     report = result.to_json()
     damping = None

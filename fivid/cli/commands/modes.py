@@ -47,6 +47,7 @@ def run(args) -> int:
     from fivid.errors import ConfigError
     from fivid.fe import load_model
     from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
+    from fivid.pipeline.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json
 
     if args.n_modes < 1:
@@ -56,6 +57,7 @@ def run(args) -> int:
     if args.damping_curve:
         check_writable(args.damping_curve, overwrite=True)
     load = None if args.load is None else float(args.load)
+    check_modal_memory(args.model, args.n_modes)  # from the config's divisions, before the mesh is built
     model = load_model(args.model)
     if args.contact and load is None and not model.loads:
         raise ConfigError("--contact needs --load Q (e.g. --load '5 N'): the contact is linearised about the "

@@ -91,7 +91,7 @@ def run(args) -> int:
 
     from fivid.errors import FividError
     from fivid.io import write_run
-    from fivid.pipeline.resources import check_simulation_memory, simulation_memory
+    from fivid.pipeline.resources import check_monte_carlo_size, check_simulation_memory, simulation_memory
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
 
@@ -109,7 +109,10 @@ def run(args) -> int:
         args.law_domain = law_file.pop("domain")
     duration, sample_rate, time_step = si(args.duration), si(args.sample_rate), si(args.time_step)
     size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
-    check_simulation_memory(size)  # before any allocation: a year of records fails here, not in the kernel
+    check_simulation_memory(size, n_dofs=2 * model.n_nodes)  # before any allocation: a year of records fails here
+    if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.pipeline.resources)
+        check_monte_carlo_size(size, samples=args.samples, nperseg=args.nperseg, n_dofs=2 * model.n_nodes,
+                               workers=args.workers)
     if args.dry_run:
         print(f"{model.describe()}: {size.describe()}")
         return 0
