@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
-from fivid.signal.fft import SegmentTransform
+from fivid.signal.fft import SegmentTransform, check_backend
 
 __all__ = [
     "DETRENDS",
@@ -30,6 +30,7 @@ __all__ = [
     "segment_count",
     "SpectralSettings",
     "averaged_spectra",
+    "welch_density",
     "equivalent_degrees_of_freedom",
     "bin_correlation",
     "bin_degrees_of_freedom",
@@ -209,6 +210,54 @@ def averaged_spectra(x: np.ndarray, settings: SpectralSettings, y: np.ndarray | 
         _one_sided_density(sxy, settings, w, k_total),
         k_total,
     )
+
+
+def welch_density(x, fs: float, *, nperseg: int, noverlap: int | None = None, window="hann",
+                  detrend="constant", backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided Welch PSD of a plain array: ``(frequency [Hz], density [u2 Hz-1])``.
+
+    The array-level entry of fivid's one Welch estimator (:func:`averaged_spectra`) for code that holds
+    numbers, not DataArrays (study points, profiles over ``x`` with ``fs = 1 / dx`` [m-1]); the DataArray
+    entry with units, χ² bounds and recorded settings is :func:`fivid.signal.welch_psd`.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Uniformly sampled signal [u], finite, ``n >= nperseg``.
+    fs : float
+        Sampling rate [Hz] (or samples per unit of whatever ``x`` is sampled over).
+    nperseg : int
+        Segment length [samples].
+    noverlap : int, optional
+        Overlap [samples]; default ``nperseg // 2``.
+    window : str, tuple or ndarray, default "hann"
+        Taper (:func:`segment_window`).
+    detrend : {"constant", "linear", "none"} or False, default "constant"
+        Per-segment detrending.
+    backend : {"pyfftw", "numpy"}, optional
+        FFT implementation (same numbers to round-off).
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Frequencies ``k fs / nperseg`` and the density; equal to :func:`scipy.signal.welch` with
+        ``scaling="density"`` and the same settings to round-off (a few ulp).
+
+    Examples
+    --------
+    White noise of variance 1 sampled at 1 kHz has the density 2 / fs = 2e-3 Hz-1:
+
+    >>> x = np.random.default_rng(0).standard_normal(2**16)
+    >>> f, p = welch_density(x, 1000.0, nperseg=256)
+    >>> bool(abs(p[1:-1].mean() / 2e-3 - 1) < 0.02)
+    True
+    """
+    nperseg = check_nperseg(nperseg)
+    noverlap = nperseg // 2 if noverlap is None else int(noverlap)
+    settings = SpectralSettings(fs=float(fs), nperseg=nperseg, noverlap=noverlap, window=window, detrend="none" if detrend in (None, False) else detrend,
+                                backend=check_backend(backend))
+    f, p, _, _, _ = averaged_spectra(np.asarray(x, dtype=np.float64), settings)
+    return f, p
 
 
 def equivalent_degrees_of_freedom(window: np.ndarray, nsegments: int, step: int) -> float:
