@@ -20,14 +20,24 @@ EPS = np.finfo(float).eps
 
 @pytest.mark.parametrize("detrend, window, noverlap", [("constant", "hann", None), ("linear", "hamming", 100),
                                                        ("none", ("tukey", 0.25), 0)])
-def test_welch_density_is_scipys_welch(detrend, window, noverlap):
+def test_the_array_and_the_dataarray_welch_agree(detrend, window, noverlap):
+    """welch_density (scipy's estimator, plain arrays) and welch_psd (fivid's engine, DataArrays) are one
+    spectrum: equal to float round-off (the sums run in another order: ~log2(k) eps per bin)."""
+    import xarray as xr
+
+    from fivid.signal import welch_psd
+
     x = np.random.default_rng(3).standard_normal(10_000).cumsum()  # synthetic: a random walk (red spectrum)
     f, p = welch_density(x, 2000.0, nperseg=512, noverlap=noverlap, window=window, detrend=detrend)
     fr, pr = welch(x, fs=2000.0, window=window, nperseg=512, noverlap=512 // 2 if noverlap is None else noverlap,
                    detrend=False if detrend == "none" else detrend, scaling="density")
     np.testing.assert_array_equal(f, fr)
-    # each bin: a mean of k squared magnitudes, summed in another order: relative round-off ~ log2(k) eps
-    np.testing.assert_allclose(p, pr, rtol=64 * EPS, atol=64 * EPS * pr.max())
+    np.testing.assert_array_equal(p, pr)
+    t = np.arange(x.size) / 2000.0
+    da = xr.DataArray(x, dims="time", coords={"time": t}, name="y", attrs={"units": "m"})
+    q = welch_psd(da, nperseg=512, noverlap=noverlap, window=window, detrend=detrend)
+    np.testing.assert_allclose(q["frequency"].values, f, rtol=4 * EPS)
+    np.testing.assert_allclose(q.values, p, rtol=64 * EPS, atol=64 * EPS * p.max())
 
 
 def test_distance_of_a_scaled_spectrum_is_its_scale():

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
-from fivid.signal.fft import SegmentTransform, check_backend
+from fivid.signal.fft import SegmentTransform
 
 __all__ = [
     "DETRENDS",
@@ -213,12 +213,14 @@ def averaged_spectra(x: np.ndarray, settings: SpectralSettings, y: np.ndarray | 
 
 
 def welch_density(x, fs: float, *, nperseg: int, noverlap: int | None = None, window="hann",
-                  detrend="constant", backend: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  detrend="constant") -> tuple[np.ndarray, np.ndarray]:
     """One-sided Welch PSD of a plain array: ``(frequency [Hz], density [u2 Hz-1])``.
 
-    The array-level entry of fivid's one Welch estimator (:func:`averaged_spectra`) for code that holds
-    numbers, not DataArrays (study points, profiles over ``x`` with ``fs = 1 / dx`` [m-1]); the DataArray
-    entry with units, χ² bounds and recorded settings is :func:`fivid.signal.welch_psd`.
+    The array-level entry of fivid's spectra for code that holds numbers, not DataArrays (study points, profiles
+    over ``x`` with ``fs = 1 / dx`` [m-1]): :func:`scipy.signal.welch` with every setting explicit
+    (``scaling="density"``, ``average="mean"``, one-sided, no padding). The DataArray entry with units, χ² bounds
+    and recorded settings is :func:`fivid.signal.welch_psd` (:func:`averaged_spectra`, pyfftw), which agrees with
+    it to round-off (tests/test_signal_compare.py).
 
     Parameters
     ----------
@@ -234,14 +236,12 @@ def welch_density(x, fs: float, *, nperseg: int, noverlap: int | None = None, wi
         Taper (:func:`segment_window`).
     detrend : {"constant", "linear", "none"} or False, default "constant"
         Per-segment detrending.
-    backend : {"pyfftw", "numpy"}, optional
-        FFT implementation (same numbers to round-off).
 
     Returns
     -------
     (ndarray, ndarray)
-        Frequencies ``k fs / nperseg`` and the density; equal to :func:`scipy.signal.welch` with
-        ``scaling="density"`` and the same settings to round-off (a few ulp).
+        Frequencies ``k fs / nperseg`` and the density; ``sum(p) * fs / nperseg`` is the variance of the
+        detrended signal.
 
     Examples
     --------
@@ -252,12 +252,19 @@ def welch_density(x, fs: float, *, nperseg: int, noverlap: int | None = None, wi
     >>> bool(abs(p[1:-1].mean() / 2e-3 - 1) < 0.02)
     True
     """
+    import scipy.signal
+
     nperseg = check_nperseg(nperseg)
     noverlap = nperseg // 2 if noverlap is None else int(noverlap)
-    settings = SpectralSettings(fs=float(fs), nperseg=nperseg, noverlap=noverlap, window=window, detrend="none" if detrend in (None, False) else detrend,
-                                backend=check_backend(backend))
-    f, p, _, _, _ = averaged_spectra(np.asarray(x, dtype=np.float64), settings)
-    return f, p
+    detrend = "none" if detrend in (None, False) else detrend
+    SpectralSettings(fs=float(fs), nperseg=nperseg, noverlap=noverlap, window=window, detrend=detrend)  # checks
+    x = np.asarray(x, dtype=np.float64)
+    if x.size < nperseg:
+        raise ConfigError(f"signal of {x.size} samples is shorter than one segment (nperseg = {nperseg})",
+                          key="nperseg")
+    return scipy.signal.welch(x, fs=float(fs), window=window, nperseg=nperseg, noverlap=noverlap,
+                              detrend=False if detrend == "none" else detrend, scaling="density",
+                              return_onesided=True, average="mean")
 
 
 def equivalent_degrees_of_freedom(window: np.ndarray, nsegments: int, step: int) -> float:
