@@ -187,6 +187,13 @@ def check_simulation_memory(size: SimulationSize, *, key: str = "--duration", n_
         change; ``key`` names the option (``--duration``: the advice names options) or config key
         (``simulate.duration``: the advice names keys) to change first.
     """
+    available = available_memory()
+    if available is not None and size.bytes > MEMORY_FRACTION * available[0]:
+        free, source = available
+        raise ConfigError(
+            f"this simulation would need about {format_bytes(size.bytes)} of memory ({size.describe()}), but "
+            f"{format_bytes(free)} available ({source}); at most {MEMORY_FRACTION:.0%} of it may be planned. "
+            f"{_advice(key)}", key=key)
     if n_dofs is not None and size.steps * float(n_dofs) * runs > MAX_DOF_STEPS:
         work = size.steps * float(n_dofs) * runs
         days = work / DOF_STEPS_PER_SECOND / 86400
@@ -194,16 +201,6 @@ def check_simulation_memory(size: SimulationSize, *, key: str = "--duration", n_
             f"this simulation would take {runs} run(s) x {size.steps:,} solver steps x {n_dofs:,} dofs = {work:.3g} dof "
             f"updates, about {days:.3g} days at {DOF_STEPS_PER_SECOND:.0e} per second (the full path on an idle "
             f"2-core machine); at most {MAX_DOF_STEPS:.0e} may be planned. {_advice(key)}", key=key)
-    available = available_memory()
-    if available is None:
-        return
-    free, source = available
-    if size.bytes <= MEMORY_FRACTION * free:
-        return
-    raise ConfigError(
-        f"this simulation would need about {format_bytes(size.bytes)} of memory ({size.describe()}), but "
-        f"{format_bytes(free)} available ({source}); at most {MEMORY_FRACTION:.0%} of it may be planned. "
-        f"{_advice(key)}", key=key)
 
 
 def check_monte_carlo_size(size: SimulationSize, *, samples: int, nperseg: int, n_dofs: int,
