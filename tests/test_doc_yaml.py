@@ -13,7 +13,8 @@ separated by a line starting ``# or`` is checked per alternative. The kind is fo
   replaced; the model is then built by ``fivid.fe.config.build_model`` from a file in a directory whose
   ``profiles/`` is ``configs/models/profiles/`` (so relative profile paths resolve as in ``configs/models``);
 - a fragment of a smaller part (an edge selector, a body's ``grading``, a contact's ``rigid`` master): placed
-  into the base at the path ``FRAGMENTS`` names.
+  into the base at the path ``FRAGMENTS`` names;
+- ``parameters`` and ``modes``: a targets file of ``fivid update`` -> ``fivid.updating.load_targets``.
 
 A block of no known kind fails the test: add its loader here.
 """
@@ -137,6 +138,12 @@ def load_example(where: str, text: str, tmp_path: Path):
         path = tmp_path / "run.yaml"  # paths in a run config are relative to the config file
         path.write_text(text, encoding="utf-8")
         return load_run_config(path)
+    if isinstance(data, dict) and {"parameters", "modes"} <= set(data):  # a targets file of fivid update
+        from fivid.updating import load_targets
+
+        path = tmp_path / "targets.yaml"
+        path.write_text(text, encoding="utf-8")
+        return load_targets(path)
     fragment = _fragment(text)
     if fragment and fragment[0][0].startswith("configs/rigs/"):
         from fivid.io.rig_profile import rig_profile_from_mapping
