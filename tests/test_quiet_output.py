@@ -13,6 +13,7 @@ import warnings
 
 import pytest
 from test_pipeline_runner import make_pipeline
+from test_pipeline_safety import _wait_for_stage
 
 from fivid.cli import main
 
@@ -74,12 +75,7 @@ def test_run_without_terminal_logs_each_task(tmp_path, root):
 def test_sigint_message_once(tmp_path, root):
     s = make_pipeline(tmp_path, root, "ingest, identify", "identify: {band: [100 Hz, 5 kHz]}")
     proc = _cli("run", str(s["recipe"]), "--config", str(s["config"]))
-    logfile = s["out"] / "fivid-run.log"
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        if logfile.is_file() and "stage identify: " in logfile.read_text(encoding="utf-8"):
-            break
-        time.sleep(0.02)
+    _wait_for_stage(proc, s["out"], "identify")
     assert proc.poll() is None, "the run ended before it could be interrupted"
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
@@ -95,12 +91,7 @@ def test_ctrl_c_during_the_dask_sweep_prints_one_message_and_no_leak_warning(tmp
                       "simulate: {duration: 0.3 s, sample_rate: 51.2 kHz, seeds: 2}\n"
                       "analysis: {band: [500 Hz, 5 kHz], nperseg: 512}")
     proc = _cli("run", str(s["recipe"]), "--config", str(s["config"]), "--workers", "2", start_new_session=True)
-    logfile = s["out"] / "fivid-run.log"
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        if logfile.is_file() and "stage simulate: " in logfile.read_text(encoding="utf-8"):
-            break
-        time.sleep(0.05)
+    _wait_for_stage(proc, s["out"], "simulate")
     time.sleep(8.0)  # the workers are simulating
     assert proc.poll() is None, "the run ended before it could be interrupted"
     os.killpg(proc.pid, signal.SIGINT)
