@@ -8,7 +8,7 @@ from fivid.ema.frf_input import read_frfs
 from fivid.ema.lscf import identify_modes
 from fivid.ema.modes_file import modes_dataset
 from fivid.errors import FividError
-from fivid.identify.damping import fit_rayleigh
+from fivid.fe.damping import fit_rayleigh_least_squares
 
 __all__ = ["experimental_modal_analysis"]
 
@@ -36,7 +36,8 @@ def experimental_modal_analysis(paths, *, band=None, n_modes=None, max_order: in
     -------
     ds : xarray.Dataset
         MODES.nc content (:mod:`fivid.ema.modes_file`), with Rayleigh alpha [s-1], beta [s] fitted to the
-        identified damping ratios (:func:`fivid.identify.fit_rayleigh`) when two modes or more are found.
+        identified damping ratios (:func:`fivid.fe.damping.fit_rayleigh_least_squares`) when two modes or more
+        are found.
     frfs : FRFSet
     """
     frfs = read_frfs(paths, form=form, force=force, response=response, nperseg=nperseg)
@@ -45,7 +46,7 @@ def experimental_modal_analysis(paths, *, band=None, n_modes=None, max_order: in
     rayleigh = None
     if result.frequency.size >= 2:
         try:
-            rayleigh = fit_rayleigh(result.frequency, result.damping_ratio)
+            rayleigh = fit_rayleigh_least_squares(result.frequency, result.damping_ratio)
         except FividError as exc:  # e.g. two identical frequencies
             log.warning("no Rayleigh fit: %s", exc.message)
     return modes_dataset(result, frfs, rayleigh), frfs
