@@ -35,3 +35,22 @@ def test_no_transition_lines_without_a_load_sweep(monkeypatch, tmp_path, capsys)
     assert main(["study", "unused.yaml", "-o", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "weak/strong" not in out and "  mu 0.3: stable" in out
+
+
+def test_study_report_gives_units_and_the_transition():
+    """The study report's points table names every quantity with its units and says where the contact turns
+    strong (fivid.study.report, the section every study report has)."""
+    import xarray as xr
+
+    from fivid.report.html import Page
+    from fivid.study.report import study_section
+
+    summary = {**_summary(), "source": "ws.yaml"}
+    summary["points"] = [{**p, "level_db": 80.0} for p in summary["points"]]
+    page = Page("t")
+    study_section(page, xr.Dataset(), summary)
+    html = page.render()
+    assert "<th>normal_load [N]</th><th>roughness_ra [m]</th><th>regime</th><th>level_db [dB re 1e-6 m s-2]</th>" in html
+    assert ("Weak/strong contact transition (coupling indicator κ = 0.5): at 1.58 N (between the swept loads 0.5 and "
+            "5 N); per condition: roughness_ra 4e-07 m: at 1.58 N") in html
+    assert "roughness_ra 1.6e-06 m: strong at every swept load" in html
