@@ -13,7 +13,7 @@ PKG = Path(__file__).resolve().parents[1] / "fivid"
 LAYERS = {
     "cli": 5,
     "pipeline": 4, "study": 4,
-    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3,
+    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3, "ema": 3, "updating": 3,
     "io": 2, "signal": 2, "friction": 2, "fe": 2, "surface": 2, "contact": 2,
     "schema": 1, "units": 1, "errors": 1, "storage": 1, "builtin": 1, "config_layer": 1,
     "__init__": 1, "__main__": 5,

@@ -30,7 +30,7 @@ YAML blocks (``yaml``/``yml``) are loaded by the loader of their kind, found by 
 ``fivid-rig-profile`` -> ``fivid.io.rig_profile.rig_profile_from_mapping``; ``fivid-study`` ->
 ``fivid.study.config.load_study``; ``fivid-run`` -> ``fivid.pipeline.config.load_run_config``;
 top-level keys of a model config (``bodies``, ``damping``, ``contacts``, ...) -> merged into a shipped model
-(``FRAGMENT_BASES``) and built by ``fivid.fe.config.build_model``; a fragment of a smaller part (an edge
+(``FRAGMENT_BASES``) and built by ``fivid.fe.build.build_model``; a fragment of a smaller part (an edge
 selector, a body's ``grading``, a contact's ``rigid`` master) is placed into the base at the path
 ``FRAGMENT_PLACES`` names. A block with alternatives separated by a ``# or`` line is checked per alternative.
 """

@@ -10,7 +10,7 @@ wrap DataArrays/Datasets and record units and settings in attrs.
 from fivid.signal.frf import coherence, frf
 from fivid.signal.levels import band_rms, third_octave_bands, third_octave_levels, vibration_level_db
 from fivid.signal.resample import resample_to
-from fivid.signal.steady import steady_part, steady_sliding_window
+from fivid.signal.steady import measured_window, steady_force_window, steady_part, steady_sliding_window
 from fivid.units import power_units
 from fivid.signal.welch import csd, welch_psd
 
@@ -25,6 +25,8 @@ __all__ = [
     "vibration_level_db",
     "steady_sliding_window",
     "steady_part",
+    "steady_force_window",
+    "measured_window",
     "resample_to",
     "power_units",
 ]

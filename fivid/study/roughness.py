@@ -52,9 +52,9 @@ def synthetic_rough_profiles(ra: float, length: float, *, correlation_length: fl
 
 
 def _si(ctx, value, key, units="m") -> float:
-    from fivid.fe.config import _quantity
+    from fivid.config_layer import quantity_at
 
-    return _quantity(ctx, value, key, units)
+    return quantity_at(ctx, value, key, units)
 
 
 def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None):

@@ -95,7 +95,7 @@ def run(args) -> int:
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
 
-    def si(value):  # a parsed Quantity -> plain float (None stays None)
+    def si(value):  # a parsed QuantityArgument -> plain float (None stays None)
         return None if value is None else float(value)
 
     if args.samples is not None and not args.law:
