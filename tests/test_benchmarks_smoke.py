@@ -32,6 +32,7 @@ POSITIVE = {
     "bench_psd.py": ["samples", "speedup_vs_scipy_welch"],
     "bench_frf.py": ["hbm_frf_s", "arclength_points", "time_domain_s"],
     "bench_ingest.py": ["rows", "rows_per_s", "fivid_ingest_s", "pandas_pyarrow_s", "time_ratio_vs_pandas_pyarrow"],
+    "bench_update.py": ["update_params", "update_evaluations", "update_s", "ema_s"],
 }
 #: values that are fixed by the benchmark's set-up
 EXACT = {
@@ -41,6 +42,7 @@ EXACT = {
     "bench_damping.py": {"quick": True},
     "bench_rough.py": {"benchmark": "rough", "quick": True},
     "bench_ingest.py": {"benchmark": "ingest", "rows": 300_000, "columns": 5},
+    "bench_update.py": {"benchmark": "update", "quick": True, "update_converged": True},
 }
 
 
