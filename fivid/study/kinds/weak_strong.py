@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from fivid.report.html import table
 from fivid.study.axes import AXES
 from fivid.study.coupling import WEAK_STRONG_THRESHOLD
 from fivid.study.kinds.sweep import FeSweep
@@ -34,16 +33,8 @@ class WeakStrong(FeSweep):
         return {**transitions(points), **super().summarise(study, ds, points)}
 
     def report(self, page, ds, summary: dict) -> None:
-        """The transition load(s) with their brackets."""
-        rows = [[", ".join(f"{k} {v:g}" for k, v in t.items() if k in AXES) or "all points", t.get("value"),
-                 t.get("bracket"), t.get("note")]
-                for t in summary.get("transition_loads") or ([summary["transition_load"]]
-                                                             if "transition_load" in summary else [])]
-        if rows:
-            page.heading("Weak/strong transition", level=3)
-            page.paragraph(f"The normal load where the coupling indicator kappa crosses {WEAK_STRONG_THRESHOLD:g} "
-                           "(interpolated in log load between the swept loads that bracket it).")
-            page.raw(table(["conditions", "transition load [N]", "bracket [N]", "note"], rows))
+        """Nothing beyond the generic section, whose points table is followed by the transition load(s) of the
+        summary (``transition_load``, ``transition_loads``)."""
 
 
 def transitions(points) -> dict:
