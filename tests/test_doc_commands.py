@@ -98,6 +98,8 @@ DECISIONS: dict[str, Decision] = {
     "fivid study configs/studies/hoffmann_mu_sweep.yaml -o out/hoffmann": slow(
         "a 5-point study with transients (~1 min on a loaded 2-core machine, most of it dask start-up); the "
         "fast test runs docs/studies.md's --quick variant of the same study"),
+    "python -m venv .venv && . .venv/bin/activate": skip(
+        "creates a virtual environment in the reader's checkout; the tests run in the environment already set up"),
     f'python -m pip install -e ".[all,test]" -c constraints.txt && {_PIPELINE}': skip(
         "pip install needs the network (CI installs before the tests); the pipeline command after it is "
         "docs/pipeline.md's, run by the slow test"),

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.report.html import Page, figure_data_uri, table
+from fivid.study.config import AXES
 
 __all__ = ["render_study_report", "study_section"]
 
@@ -61,6 +62,37 @@ def _cea_figure(ds) -> str:
     return figure_data_uri(fig)
 
 
+#: units of the points table's result columns (the swept axes take theirs from fivid.study.config.AXES)
+_RESULT_UNITS = {"growth_rate": "s-1", "cea_growth_rate": "s-1", "frequency": "Hz", "onset_time": "s",
+                 "level_db": "dB re 1e-6 m s-2"}
+
+
+def _with_units(name: str) -> str:
+    """A column header with its units, ``normal_load [N]`` (none for a pure number or a label)."""
+    units = AXES[name][0] if name in AXES else _RESULT_UNITS.get(name, "1")
+    return name if units == "1" else f"{name} [{units}]"
+
+
+def _transition_paragraph(page: Page, summary: dict) -> None:
+    """The weak/strong transition load of a load sweep (summary ``transition_load``, ``transition_loads``)."""
+    t = summary.get("transition_load")
+    if not t:
+        return
+
+    def one(x) -> str:
+        if x.get("value") is None:
+            return x.get("note", "no transition in the swept loads")
+        return f"at {x['value']:.3g} N (between the swept loads {x['bracket'][0]:g} and {x['bracket'][1]:g} N)"
+
+    text = f"Weak/strong contact transition (coupling indicator κ = {t['threshold']:g}): {one(t)}"
+    groups = summary.get("transition_loads", [])
+    if groups:
+        text += "; per condition: " + "; ".join(
+            ", ".join(f"{k} {v:g}" + ("" if AXES[k][0] == "1" else f" {AXES[k][0]}") for k, v in g.items() if k in AXES)
+            + f": {one(g)}" for g in groups)
+    page.paragraph(text + ".")
+
+
 def study_section(page: Page, ds, summary: dict) -> None:
     """Add the study's section to ``page`` (a study report, or a pipeline report that embeds one)."""
     page.heading(f"Study {summary['study']}")
@@ -78,7 +110,8 @@ def study_section(page: Page, ds, summary: dict) -> None:
     cols = ["regime", "growth_rate", "cea_growth_rate", "frequency", "onset_time", "level_db", "status"]
     cols = [c for c in cols if any(c in p for p in summary["points"])]
     rows = [[p.get(a) for a in axes] + [p.get(c) for c in cols] for p in summary["points"]]
-    page.raw(table(axes + cols, rows))
+    page.raw(table([_with_units(c) for c in axes + cols], rows))
+    _transition_paragraph(page, summary)
     if summary["failed"]:
         page.paragraph("Failed points: " + "; ".join(f"point {f['point']}: {f['error']}" for f in summary["failed"]),
                        cls="fail")

@@ -111,7 +111,12 @@ def run(args) -> int:
     size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
     check_simulation_memory(size)  # before any allocation: a year of records fails here, not in the kernel
     if args.dry_run:
-        print(f"{model.describe()}: {size.describe()}")
+        if args.json:  # --json promises JSON on stdout, a dry run too (issue 32 item 6)
+            print(dumps_json({"dry_run": True, "model": model.describe(), "output_samples": size.output_samples,
+                              "solver_steps": size.steps, "time_step_s": size.time_step,
+                              "memory_bytes": size.bytes, "memory_parts_bytes": dict(size.parts)}))
+        else:
+            print(f"{model.describe()}: {size.describe()}")
         return 0
     if args.samples is not None:
         return _run_samples(args, model, law, law_file)
