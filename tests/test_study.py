@@ -53,6 +53,13 @@ def test_cea_finds_the_closed_form_threshold_and_transients_follow_it(tmp_path):
     assert above["growth_rate"] == pytest.approx(above["cea_growth_rate"], rel=0.02)
     assert above["onset_time"] > 0
     assert below["growth_rate"] == pytest.approx(below["cea_growth_rate"], rel=0.1)  # two modes beat: coarser
+    # every per-point quantity carries its CF unit beside the plain key (issue 32 item 5; the keys are the contract)
+    units = summary["units"]
+    assert {k: units[k] for k in ("mu", "growth_rate", "frequency", "onset_time", "cea_growth_rate",
+                                  "cea_frequency")} == {"mu": "1", "growth_rate": "s-1", "frequency": "Hz",
+                                                        "onset_time": "s", "cea_growth_rate": "s-1",
+                                                        "cea_frequency": "Hz"}
+    assert set(units) >= {k for p in summary["points"] for k, v in p.items() if isinstance(v, float)}
 
 
 def test_regimes_across_the_threshold_and_stick_slip():
@@ -60,11 +67,10 @@ def test_regimes_across_the_threshold_and_stick_slip():
     with a small disturbance stays stable (a run that never sticks cannot show static friction)."""
     mc = HoffmannSystem().critical_mu()
     study = _study([1.6 * mc], cea=False, duration="0.3 s")
-    from fivid.study.tasks import evaluate_point
-
-    ds = evaluate_point({"lumped": study.lumped}, study.points, {"mu": 1.6 * mc})
+    kind = study.kind
+    ds = kind.evaluate(kind.system(study), study.points, {"mu": 1.6 * mc})
     assert str(ds["regime"].values) == "stick_slip" and float(ds["stick_fraction"]) > 0.01
-    ds = evaluate_point({"lumped": study.lumped}, study.points, {"mu": 0.5, "mu_static": 0.8})
+    ds = kind.evaluate(kind.system(study), study.points, {"mu": 0.5, "mu_static": 0.8})
     assert str(ds["regime"].values) == "stable"
 
 
@@ -223,7 +229,7 @@ def test_coupling_indicator_spans_uncoupled_to_tied():
 
 
 def test_transition_load_is_bracketed():
-    from fivid.study.runner import _transition_load
+    from fivid.study.kinds.weak_strong import _transition_load
 
     pts = [{"normal_load": f, "coupling_indicator": k} for f, k in ((0.5, 0.1), (2.0, 0.3), (8.0, 0.7), (32.0, 0.9))]
     t = _transition_load(pts)

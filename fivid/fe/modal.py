@@ -15,8 +15,7 @@ from os import PathLike
 import numpy as np
 
 from fivid.errors import ConfigError
-from fivid.fe.loads import static_response
-from fivid.fe.prestress import geometric_stiffness_matrix
+from fivid.fe.prestress import geometric_stiffness_matrix, static_state
 
 __all__ = ["constrained_matrices", "lowest_modes", "modal_analysis", "write_modes", "modes_to_json"]
 
@@ -166,7 +165,8 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
     prestress : bool
         Vibrations about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the static state
         (with ``include_contact`` on a model with contacts the preload solve's state, otherwise the linear
-        static response to the pressure loads, :func:`fivid.fe.loads.static_response`); small-strain,
+        static response to the pressure loads and the displacement motions, :func:`fivid.fe.prestress.static_state`);
+        small-strain,
         reference-configuration form, see :mod:`fivid.fe.prestress`. Tension stiffens, compression softens;
         a negative ``omega^2`` (frequency reported 0) means the preload exceeds a buckling load.
 
@@ -189,7 +189,7 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
         contact, state = linearise_preloaded_contact(model, normal_load)
     u0 = None
     if prestress:
-        u0 = state.u if state is not None else static_response(model)
+        u0 = state.u if state is not None else static_state(model)
     K, M, free = constrained_matrices(model, mass=mass, include_contact=include_contact, contact=contact,
                                       prestress=u0)
     lam, vec = lowest_modes(K, M, n_modes, sigma=sigma)

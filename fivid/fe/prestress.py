@@ -33,9 +33,10 @@ import numpy as np
 
 from fivid.errors import ConfigError
 from fivid.fe.assembly import GAUSS_POINTS_2X2, _assemble, shape_gradients_q4, stiffness_matrix, strain_displacement_q4
+from fivid.fe.loads import static_response
 
 __all__ = ["gauss_point_stress_q4", "block_gauss_point_stress", "element_geometric_stiffness_q4",
-           "geometric_stiffness_matrix", "buckling_load_factors"]
+           "geometric_stiffness_matrix", "buckling_load_factors", "static_state"]
 
 
 def gauss_point_stress_q4(xy: np.ndarray, u_e: np.ndarray, D: np.ndarray) -> np.ndarray:
@@ -125,6 +126,18 @@ def geometric_stiffness_matrix(model, u: np.ndarray):
                                               block.thickness)
 
     return _assemble(model, element_matrices)
+
+
+def static_state(model) -> np.ndarray:
+    """The preloaded static state of a model without a contact solve [m], shape (n_dofs,): the linear response to
+    the full pressure loads with every displacement motion at its final ``amplitude`` (an imposed stretch, a moved
+    clamp) and all other constrained dofs (clamps, velocity motions) at rest
+    (:func:`fivid.fe.loads.static_response`). For a contact preload use :func:`fivid.fe.static.preload_state`."""
+    imposed = np.zeros(model.n_dofs)
+    for m in model.motions:
+        if m.kind == "displacement":
+            imposed[m.dofs] = m.amplitude
+    return static_response(model, imposed=imposed)
 
 
 def buckling_load_factors(model, u: np.ndarray, n: int = 1) -> np.ndarray:
