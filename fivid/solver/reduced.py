@@ -312,10 +312,14 @@ def _fixed_interface_modes(Kii, Mii, lu, n_modes, f_cut):
         k = min(k, n - 1)
         # ARPACK's vector work and the solves are faster on one BLAS thread on this machine class (fe/modal.py)
         with threadpool_limits(limits=1, user_api="blas"):
-            lam, phi = spla.eigsh(Kii, k=k, M=Mii, sigma=0.0, OPinv=op, which="LM", ncv=min(n, int(1.3 * k) + 20))
+            # a fixed start vector: the same model gives the same basis in every process (ARPACK's default is random)
+            lam, phi = spla.eigsh(Kii, k=k, M=Mii, sigma=0.0, OPinv=op, which="LM", ncv=min(n, int(1.3 * k) + 20),
+                                  v0=np.ones(n))
         order = np.argsort(lam)
         lam, phi = lam[order], phi[:, order]
         phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, Mii @ phi))
+        big = np.argmax(np.abs(phi), axis=0)  # sign: largest entry positive (as fivid.fe.modal.lowest_modes)
+        phi = phi * np.sign(phi[big, np.arange(phi.shape[1])])
         freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
         if n_modes is not None or freq[-1] > f_cut or k >= n - 1:
             return freq, phi
