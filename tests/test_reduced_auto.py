@@ -159,7 +159,8 @@ def test_estimate_against_measured_full_vs_reduced_distance(model):
     against the measured log-spectral distance of the reduced and the full run's acceleration PSDs (Coulomb mu
     0.3, 10 mm/s, 5 N, 30 ms of steady sliding, 200 Hz - 10 kHz, Welch Hann 256 / 50 %): the automatic choice is
     right (estimate and measurement on the same side of the 0.5 dB tolerance). The two numbers are printed for
-    docs/solver.md; the estimate covers the modal errors only (docs/solver.md says what it leaves out)."""
+    docs/solver.md; the estimate covers the modal errors with rigid contact only (docs/solver.md says what it leaves
+    out): on the rough-contact model the automatic path is the full one, and the forced reduction is indeed off."""
     from fivid.fe import load_model
     from fivid.signal.welch import welch_psd
     from fivid.solver import simulate
@@ -167,6 +168,10 @@ def test_estimate_against_measured_full_vs_reduced_distance(model):
     m = load_model(ROOT / "configs/models" / model)
     kw = dict(duration=0.03, progress=False, **RUN)
     red = simulate(m, reduced="auto", **kw)
+    rough = red.attrs["solver_path"] == "full"
+    if rough:
+        assert "compliant normal law" in red.attrs["solver_choice_reason"]
+        red = simulate(m, reduced="reduced", **kw)
     full = simulate(m, reduced=None, **kw)
 
     def psd(ds):
@@ -180,6 +185,6 @@ def test_estimate_against_measured_full_vs_reduced_distance(model):
     band = (f >= 200.0) & (f <= 10e3)
     measured = float(np.sqrt(np.mean((10 * np.log10(p_r.values[band] / p_f.values[band])) ** 2)))
     est = float(red.attrs["reduced_error_estimate_db"])
-    print(f"{model}: estimate {est:.3g} dB, measured {measured:.3g} dB, path {red.attrs['solver_path']}")
+    print(f"{model}: estimate {est:.3g} dB, measured {measured:.3g} dB, automatic path {'full' if rough else 'reduced'}")
     assert red.attrs["solver_path"] == "reduced"
-    assert (est <= 0.5) == (measured <= 0.5)
+    assert (est <= 0.5 and not rough) == (measured <= 0.5)
