@@ -41,7 +41,7 @@ def main():
     freqs = np.linspace(*model.frequency_range, 200)
     hb = HarmonicBalance.from_model(model, fn)
     hb.sweep(freqs[:3])  # compile / load the numba kernels outside the timing
-    steady_state_response(model.modal, model.contact_stiffness, model.slip_force(fn), model.excitation_amplitude, 50.0,
+    steady_state_response(model.modal, model.series_stiffness, model.slip_force(fn), model.excitation_amplitude, 50.0,
                           max_periods=2)
     best = np.inf
     for _ in range(3):
@@ -58,7 +58,7 @@ def main():
     t0 = time.perf_counter()
     diffs = []
     for i in idx:
-        td = steady_state_response(model.modal, model.contact_stiffness, model.slip_force(fn),
+        td = steady_state_response(model.modal, model.series_stiffness, model.slip_force(fn),
                                    model.excitation_amplitude, freqs[i])
         diffs.append(abs(abs(sols[i].measurement[0]) / abs(td.harmonic("measurement")) - 1))
     t_td = (time.perf_counter() - t0) * 200 / idx.size

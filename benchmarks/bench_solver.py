@@ -266,7 +266,7 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
     their deterministic forcing, so a distance above that floor is the reduction's, not the estimator's."""
     from fivid.solver.driver import prepare_run
     from fivid.solver.reduced import prepare_reduced
-    from fivid.solver.study import band_distance, steady_psds
+    from fivid.signal.compare import band_distance, steady_psds
 
     full = prepare_run(model, duration=duration, **kw)
     t0 = time.perf_counter()

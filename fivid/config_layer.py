@@ -32,7 +32,7 @@ from os import PathLike
 from pathlib import Path
 from typing import Annotated, Any, Mapping
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError, WithJsonSchema, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
 from fivid.errors import ConfigError, UnitError
@@ -48,6 +48,10 @@ __all__ = [
     "none_as",
     "quantity_parser",
     "quantity_schema",
+    "quantity_at",
+    "QuantityText",
+    "Vector",
+    "either",
     "fail",
     "read_yaml",
     "parse_yaml_text",
@@ -262,6 +266,64 @@ def Quantity(units: str, *, positive: bool = False, nonnegative: bool = False, b
                      WithJsonSchema(schema)]
 
 
+def Vector(units: str, length: int = 2, *, positive: bool = False, bare_is_si: bool = True):
+    """Field type of a list of ``length`` quantities in ``units`` (a point ``[x, y]`` [m]), as a list of SI floats."""
+    return Annotated[list[Quantity(units, positive=positive, bare_is_si=bare_is_si)],
+                     BeforeValidator(lambda v: list(v) if isinstance(v, tuple) else v),
+                     Field(min_length=length, max_length=length)]
+
+
+def quantity_at(source: "ConfigSource", value, key: str, units: str, *, positive: bool = False,
+                nonnegative: bool = False) -> float:
+    """``value`` in SI ``units`` (a bare number is in ``units``), checked like a :func:`Quantity` field.
+
+    For a quantity whose units depend on another key (a motion's amplitude: m or m s-1), or one read outside
+    a model. A problem is a :class:`~fivid.errors.ConfigError` at ``key`` of ``source`` (file, line, key path).
+
+    Examples
+    --------
+    >>> quantity_at(from_mapping({}), "10 mm", "bodies.beam.thickness", "m")
+    0.01
+    """
+    try:
+        return quantity_parser(units, positive, nonnegative, bare=units)(value)
+    except PydanticCustomError as exc:
+        raise source.error(key, exc.context["message"]) from None
+
+
+def _quantity_text(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise fail(f"expected a quantity (a number, or a number with a unit), found {_kind(value)}")
+    return value
+
+
+#: A quantity whose units depend on another key: kept as written (number or text), converted by
+#: :func:`quantity_at` once the units are known.
+QuantityText = Annotated[Any, BeforeValidator(_quantity_text),
+                         WithJsonSchema({"anyOf": [{"type": "number"}, {"type": "string"}],
+                                         "description": "a quantity (a number, or a number with a unit); its units "
+                                                        "depend on the other keys"})]
+
+#: Prefix of the tags of :func:`either` (dropped from the key paths of errors).
+_VARIANT = "variant:"
+
+
+def either(text, model):
+    """Field type of a value written either as text (``text``: a type such as :data:`Name` or a ``Literal``) or
+    as a mapping (``model``): a material's name or its ``{E, nu, rho}``.
+
+    The branch is chosen by the value's type (text, or anything else: the mapping), so an error speaks about
+    the branch the user meant, not about both.
+    """
+    from pydantic import Discriminator, Tag
+
+    def branch(value):
+        return _VARIANT + ("text" if isinstance(value, str) else "mapping")
+
+    return Annotated[typing.Union[Annotated[text, Tag(_VARIANT + "text")], Annotated[model, Tag(_VARIANT + "mapping")]],
+                     Discriminator(branch)]
+
+
 def _number(value):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise fail(f"expected a number, found {_kind(value)}")
@@ -337,7 +399,8 @@ def _unwrap(tp):
             tp = typing.get_args(tp)[0]
             continue
         if origin in (typing.Union, getattr(__import__("types"), "UnionType", None)):
-            args = [a for a in typing.get_args(tp) if a is not type(None)]
+            args = [typing.get_args(a)[0] if typing.get_origin(a) is Annotated else a
+                    for a in typing.get_args(tp) if a is not type(None)]
             models = [a for a in args if isinstance(a, type) and issubclass(a, BaseModel)]
             containers = [a for a in args if typing.get_origin(a) in (list, dict)]
             tp = (models or containers or args)[0]
@@ -370,7 +433,8 @@ def allowed_keys(model) -> list[str]:
 
 def _describe(err: dict, model) -> tuple[str, str]:
     """(key path, message) of one pydantic error, in fivid's words."""
-    loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith(("function-", "tagged-union"))))
+    loc = tuple(p for p in err["loc"]
+                if not (isinstance(p, str) and p.startswith(("function-", "tagged-union", _VARIANT))))
     kind, ctx, found = err["type"], err.get("ctx") or {}, err.get("input")
     if kind == "fivid":
         return key_path(loc + tuple(ctx.get("at", ()))), ctx["message"]

@@ -12,8 +12,8 @@ PKG = Path(__file__).resolve().parents[1] / "fivid"
 # DESIGN §1. A module may import from its own layer or below.
 LAYERS = {
     "cli": 5,
-    "pipeline": 4, "study": 4,
-    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3,
+    "pipeline": 4, "study": 4, "verify": 4,
+    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3, "ema": 3, "updating": 3,
     "io": 2, "signal": 2, "friction": 2, "fe": 2, "surface": 2, "contact": 2,
     "schema": 1, "units": 1, "errors": 1, "storage": 1, "builtin": 1, "config_layer": 1,
     "__init__": 1, "__main__": 5,
@@ -155,3 +155,77 @@ def test_docs_layer_table_matches_the_code():
     kernels = set(re.findall(r"`([\w/]+\.py)`", rows["0"]))
     actual = {str(p.relative_to(PKG)) for p in PKG.rglob("*_kernels.py")}
     assert kernels == actual
+
+
+#: the Welch estimators of scipy.signal that fivid.signal wraps (one home for spectra: issue 29 item 1)
+_SPECTRAL = {"welch", "csd"}
+_SCIPY_SIGNAL = {"scipy.signal", "scipy.signal.spectral", "scipy.signal._spectral_py"}
+
+
+def _scipy_welch_uses(source: str) -> list[tuple[int, str]]:
+    """Lines of ``source`` that import or call ``scipy.signal.welch``/``csd`` in any spelling (module level and
+    function bodies): ``from scipy.signal import welch [as w]``, ``scipy.signal.welch(...)``,
+    ``import scipy.signal as ss; ss.csd(...)``, ``from scipy import signal; signal.welch(...)``, or the
+    function fetched with ``getattr(module, "welch")``."""
+    tree = ast.parse(source)
+    modules = set()  # names bound to scipy.signal
+    roots = set()  # names bound to scipy
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name in _SCIPY_SIGNAL and a.asname:
+                    modules.add(a.asname)
+                elif a.name == "scipy" or a.name.startswith("scipy."):
+                    roots.add(a.asname or "scipy")
+        elif isinstance(node, ast.ImportFrom) and node.module == "scipy":
+            modules.update(a.asname or a.name for a in node.names if a.name == "signal")
+
+    def is_scipy_signal(expr) -> bool:
+        if isinstance(expr, ast.Name):
+            return expr.id in modules
+        return (isinstance(expr, ast.Attribute) and expr.attr in {"signal", "spectral", "_spectral_py"}
+                and (is_scipy_signal(expr.value) or isinstance(expr.value, ast.Name) and expr.value.id in roots))
+
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module in _SCIPY_SIGNAL:
+            found += [(node.lineno, f"from {node.module} import {a.name}") for a in node.names
+                      if a.name in _SPECTRAL or a.name == "*"]
+        elif isinstance(node, ast.Attribute) and node.attr in _SPECTRAL and is_scipy_signal(node.value):
+            found.append((node.lineno, f"{ast.unparse(node)}"))
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "getattr"
+              and len(node.args) >= 2 and is_scipy_signal(node.args[0]) and isinstance(node.args[1], ast.Constant)
+              and node.args[1].value in _SPECTRAL):
+            found.append((node.lineno, ast.unparse(node)))
+    return found
+
+
+@pytest.mark.parametrize("source, n", [
+    ("def f(x):\n    from scipy.signal import welch\n    return welch(x)\n", 1),
+    ("import scipy.signal\ndef f(x):\n    return scipy.signal.csd(x, x)\n", 1),
+    ("import scipy.signal as ss\nclass A:\n    def f(self, x):\n        return ss.welch(x)\n", 1),
+    ("from scipy import signal as sig\nf = lambda x: sig.welch(x)\n", 1),
+    ("import scipy\ny = scipy.signal.welch\n", 1),
+    ("from scipy.signal import csd as c, welch\n", 2),
+    ("import scipy.signal\nw = getattr(scipy.signal, 'welch')\n", 1),
+    ("from scipy.signal import find_peaks, get_window\nimport scipy.signal\nscipy.signal.spectrogram\n", 0),
+    ("from fivid.signal import csd, welch_psd\ncsd(a, b)\n", 0),
+])
+def test_the_welch_detector_sees_every_spelling(source, n):
+    """The checker below is an oracle only if it finds the call however it is written (and nothing else)."""
+    assert len(_scipy_welch_uses(source)) == n, _scipy_welch_uses(source)
+
+
+def test_spectra_have_one_home():
+    """No scipy.signal.welch/csd call or import outside fivid/signal/ (module level or in a function body): every
+    PSD and cross-spectrum goes through fivid.signal (welch_psd, csd, welch_density), so its settings are the ones
+    recorded and one estimator serves the scores, the studies, the solver checks and the surface statistics."""
+    bad = []
+    for path, parts in _modules():
+        if parts[0] == "signal":
+            continue
+        if parts[:3] == ("verify", "cases", "signal_welch"):  # the case comparing fivid.signal with scipy's welch
+            continue
+        for lineno, what in _scipy_welch_uses(path.read_text(encoding="utf-8")):
+            bad.append(f"{path.relative_to(PKG.parent)}:{lineno}: {what} (use fivid.signal)")
+    assert not bad, "spectral estimators outside fivid/signal/:\n" + "\n".join(bad)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from fivid.cli import Quantity, build_parser, main, quantity
+from fivid.cli import QuantityArgument, build_parser, main, quantity
 from fivid.cli import _verbosity
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -85,7 +85,7 @@ def test_a_parsed_quantity_is_a_float_that_pickles():
     q = quantity("m s-1")("10 mm/s")
     assert isinstance(q, float) and q == pytest.approx(0.01)
     back = pickle.loads(pickle.dumps(q))
-    assert isinstance(back, Quantity) and back == q and back.text == "10 mm/s"
+    assert isinstance(back, QuantityArgument) and back == q and back.text == "10 mm/s"
 
 
 @pytest.mark.parametrize("argv, level", [

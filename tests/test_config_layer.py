@@ -261,3 +261,17 @@ def test_the_model_schema_describes_the_item_sections(edit):
     assert not jsonschema.Draft202012Validator(schema).is_valid(cfg)
     with pytest.raises(ConfigError):
         load_model(cfg)
+
+
+def test_quantity_at_checks_like_a_quantity_field_and_names_the_key(tmp_path):
+    """The public form of a field check, for a value read outside a model (same message as the field)."""
+    from fivid.config_layer import quantity_at
+
+    p = tmp_path / "m.yaml"
+    p.write_text("bodies:\n  a:\n    thickness: 10 kg\n")
+    src = read_yaml(p)
+    assert quantity_at(src, "10 mm", "bodies.a.thickness", "m") == pytest.approx(0.01, rel=1e-15)
+    assert quantity_at(src, 2, "x", "m") == 2.0  # a bare number is in the units
+    with pytest.raises(ConfigError) as e:
+        quantity_at(src, src.data["bodies"]["a"]["thickness"], "bodies.a.thickness", "m", positive=True)
+    assert e.value.line == 3 and e.value.key == "bodies.a.thickness" and "10 kg" in str(e.value)

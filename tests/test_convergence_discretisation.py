@@ -13,28 +13,27 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from fivid.study.convergence import band_levels_db, convergence_summary, psd_peaks, third_octave_bands
+from fivid.signal.compare import band_levels_db
+from fivid.signal.levels import bin_weights, third_octave_bands
+from fivid.signal.peaks import parabolic_peaks
+from fivid.study.convergence import band_level_grid, convergence_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 COARSE = ROOT / "configs" / "models" / "triboair_coarse.yaml"
 
 
-def test_third_octave_bands_are_clipped_base_2_thirds():
-    bands = third_octave_bands(100.0, 10_000.0)
-    assert bands[0][0] == 100.0 and bands[-1][1] == 10_000.0
-    for lo, hi in bands[1:-1]:
-        assert hi / lo == pytest.approx(2.0 ** (1 / 3), rel=1e-12)
-        k = 3 * np.log2(np.sqrt(lo * hi) / 1000.0)  # centres 1000 * 2^(k/3), k integer
-        assert k == pytest.approx(round(k), abs=1e-9)
-    assert all(a[1] == pytest.approx(b[0], rel=1e-12) for a, b in zip(bands, bands[1:]))  # contiguous
-
-
-def test_band_level_of_a_white_psd_is_density_times_width():
-    f = np.arange(0.0, 10_000.0, 25.0)
-    p = np.full(f.size, 4e-6)  # (m s-2)^2 Hz-1
-    (lvl,) = band_levels_db(f, p, [(1000.0, 2000.0)])
-    # bins with centres in [1000, 2000]: 41 bins of 25 Hz
-    assert lvl == pytest.approx(10 * np.log10(4e-6 * 41 * 25.0 / 1e-12), abs=1e-12)
+def test_band_level_grid_is_the_scores_iec_thirds_and_the_whole_range():
+    """The convergence study's bands are the PSD scores' (IEC 61260-1 base-10 thirds inside the PSD's range), so
+    its errors qualify the scores' band levels; the last band is the whole range."""
+    f = np.arange(100.0, 10_000.0, 25.0)
+    bands, weights = band_level_grid(f)
+    iec = third_octave_bands(100.0, 9975.0)
+    assert [b[0] for b in bands[:-1]] == list(iec["lower"]) and [b[1] for b in bands[:-1]] == list(iec["upper"])
+    assert bands[-1] == (100.0, 9975.0) and weights.shape == (f.size, len(bands))
+    for lo, hi in bands[:-1]:
+        assert hi / lo == pytest.approx(10 ** 0.1, rel=1e-12)  # G^(1/3), G = 10^(3/10)
+    # a white PSD: each band's power is density x width (bin rectangles), the whole range's (n - 1) bins' worth
+    np.testing.assert_allclose(np.ones(f.size) @ weights, [hi - lo for lo, hi in bands], rtol=1e-12)
 
 
 @pytest.mark.parametrize("centre", [1000.0, 1010.0, 1012.5, 1024.9])
@@ -42,7 +41,7 @@ def test_peak_of_a_gaussian_is_found_between_bins_exactly(centre):
     """A Gaussian in linear scale is a parabola in dB: the three-point vertex is exact (float round-off)."""
     f = np.arange(0.0, 5000.0, 25.0)
     p = np.exp(-0.5 * ((f - centre) / 40.0) ** 2) + np.exp(-0.5 * ((f - 3000.0) / 60.0) ** 2)
-    peaks = psd_peaks(f, p)  # no floor: log(p) is exactly a sum of two parabolas, each dominant near its peak
+    peaks = parabolic_peaks(f, p, 20.0)  # no floor: log(p) is exactly a sum of two parabolas, each dominant near its peak
     assert peaks[0] == pytest.approx(centre, abs=1e-6) and peaks[1] == pytest.approx(3000.0, abs=1e-6)
 
 
@@ -121,9 +120,9 @@ def test_discretisation_estimate_of_the_coarse_model(tmp_path):
     est = discretisation_estimate(COARSE, (800.0, 5000.0), path, bin_width=25.0)
     assert est["covered"] and est["model"]["element_size"] == pytest.approx(0.002, rel=1e-9)
     assert est["model"]["dofs"] == 984 and est["model"]["name"] == "triboair_coarse"
-    # thirds overlapping 800-5000 Hz: from 707-891 to 4490-5657; the peak moves inside 3564-4490 (1e7 h^2 Hz)
+    # IEC thirds overlapping 800-5000 Hz: from 708-891 to 4467-5623; the peak moves inside 3548-4467 (1e7 h^2 Hz)
     parts = est["third_octaves"]
-    assert round(parts[0]["band"][0]) == 707 and round(parts[-1]["band"][0]) == 4490 and len(parts) == 9
+    assert round(parts[0]["band"][0]) == 708 and round(parts[-1]["band"][0]) == 4467 and len(parts) == 9
     assert est["band_level_error_db"] == pytest.approx(2e3 * 0.002**1.5, rel=1e-3)  # the uniform scale's error
     assert est["band_level_deviation_db"] is None  # no PSDs in this table: the bound over the thirds only
     (peak,) = est["peaks"]
@@ -142,6 +141,14 @@ def test_discretisation_estimate_from_the_tables_psds_is_exact_for_the_band(tmp_
     assert est["band_level_deviation_db"] == pytest.approx(2e3 * 0.002**1.5, rel=1e-6)
     assert est["band_level_error_db"] == pytest.approx(est["band_level_deviation_db"])
     assert est["band_lsd_db"] > 2e3 * (0.002**1.5 - 0.0005**1.5)  # the floor's offset, plus the shifted peak
+    # the breakdown is on the scores' grid: the IEC thirds score_runs reports for this band (third_octave_weights)
+    from fivid.signal.levels import third_octave_weights
+
+    thirds, _ = third_octave_weights(np.arange(100.0, 10_000.0, 25.0), 800.0, 5000.0, min_bins=1.0)
+    assert [b["band"] for b in est["third_octaves"]] == [[lo, hi] for lo, hi in zip(thirds["lower"], thirds["upper"])]
+    assert len(est["third_octaves"]) == 7  # 891-1122 ... 3548-4467 Hz
+    floor_only = [b for b in est["third_octaves"] if b["band"][1] < 3000.0]  # a uniform scale: exact there
+    assert floor_only and all(b["deviation_db"] == pytest.approx(2e3 * 0.002**1.5, rel=1e-6) for b in floor_only)
 
 
 def test_uncovered_model_or_missing_table_is_said_not_guessed(tmp_path):

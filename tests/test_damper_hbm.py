@@ -181,7 +181,7 @@ def test_seed_frf_sequence_model1(model1):
         peaks.append(freqs[np.argmax(a)])
         amps.append(a.max())
     f_free = model1.modal.natural_frequencies[0] / (2 * np.pi)
-    f_stuck = model1.modal.with_contact_spring(model1.contact_stiffness)[0] / (2 * np.pi)
+    f_stuck = model1.modal.with_contact_spring(model1.series_stiffness)[0] / (2 * np.pi)
     step = freqs[1] - freqs[0]
     assert abs(peaks[0] - f_free) <= step
     assert abs(peaks[-1] - f_stuck) <= 0.02 * f_stuck  # 80 N: nearly stuck (2 N force against mu Fn = 36 N)

@@ -30,7 +30,7 @@ YAML blocks (``yaml``/``yml``) are loaded by the loader of their kind, found by 
 ``fivid-rig-profile`` -> ``fivid.io.rig_profile.rig_profile_from_mapping``; ``fivid-study`` ->
 ``fivid.study.config.load_study``; ``fivid-run`` -> ``fivid.pipeline.config.load_run_config``;
 top-level keys of a model config (``bodies``, ``damping``, ``contacts``, ...) -> merged into a shipped model
-(``FRAGMENT_BASES``) and built by ``fivid.fe.config.build_model``; a fragment of a smaller part (an edge
+(``FRAGMENT_BASES``) and built by ``fivid.fe.build.build_model``; a fragment of a smaller part (an edge
 selector, a body's ``grading``, a contact's ``rigid`` master) is placed into the base at the path
 ``FRAGMENT_PLACES`` names. A block with alternatives separated by a ``# or`` line is checked per alternative.
 """
@@ -88,6 +88,12 @@ _QUICK_SIM = ('the 1 mm rig for 0.1 s is minutes of solver time (docs/solver.md:
               'test runs the 2 mm variant triboair_coarse.yaml for 5 ms')
 
 DECISIONS: dict[str, Decision] = {
+    # README.md and docs/verification.md (fivid verify, issue 28)
+    "fivid verify --quick -o verification": slow(
+        "all 21 cases at --quick resolution: ~20 s of compute plus the dask start-up, a minute on a loaded machine "
+        "(CI also runs it as a step of its own); the fast test runs two of its cases in-process",
+        quick="fivid verify --quick --case welch_parseval --case hoffmann_threshold --workers 0 -o verification"),
+    "fivid verify -o verification": slow("the full manual: every case at full resolution, 1-2 min on 2 cores"),
     # README.md (and docs/studies.md: the same command)
     "fivid study configs/studies/hoffmann_mu_sweep.yaml -o out/hoffmann": slow(
         "a 5-point study with transients (~1 min on a loaded 2-core machine, most of it dask start-up); the "

@@ -10,10 +10,11 @@ separated by a line starting ``# or`` is checked per alternative. The kind is fo
 - top-level keys of a model config (``bodies``, ``damping``, ``contacts``, ``motions``, ...): a fragment of a
   model. It is merged into a shipped model (``FRAGMENTS`` names which, per fragment; default
   ``configs/models/triboair_coarse.yaml``): ``bodies`` and ``materials`` entry by entry, any other key
-  replaced; the model is then built by ``fivid.fe.config.build_model`` from a file in a directory whose
+  replaced; the model is then built by ``fivid.fe.build.build_model`` from a file in a directory whose
   ``profiles/`` is ``configs/models/profiles/`` (so relative profile paths resolve as in ``configs/models``);
 - a fragment of a smaller part (an edge selector, a body's ``grading``, a contact's ``rigid`` master): placed
-  into the base at the path ``FRAGMENTS`` names.
+  into the base at the path ``FRAGMENTS`` names;
+- ``parameters`` and ``modes``: a targets file of ``fivid update`` -> ``fivid.updating.load_targets``.
 
 A block of no known kind fails the test: add its loader here.
 """
@@ -99,7 +100,7 @@ def _place(model: dict, path: tuple, fragment) -> None:
 
 
 def _model(where: str, text: str, tmp_path: Path):
-    from fivid.fe.config import build_model
+    from fivid.fe.build import build_model
 
     bases, drop, place = _fragment(text) or ((COARSE,), (), None)
     model: dict = {}
@@ -137,6 +138,12 @@ def load_example(where: str, text: str, tmp_path: Path):
         path = tmp_path / "run.yaml"  # paths in a run config are relative to the config file
         path.write_text(text, encoding="utf-8")
         return load_run_config(path)
+    if isinstance(data, dict) and {"parameters", "modes"} <= set(data):  # a targets file of fivid update
+        from fivid.updating import load_targets
+
+        path = tmp_path / "targets.yaml"
+        path.write_text(text, encoding="utf-8")
+        return load_targets(path)
     fragment = _fragment(text)
     if fragment and fragment[0][0].startswith("configs/rigs/"):
         from fivid.io.rig_profile import rig_profile_from_mapping

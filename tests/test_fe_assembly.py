@@ -12,7 +12,7 @@ from fivid.fe import (
     element_stiffness_q4,
     load_model,
     lumped_mass,
-    rayleigh_from_damping_ratios,
+    rayleigh_through_two_ratios,
     stiffness_matrix,
 )
 from fivid.fe.assembly import GAUSS_POINTS_2X2, shape_gradients_q4, strain_displacement_q4
@@ -150,12 +150,12 @@ def test_springs_add_to_stiffness():
 
 def test_rayleigh_coefficients_reproduce_the_target_damping_ratios():
     f1, z1, f2, z2 = 1e3, 0.005, 1e4, 0.01
-    alpha, beta = rayleigh_from_damping_ratios(f1, z1, f2, z2)
+    alpha, beta = rayleigh_through_two_ratios(f1, z1, f2, z2)
     for f, z in ((f1, z1), (f2, z2)):
         w = 2 * np.pi * f
         assert alpha / (2 * w) + beta * w / 2 == pytest.approx(z, rel=1e-12)
     with pytest.raises(ValueError):
-        rayleigh_from_damping_ratios(1e3, 0.01, 1e3, 0.02)
+        rayleigh_through_two_ratios(1e3, 0.01, 1e3, 0.02)
 
 _square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 

@@ -11,67 +11,43 @@ from fivid.fe import load_model
 from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis, complex_eigenvalue_sweep, project_on_modes
 from fivid.fe.contact import ContactLinearisation, linearise_contact
 from fivid.fe.modal import modal_analysis
+from fivid.verify import evaluate_case, select_cases
+from fivid.verify.cases.fe_hoffmann_threshold import C, K1, K2, K3, M, hoffmann_model
 
 ROOT = Path(__file__).resolve().parents[1]
 COARSE = ROOT / "configs" / "models" / "triboair_coarse.yaml"
 LOAD = 5.0  # [N] normal load of the rig's preload (the sample runs' 5 N)
 
 
-def _hoffmann(m, k1, k2, k3, c):
-    """Minimal mode-coupling model (Hoffmann, Fischer, Gaul & Hahn 2002, Tribology International 35):
-    a mass m on a belt moving in +x, held by springs k1 at +45 deg and k2 at 135 deg, pressed on the belt by the
-    contact spring k3 (normal y). Springs at angle a contribute k [[c^2, cs], [cs, s^2]], so
-
-        k11 = (k1 + k2)/2,  k12 = (k1 - k2)/2,  k22 = (k1 + k2)/2 + k3.
-
-    Friction on the mass is mu p along +x with the contact pressure p = -k3 y, which adds +mu k3 at (x, y):
-        m x'' + c x' + k11 x + (k12 + mu k3) y = 0
-        m y'' + c y' + k12 x + k22 y = 0.
-    Undamped, with s = m omega^2:  s^2 - (k11 + k22) s + k11 k22 - k12 (k12 + mu k3) = 0, whose roots turn
-    complex (flutter: one eigenvalue with Re > 0) when the discriminant
-        D = (k11 - k22)^2 + 4 k12^2 + 4 mu k3 k12
-    is negative, i.e. (k12 < 0)  mu_c = -[(k11 - k22)^2 + 4 k12^2] / (4 k3 k12).
-    With mass-proportional damping c: lambda = -gamma +- sqrt(gamma^2 - s/m), gamma = c/(2m). Writing
-    s/m = S +- i Omega (S = (k11+k22)/(2m), Omega = sqrt(-D)/(2m)), Re sqrt(gamma^2 - s/m) > gamma iff
-    Omega^2 > 4 gamma^2 S, i.e.  -D > 2 c^2 (k11 + k22)/m:
-        mu_c = -[(k11 - k22)^2 + 4 k12^2 + 2 c^2 (k11 + k22)/m] / (4 k3 k12).
-
-    Returns K_s (springs), the contact linearisation with G_n = [0, 1], G_t = [1, 0] (belt rigid), M, C and
-    the two closed-form thresholds.
-    """
-    k11, k12, k22s = (k1 + k2) / 2, (k1 - k2) / 2, (k1 + k2) / 2
-    K_s = np.array([[k11, k12], [k12, k22s]])
-    contact = ContactLinearisation(sp.csr_matrix([[0.0, 1.0]]), sp.csr_matrix([[1.0, 0.0]]),
-                                   np.array([k3]), np.array([1.0]), np.array([0]))
-    k22 = k22s + k3
-    mu_c = -((k11 - k22) ** 2 + 4 * k12**2) / (4 * k3 * k12)
-    mu_c_damped = -((k11 - k22) ** 2 + 4 * k12**2 + 2 * c**2 * (k11 + k22) / m) / (4 * k3 * k12)
-    return K_s, contact, m * np.eye(2), c * np.eye(2), mu_c, mu_c_damped
-
-
 @pytest.mark.parametrize("damped", [False, True])
 @pytest.mark.parametrize("belt", [+1, -1], ids=["belt+x", "belt-x"])
 def test_two_dof_mode_coupling_threshold_matches_closed_form(damped, belt):
-    """Belt moving in -x is the mirror image (x -> -x) of the +x case with k1 and k2 swapped: same threshold."""
-    m, k1, k2, k3, c = 1.0, 1.0e6, 1.6e6, 0.8e6, 20.0
-    K_s, contact, M, C, mu_c, mu_c_damped = _hoffmann(m, k1, k2, k3, c)
+    """The minimal model of Hoffmann et al. (its closed form and tolerances in the cases hoffmann_threshold and
+    hoffmann_threshold_damped, run here). Belt moving in -x is the mirror image (x -> -x) of the +x case with k1
+    and k2 swapped: same threshold."""
+    name = "hoffmann_threshold_damped" if damped else "hoffmann_threshold"
+    (case,) = select_cases([name])
+    if belt > 0:
+        result = evaluate_case(case, False, None)
+        assert result.status == "passed", result
+        assert result.outcome.details["modes destabilised"] == 1  # one of the pair destabilises, one is stabilised
+    m, k3, c = M, K3, C
+    K_s, contact, *_ = hoffmann_model(m, *((K1, K2) if belt > 0 else (K2, K1)), k3, c)
     if belt < 0:
-        K_s, contact, *_ = _hoffmann(m, k2, k1, k3, c)
         contact = ContactLinearisation(contact.G_n, contact.G_t, contact.stiffness, -contact.direction, contact.pair)
-    K = K_s + contact.normal_stiffness_matrix().toarray()
     Kf = contact.friction_stiffness_matrix().toarray()
     assert np.allclose(Kf, [[0.0, belt * k3], [0.0, 0.0]])  # normal displacement drives the tangential force only
-    proj = project_on_modes(K, M, C if damped else 0 * C, Kf)
+    K = K_s + contact.normal_stiffness_matrix().toarray()
+    proj = project_on_modes(K, m * np.eye(2), c * np.eye(2) if damped else 0 * np.eye(2), Kf)
     mu = np.linspace(0.0, 2.0, 41)
     res = complex_eigenvalue_sweep(proj, mu)
+    *_, mu_c, mu_c_damped = hoffmann_model()
     expected = mu_c_damped if damped else mu_c
     assert 0.0 < expected < 2.0
     crit = res["critical_mu"]
-    assert np.isfinite(crit).sum() == 1  # one of the pair destabilises, the other is stabilised
+    assert np.isfinite(crit).sum() == 1
     i = int(np.flatnonzero(np.isfinite(crit))[0])
-    # bisection runs to machine precision; what is left is the threshold tol = sqrt(eps)|lambda|max on Re:
-    # undamped Re ~ omega sqrt(mu - mu_c) -> mu error ~ eps; damped Re ~ omega (mu - mu_c) -> ~ sqrt(eps) ~ 1.5e-8
-    assert crit[i] == pytest.approx(expected, rel=1e-9 if not damped else 1e-6)
+    assert crit[i] == pytest.approx(expected, rel=case.compute(False, None).tolerance)
     assert res["partner"][i] == 1 - i
     lam = res["eigenvalues"]
     before, after = mu < expected, mu > expected

@@ -143,3 +143,54 @@ def test_missing_file_and_bad_yaml(tmp_path):
     with pytest.raises(ConfigError) as e:
         load_model(p)
     assert e.value.line is not None and "YAML" in str(e.value)
+
+
+INNER = [
+    # the inner sections are typed by the one schema: the same format as the top level, at the inner key
+    ("material as a number", lambda c: c["bodies"]["beam"].update(material=3), "bodies.beam.material",
+     ["expected a mapping", "3"]),
+    ("sensor direction", lambda c: c.update(sensors=[{"name": "a", "body": "beam", "at": [0.1, 0.01],
+                                                      "direction": "z"}]), "sensors[0].direction", ["'x'", "'-y'"]),
+    ("motion amplitude unit follows its kind",
+     lambda c: c.update(motions=[{"name": "m", "body": "beam", "edge": "left", "component": "x", "kind": "velocity",
+                                  "amplitude": "1 mm"}]), "motions[0].amplitude", ["m s-1", "1 mm"]),
+    ("power-law coefficient unit follows its exponent",
+     lambda c: c["bodies"].update(base=copy.deepcopy(c["bodies"]["beam"])) or c.update(contacts=[
+         {"name": "c", "slave": {"body": "beam", "edge": "top"}, "master": {"body": "base", "edge": "bottom"},
+          "mu": 0.3, "normal": {"law": "power", "coefficient": "1 Pa", "exponent": 1.5}}]),
+     "contacts[0].normal.coefficient", ["Pa / m**1.5", "1 Pa"]),
+    ("a parameter of another law", lambda c: c["bodies"].update(base=copy.deepcopy(c["bodies"]["beam"])) or c.update(
+        contacts=[{"name": "c", "slave": {"body": "beam", "edge": "top"}, "master": {"body": "base", "edge": "bottom"},
+                   "mu": 0.3, "normal": {"law": "linear", "stiffness": 1e12, "exponent": 2}}]),
+     "contacts[0].normal.exponent", ["not a parameter of the linear law", "stiffness"]),
+    ("duplicate sensor names", lambda c: c.update(sensors=[{"name": "a", "body": "beam", "at": [0.1, 0.01],
+                                                            "direction": "y"}] * 2), "sensors", ["duplicate", "'a'"]),
+    ("divisions as a tuple of a bool", lambda c: c["bodies"]["beam"].update(divisions=(True, 2)),
+     "bodies.beam.divisions[0]", ["integer", "True"]),
+]
+
+
+@pytest.mark.parametrize("what, mutate, key, words", INNER, ids=[b[0] for b in INNER])
+def test_inner_sections_are_typed_with_the_one_error_format(what, mutate, key, words):
+    cfg = copy.deepcopy(_beam())
+    mutate(cfg)
+    with pytest.raises(ConfigError) as e:
+        load_model(cfg)
+    assert e.value.key == key, str(e.value)
+    for w in words:
+        assert w in str(e.value), str(e.value)
+
+
+def test_inner_key_errors_in_a_file_name_their_line(tmp_path):
+    """An unknown key inside a contact item: the file's line of that key, and the keys a contact takes."""
+    text = COARSE.read_text()
+    lines = text.splitlines()
+    i = next(k for k, ln in enumerate(lines) if ln.strip().startswith("mu:"))
+    indent = lines[i][:len(lines[i]) - len(lines[i].lstrip())]
+    lines.insert(i + 1, f"{indent}mu_kinetic: 0.2")
+    p = tmp_path / "typo.yaml"
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ConfigError) as e:
+        load_model(p)
+    assert e.value.key.endswith(".mu_kinetic") and e.value.line == i + 2 and e.value.file == str(p)
+    assert "mu_static" in str(e.value) and "stribeck_velocity" in str(e.value)

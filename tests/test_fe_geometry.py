@@ -229,7 +229,7 @@ def test_profile_from_a_two_column_file_with_units(tmp_path):
     (lambda b: b.update(profile={"edge": "top", "x": [0.0, 0.01], "z": [0.0, 0.0]}), "bodies.beam.profile.x",
      ["whole edge"]),
     (lambda b: b.update(profile={"edge": "left", "sine": {"amplitude": 1e-4, "wavelength": 1e-3}}),
-     "bodies.beam.profile.edge", ["bottom, top"]),
+     "bodies.beam.profile.edge", ["'bottom' or 'top'"]),
     (lambda b: b.update(profile={"edge": "top", "sine": {"amplitude": "7 mm", "wavelength": "10 mm"}}),
      "bodies.beam.profile", ["fold"]),
     (lambda b: b.update(grading={"ratio": 1.2}), "bodies.beam.grading", ["missing 'edge'"]),

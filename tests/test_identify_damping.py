@@ -10,7 +10,8 @@ from scipy import stats
 from fivid.errors import FividError
 from fivid.friction import synthesise_perturbation
 from fivid.identify import identify_damping
-from fivid.identify.damping import fit_rayleigh, half_power_damping
+from fivid.fe.damping import fit_rayleigh_least_squares
+from fivid.identify.damping import half_power_damping
 from fivid.signal import welch_psd
 from fivid.units import parse_quantity
 
@@ -81,16 +82,16 @@ def test_noisy_psd_recovers_modes_and_rayleigh():
 def test_rayleigh_fit_equals_direct_solve():
     w = 2 * np.pi * FN
     X = np.column_stack([1 / (2 * w), w / 2])
-    fit = fit_rayleigh(FN, ZETA, np.full(3, 1e-4))
+    fit = fit_rayleigh_least_squares(FN, ZETA, np.full(3, 1e-4))
     np.testing.assert_allclose([fit.alpha, fit.beta], [ALPHA, BETA], rtol=1e-9)
-    two = fit_rayleigh(FN[:2], ZETA[:2], [1e-4, 2e-4])
+    two = fit_rayleigh_least_squares(FN[:2], ZETA[:2], [1e-4, 2e-4])
     direct = np.linalg.solve(X[:2], ZETA[:2])
     np.testing.assert_allclose([two.alpha, two.beta], direct, rtol=1e-10)
     # error propagation of the exact solve: cov = (X' W X)^-1
     cov = np.linalg.inv(X[:2].T @ np.diag([1e8, 0.25e8]) @ X[:2])
     assert two.alpha_stderr == pytest.approx(np.sqrt(cov[0, 0]), rel=1e-9)
     with pytest.raises(FividError, match="at least two modes"):
-        fit_rayleigh([1000.0], [0.01])
+        fit_rayleigh_least_squares([1000.0], [0.01])
 
 
 def test_one_peak_gives_no_rayleigh_and_a_clear_message():

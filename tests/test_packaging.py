@@ -85,7 +85,8 @@ def own_tmp():
 
 @pytest.mark.slow
 def test_a_wheel_installed_in_a_fresh_venv_ingests_with_a_built_in_rig_profile(own_tmp):
-    """Build the wheel, install it (dependencies from the package index: minutes), ingest outside the checkout."""
+    """Build the wheel, install it (dependencies from the package index: minutes), ingest outside the checkout;
+    ``fivid verify --quick --json`` passes from the wheel alone (issue 28)."""
     tmp_path = own_tmp
     src, wheels, venv, work = tmp_path / "src", tmp_path / "whl", tmp_path / "venv", tmp_path / "work"
     # the checkout must not be on the path: pip would take its fivid for installed and skip the wheel
@@ -113,6 +114,15 @@ def test_a_wheel_installed_in_a_fresh_venv_ingests_with_a_built_in_rig_profile(o
                             cwd=work, env=env, capture_output=True, text=True)
     assert models.returncode == 0, models.stderr
     assert len(json.loads(models.stdout)["frequencies_hz"]) == 2
+    # issue 28: the verification cases ship in the wheel; a plain install (no dask, no matplotlib) verifies itself
+    verify = subprocess.run([str(bin_ / "fivid"), "verify", "--quick", "--json", "--no-progress", "-o", "verification"],
+                            cwd=work, env=env, capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr
+    doc = json.loads(verify.stdout)
+    assert doc["passed"] is True and len(doc["cases"]) >= 15
+    assert all(c["source"] and c["reference"] is not None for c in doc["cases"] if c["status"] != "skipped")
+    assert {c["name"]: c["status"] for c in doc["cases"]}["dektak_ra"] == "passed"  # the shipped measured profile
+    assert (work / "verification" / "verification.html").is_file()
     damper = subprocess.run([str(bin_ / "python"), "-c", "from fivid.damper.model import load_damper_model as l; "
                              "print(l('seed004_model2').source)"], cwd=work, env=env, capture_output=True, text=True)
     assert damper.returncode == 0 and "site-packages" in damper.stdout, damper.stderr

@@ -79,8 +79,8 @@ def test_cli_psd_and_score_state_the_nperseg_they_used(tmp_path, capsys):
     assert "Welch nperseg 1024" in capsys.readouterr().out
 
 
-def test_time_step_study_psds_use_the_rule_on_the_shortest_steady_part():
-    from fivid.solver.study import steady_psds
+def test_time_step_halving_psds_use_the_rule_on_the_shortest_steady_part():
+    from fivid.signal.compare import steady_psds
 
     a = _noise(20000, 51200.0).assign_attrs(transient_end=0.0)
     b = _noise(30000, 51200.0).assign_attrs(transient_end=0.0)

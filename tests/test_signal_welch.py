@@ -13,21 +13,11 @@ from hypothesis import strategies as st
 from fivid.errors import ConfigError, DataQualityError, UnitError
 from fivid.signal import csd, power_units, welch_psd
 from fivid.signal.spectral import SpectralSettings, averaged_spectra, equivalent_degrees_of_freedom
+from fivid.verify import evaluate_case, select_cases
+from fivid.verify.cases.signal_welch import EPS, roundoff_atol
+from fivid.verify.cases.signal_welch import time_signal as signal
 
-EPS = np.finfo(float).eps
 BACKENDS = ["pyfftw", "numpy"]
-
-
-def signal(values, fs, name="acceleration", units="m s-2", t0=0.0):
-    t = t0 + np.arange(values.shape[0]) / fs
-    return xr.DataArray(values, dims="time", coords={"time": t}, name=name, attrs={"units": units})
-
-
-def roundoff_atol(p, nperseg):
-    # An FFT of length N has a normwise relative error ~ eps log2(N) (Higham, Accuracy and Stability,
-    # §24.1); on |X|^2 this is an absolute error <= 2 eps log2(N) sum|X|^2, and every bin is bounded
-    # by the total. A factor 8 covers the windowing, detrending and the averaging sum.
-    return 16 * EPS * np.log2(nperseg) * np.sum(p)
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -72,15 +62,14 @@ def test_backends_agree_to_roundoff():
     assert a.attrs["fft_backend"] == "pyfftw" and b.attrs["fft_backend"] == "numpy"
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_parseval_rectangular_window_is_exact(backend):
-    # Boxcar window, no overlap, no detrend, n = K nperseg: sum(P) df = mean(x^2) exactly (Parseval per
-    # segment, one-sided doubling of a Hermitian spectrum), up to summation round-off ~ eps sqrt(n).
-    rng = np.random.default_rng(4)
-    fs, nperseg = 100.0, 256
-    x = rng.standard_normal(nperseg * 40) + 0.5
-    p = welch_psd(signal(x, fs), nperseg=nperseg, noverlap=0, window="boxcar", detrend="none", backend=backend)
-    assert float(p.sum()) * fs / nperseg == pytest.approx(np.mean(x**2), rel=64 * EPS * np.log2(nperseg))
+@pytest.mark.parametrize("name", ["welch_parseval", "welch_vs_scipy", "welch_white_noise_level"])
+def test_verification_cases(name):
+    """Parseval exact for a boxcar window (sum(P) df = mean(x^2) to summation round-off), equality with
+    scipy.signal.welch for one more setting, the white-noise level 2 s2 / fs: the verification cases (their
+    tolerances and bases are there)."""
+    (case,) = select_cases([name])
+    result = evaluate_case(case, False, None)
+    assert result.status == "passed", result
 
 
 @pytest.mark.parametrize("backend", BACKENDS)

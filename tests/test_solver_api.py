@@ -191,14 +191,14 @@ def test_cli_simulate_writes_a_run(tmp_path, root, capsys):
     assert "--velocity" in capsys.readouterr().err
 
 
-def test_time_step_study_on_a_linear_model():
+def test_time_step_halving_on_a_linear_model():
     """Undamped cantilever (no contact, linear): halving dt changes the first-mode frequency by the
     central-difference error (omega dt)^2/24 ~ 1e-7 and leaves the band power unchanged; the study must report
     the two steps and a level difference within 0.1 dB (Welch variance cancels: same signal both runs)."""
-    from fivid.solver import time_step_study
+    from fivid.solver import time_step_halving
 
     model = load_model(cantilever(nx=8, ny=2, v0=0.5, beta=1e-8))
-    res = time_step_study(model, duration=5e-3, sample_rate=200e3, oversample=1, nperseg=256, band=(1e3, 50e3),
+    res = time_step_halving(model, duration=5e-3, sample_rate=200e3, oversample=1, nperseg=256, band=(1e3, 50e3),
                           progress=False)
     assert res.attrs["time_step_fine"] == pytest.approx(res.attrs["time_step_coarse"] / 2, rel=0.01)
     assert abs(res.attrs["level_diff_db"]) < 0.1

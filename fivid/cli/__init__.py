@@ -21,10 +21,10 @@ import pkgutil
 import sys
 
 from fivid import __version__
-from fivid.cli.types import Quantity, integer_at_least, quantity
+from fivid.cli.types import QuantityArgument, integer_at_least, quantity
 from fivid.errors import FividError, Interrupted
 
-__all__ = ["main", "build_parser", "integer_at_least", "quantity", "Quantity",
+__all__ = ["main", "build_parser", "integer_at_least", "quantity", "QuantityArgument",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD", "exit_status_of_signal"]
 
 EXIT_OK = 0

@@ -10,7 +10,7 @@ import argparse
 import math
 import re
 
-__all__ = ["integer_at_least", "quantity", "Quantity"]
+__all__ = ["integer_at_least", "quantity", "QuantityArgument"]
 
 # canonical SI unit -> (the physical quantity it measures, units usual on a rig, for the messages)
 _DIMENSIONS = {
@@ -40,7 +40,7 @@ def integer_at_least(minimum: int):
     return parse
 
 
-class Quantity(float):
+class QuantityArgument(float):
     """A parsed command-line quantity: the value in SI units (a float) that remembers how it was written.
 
     ``text`` is the user's spelling (``"10 mm/s"``), kept for the ``history`` line, so that the command
@@ -55,11 +55,11 @@ class Quantity(float):
         return self
 
     def __reduce__(self):  # pickle (dask) as the pair it was built from
-        return (Quantity, (float(self), self.text))
+        return (QuantityArgument, (float(self), self.text))
 
 
 def quantity(units: str, *, bare_numbers: bool = True, positive: bool = False, nonnegative: bool = False):
-    """An argparse ``type``: a pint quantity such as ``'5 kHz'``, returned in ``units`` (SI) as a :class:`Quantity`.
+    """An argparse ``type``: a pint quantity such as ``'5 kHz'``, returned in ``units`` (SI) as a :class:`QuantityArgument`.
 
     Parameters
     ----------
@@ -79,7 +79,7 @@ def quantity(units: str, *, bare_numbers: bool = True, positive: bool = False, n
     allowed = (f"give a {name} with a unit such as {usual[0]} or {usual[1]}"
                + (f" (a bare number is in {units})" if bare_numbers else ""))
 
-    def parse(text: str) -> Quantity:
+    def parse(text: str) -> QuantityArgument:
         from fivid.errors import FividError
         from fivid.units import parse_quantity
 
@@ -99,7 +99,7 @@ def quantity(units: str, *, bare_numbers: bool = True, positive: bool = False, n
             raise argparse.ArgumentTypeError(f"must be a positive {name}, got {text!r}")
         if nonnegative and not value >= 0:
             raise argparse.ArgumentTypeError(f"must be a {name} >= 0, got {text!r}")
-        return Quantity(value, str(text))
+        return QuantityArgument(value, str(text))
 
     parse.__name__ = name  # argparse's fallback message says "invalid <name> value"
     return parse

@@ -6,6 +6,7 @@
 * :func:`steady_state_response` — Newmark/Newton-Raphson time-domain reference.
 * :func:`fit_jenkins_loop` — slip force and stiffness from a measured hysteresis loop.
 * :func:`update_contact_parameters` — mu and k_d from FRFs at several normal loads.
+* :func:`frf_peak` — the FRF peak frequency at a normal load (the target ``fivid update`` fits damper models to).
 """
 
 from fivid.damper.continuation import FrequencyResponseCurve, continue_frequency_response
@@ -13,6 +14,7 @@ from fivid.damper.hbm import HarmonicBalance, PeriodicSolution
 from fivid.damper.loop_fit import JenkinsLoopFit, fit_jenkins_loop
 from fivid.damper.modal import ModalModel
 from fivid.damper.model import DamperModel, damper_model_from_dict, load_damper_model
+from fivid.damper.peaks import FRFPeak, frf_peak
 from fivid.damper.stability import floquet_multipliers
 from fivid.damper.timedomain import SteadyStateResponse, steady_state_response
 from fivid.damper.updating import ContactUpdate, update_contact_parameters
@@ -20,6 +22,7 @@ from fivid.damper.updating import ContactUpdate, update_contact_parameters
 __all__ = [
     "ContactUpdate",
     "DamperModel",
+    "FRFPeak",
     "FrequencyResponseCurve",
     "HarmonicBalance",
     "JenkinsLoopFit",
@@ -29,6 +32,7 @@ __all__ = [
     "continue_frequency_response",
     "damper_model_from_dict",
     "fit_jenkins_loop",
+    "frf_peak",
     "floquet_multipliers",
     "load_damper_model",
     "steady_state_response",

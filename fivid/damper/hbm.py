@@ -109,7 +109,7 @@ class HarmonicBalance:
         """The equations for a :class:`DamperModel` at a normal force [N]."""
         if not (np.isfinite(normal_force) and normal_force > 0):
             raise FividError(f"normal force must be finite and > 0 N, got {normal_force!r}")
-        return cls(model.modal, model.contact_stiffness, model.slip_force(normal_force), model.excitation_amplitude,
+        return cls(model.modal, model.series_stiffness, model.slip_force(normal_force), model.excitation_amplitude,
                    model.harmonics, model.samples_per_period)
 
     # --- pieces -------------------------------------------------------------------------------

@@ -5,7 +5,7 @@ Config layout (quantities with units, parsed by pint)::
     name: seed004-model1
     beam: {length: 0.5 m, width: 0.04 m, thickness: 0.008 m, youngs_modulus: 210 GPa,
            density: 7850 kg/m^3, tip_mass: 0.07 kg, n_elements: 20, modal_damping_ratio: 0.005}
-    contact: {position: 0.5 m, friction_coefficient: 0.45, stiffness: 3.9e5 N/m}
+    contact: {position: 0.5 m, friction_coefficient: 0.45, stiffness: 3.9e5 N/m, device_stiffness: 2.5e5 N/m}
     excitation: {position: 0.25 m, amplitude: 2 N}
     measurement: {position: 0.35 m}
     frequency_range: [15 Hz, 130 Hz]
@@ -42,7 +42,11 @@ class DamperModel:
     friction_coefficient : float
         ``mu`` [1]; slip force ``F_s = mu F_n``.
     contact_stiffness : float
-        Tangential contact stiffness ``k_d`` [N/m].
+        Tangential contact stiffness ``k_d`` [N/m] (the Jenkins spring of the interface).
+    device_stiffness : float
+        Tangential stiffness of the rubbing device (its post and force sensor) in series with the contact
+        [N/m]; ``inf`` for a rigid device. A massless spring in series with a Jenkins element is a Jenkins
+        element of stiffness :attr:`series_stiffness` and the same slip force.
     excitation_amplitude : float
         Amplitude of the harmonic force [N].
     frequency_range : tuple of float
@@ -65,14 +69,26 @@ class DamperModel:
     samples_per_period: int = 128
     source: str = "dict"
     beam: dict = field(default_factory=dict, compare=False)
+    device_stiffness: float = math.inf
+
+    @property
+    def series_stiffness(self) -> float:
+        """Stiffness the beam feels while the contact sticks [N/m]: ``k_d k_s / (k_d + k_s)`` (``k_d`` when
+        the device is rigid)."""
+        if not math.isfinite(self.device_stiffness):
+            return self.contact_stiffness
+        return self.contact_stiffness * self.device_stiffness / (self.contact_stiffness + self.device_stiffness)
 
     def slip_force(self, normal_force: float) -> float:
         """``mu F_n`` [N] for a normal force [N]."""
         return self.friction_coefficient * float(normal_force)
 
-    def with_parameters(self, friction_coefficient: float | None = None, contact_stiffness: float | None = None):
+    def with_parameters(self, friction_coefficient: float | None = None, contact_stiffness: float | None = None,
+                        device_stiffness: float | None = None):
         """A copy with other contact parameters (for model updating)."""
         kw = {}
+        if device_stiffness is not None:
+            kw["device_stiffness"] = float(device_stiffness)
         if friction_coefficient is not None:
             kw["friction_coefficient"] = float(friction_coefficient)
         if contact_stiffness is not None:
@@ -80,11 +96,16 @@ class DamperModel:
         return replace(self, **kw)
 
 
-def _stiffness_or_inf(value):
-    """``inf`` (a clamped root) or a rotational stiffness quantity [N m]."""
-    if str(value).strip().lower() == "inf":
-        return math.inf
-    return quantity_parser("N m", positive=True)(value)
+def _stiffness_or_inf(units: str):
+    """A parser of ``inf`` (rigid) or a stiffness quantity in ``units``."""
+    parse = quantity_parser(units, positive=True)
+
+    def parser(value):
+        if str(value).strip().lower() == "inf":
+            return math.inf
+        return parse(value)
+
+    return parser
 
 
 class _Beam(ConfigModel):
@@ -96,7 +117,7 @@ class _Beam(ConfigModel):
     tip_mass: Quantity("kg", nonnegative=True) = 0.0
     n_elements: Annotated[int, Field(ge=2)] = 20
     modal_damping_ratio: Quantity("1", nonnegative=True) = 0.005
-    clamp_rotational_stiffness: Annotated[float, BeforeValidator(_stiffness_or_inf),
+    clamp_rotational_stiffness: Annotated[float, BeforeValidator(_stiffness_or_inf("N m")),
                                           WithJsonSchema(quantity_schema("N m", positive=True, also=("inf",)))
                                           ] = math.inf
 
@@ -105,6 +126,8 @@ class _Contact(ConfigModel):
     position: Quantity("m")
     friction_coefficient: Quantity("1", positive=True)
     stiffness: Quantity("N m-1", positive=True)
+    device_stiffness: Annotated[float, BeforeValidator(_stiffness_or_inf("N m-1")),
+                                WithJsonSchema(quantity_schema("N m-1", positive=True, also=("inf",)))] = math.inf
 
 
 class _Excitation(ConfigModel):
@@ -182,6 +205,7 @@ def _build(c: DamperConfig, source: str) -> DamperModel:
         harmonics=tuple(c.harmonic_balance.harmonics),
         samples_per_period=c.harmonic_balance.samples_per_period,
         source=source,
+        device_stiffness=c.contact.device_stiffness,
         beam=dict(props, tip_mass=b.tip_mass, n_elements=b.n_elements),
     )
 

@@ -11,9 +11,9 @@ from fivid.fe.assembly import (
     element_mass_q4,
     element_stiffness_q4,
     lumped_mass,
-    rayleigh_from_damping_ratios,
     stiffness_matrix,
 )
+from fivid.fe.damping import RayleighFit, fit_rayleigh_least_squares, rayleigh_through_two_ratios
 from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
 from fivid.fe.contact import linearise_contact, linearise_preloaded_contact
 from fivid.fe.loads import external_load_vector, pressure_forces, static_response
@@ -51,7 +51,9 @@ __all__ = [
     "lumped_mass",
     "consistent_mass",
     "damping_matrix",
-    "rayleigh_from_damping_ratios",
+    "rayleigh_through_two_ratios",
+    "fit_rayleigh_least_squares",
+    "RayleighFit",
     "pressure_forces",
     "external_load_vector",
     "static_response",

@@ -28,7 +28,6 @@ __all__ = [
     "consistent_mass",
     "lumped_mass",
     "damping_matrix",
-    "rayleigh_from_damping_ratios",
 ]
 
 _G = 1.0 / np.sqrt(3.0)
@@ -275,35 +274,3 @@ def damping_matrix(model, *, mass: str = "lumped", stiffness=None):
     if model.springs:
         C = C + _discrete_matrix(model, "damping")
     return sp.csr_matrix(C)
-
-
-def rayleigh_from_damping_ratios(f1: float, zeta1: float, f2: float, zeta2: float) -> tuple[float, float]:
-    """Rayleigh coefficients giving modal damping ratios ``zeta1`` at ``f1`` and ``zeta2`` at ``f2``.
-
-    Solves ``zeta_i = alpha/(2 omega_i) + beta omega_i / 2`` with ``omega_i = 2 pi f_i``.
-
-    Parameters
-    ----------
-    f1, f2 : float
-        Frequencies [Hz], distinct and positive.
-    zeta1, zeta2 : float
-        Damping ratios [-].
-
-    Returns
-    -------
-    alpha : float
-        [s-1]
-    beta : float
-        [s]
-
-    Examples
-    --------
-    >>> a, b = rayleigh_from_damping_ratios(1e3, 0.005, 1e4, 0.01)
-    >>> round(a, 1), round(b * 1e7, 2)
-    (50.8, 3.05)
-    """
-    from fivid.fe.damping import fit_rayleigh
-
-    if not (float(f1) > 0 and float(f2) > 0) or float(f1) == float(f2):
-        raise ConfigError(f"need two distinct positive frequencies, got {f1} and {f2} Hz", key="damping.ratios")
-    return fit_rayleigh(f1, zeta1, f2, zeta2)

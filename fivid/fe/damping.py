@@ -32,10 +32,14 @@ pass).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["modal_root", "damping_ratio", "frequency_factor", "fit_rayleigh", "scheme_name"]
+from fivid.errors import ConfigError, FividError
+
+__all__ = ["modal_root", "damping_ratio", "frequency_factor", "rayleigh_through_two_ratios", "RayleighFit",
+           "fit_rayleigh_least_squares", "scheme_name"]
 
 
 def scheme_name(beta: float, cutoff: float) -> str:
@@ -114,23 +118,32 @@ def frequency_factor(frequency, beta: float, cutoff: float | None = None) -> np.
     return np.sqrt(1.0 + beta * wc * x2 / (1.0 + x2))
 
 
-def fit_rayleigh(f1: float, zeta1: float, f2: float, zeta2: float,
-                 cutoff: float | None = None) -> tuple[float, float]:
-    """``(alpha [s-1], beta [s])`` giving the ratio ``zeta1`` at ``f1`` and ``zeta2`` at ``f2`` [Hz] under the scheme.
+def rayleigh_through_two_ratios(f1: float, zeta1: float, f2: float, zeta2: float,
+                                cutoff: float | None = None) -> tuple[float, float]:
+    """``(alpha [s-1], beta [s])`` giving exactly the ratio ``zeta1`` at ``f1`` and ``zeta2`` at ``f2`` [Hz]
+    under the scheme: a solve through two points (a model file's ``damping: ratios``), not a fit (for that, see
+    :func:`fit_rayleigh_least_squares`).
 
     Classic Rayleigh: the linear system ``zeta_i = alpha/(2 omega_i) + beta omega_i / 2`` (exact). Band-limited:
     that system with ``beta`` scaled by ``1/(1 + (omega_i/omega_c)^2)`` as the start, then Newton on the exact
     ratios of :func:`damping_ratio` to float resolution.
 
+    Raises
+    ------
+    fivid.errors.ConfigError
+        The frequencies are not two distinct positive numbers.
+
     Examples
     --------
-    >>> a, b = fit_rayleigh(1e3, 0.005, 1e4, 0.01)
+    >>> a, b = rayleigh_through_two_ratios(1e3, 0.005, 1e4, 0.01)
     >>> round(a, 1), round(b * 1e7, 2)
     (50.8, 3.05)
-    >>> a, b = fit_rayleigh(1e3, 0.005, 1e4, 0.01, cutoff=6e4)
+    >>> a, b = rayleigh_through_two_ratios(1e3, 0.005, 1e4, 0.01, cutoff=6e4)
     >>> [round(float(z), 9) for z in damping_ratio([1e3, 1e4], a, b, cutoff=6e4)]
     [0.005, 0.01]
     """
+    if not (float(f1) > 0 and float(f2) > 0) or float(f1) == float(f2):
+        raise ConfigError(f"need two distinct positive frequencies, got {f1} and {f2} Hz", key="damping.ratios")
     w = 2.0 * np.pi * np.array([f1, f2], dtype=float)
     target = np.array([zeta1, zeta2], dtype=float)
     g = _cutoff_factor(w, cutoff)
@@ -148,3 +161,85 @@ def fit_rayleigh(f1: float, zeta1: float, f2: float, zeta2: float,
                              (damping_ratio(freqs, x[0], x[1] + h[1], cutoff) - target - r) / h[1]])
         x = x - np.linalg.solve(J, r)
     return float(x[0]), float(x[1])
+
+
+@dataclass
+class RayleighFit:
+    """Rayleigh coefficients α [s-1], β [s] with standard errors and covariance."""
+
+    alpha: float
+    beta: float
+    alpha_stderr: float
+    beta_stderr: float
+    covariance: np.ndarray
+    n_modes: int
+    chi2_p_value: float = np.nan
+
+    def zeta(self, frequency) -> np.ndarray:
+        """ζ(f) = α/(2ω) + βω/2 at ``frequency`` [Hz]."""
+        w = 2 * np.pi * np.asarray(frequency, float)
+        return self.alpha / (2 * w) + self.beta * w / 2
+
+    def to_json(self) -> dict:
+        """A JSON-ready dict: ``alpha`` [s-1], ``beta`` [s], their standard errors and covariance, fit statistics."""
+        return {
+            "alpha": self.alpha, "alpha_stderr": self.alpha_stderr, "alpha_units": "s-1",
+            "beta": self.beta, "beta_stderr": self.beta_stderr, "beta_units": "s",
+            "covariance": np.asarray(self.covariance).tolist(), "n_modes": self.n_modes,
+            "chi2_p_value": self.chi2_p_value,
+        }
+
+
+def fit_rayleigh_least_squares(frequency, zeta, zeta_stderr=None) -> RayleighFit:
+    """Least-squares fit of ``ζ = α/(2ω) + βω/2`` to two or more measured modal damping ratios.
+
+    Weighted least squares (statsmodels WLS, weights ``1/se(ζ_i)^2``). The covariance takes the ratios'
+    standard errors as known, ``(X' W X)^-1``; with more modes than two a χ² goodness-of-fit p-value says
+    whether Rayleigh damping describes the measured ratios within their errors, and the covariance is scaled by
+    the reduced χ² when it exceeds 1 (Birge ratio). Without standard errors the residual variance is estimated
+    (at least three modes are needed for an error). Classic Rayleigh only; to place exactly two ratios under
+    either scheme use :func:`rayleigh_through_two_ratios`.
+
+    Parameters
+    ----------
+    frequency : array_like
+        Modal frequencies [Hz].
+    zeta : array_like
+        Damping ratios [-].
+    zeta_stderr : array_like, optional
+        Their standard errors [-]; without them, unweighted least squares.
+    """
+    import statsmodels.api as sm
+    from scipy import stats
+
+    f = np.asarray(frequency, float)
+    z = np.asarray(zeta, float)
+    if f.size < 2:
+        raise FividError(f"a Rayleigh fit needs at least two modes; got {f.size}")
+    if np.unique(np.round(f, 9)).size < 2:
+        raise FividError("a Rayleigh fit needs two distinct modal frequencies")
+    w = 2 * np.pi * f
+    X = np.column_stack([1 / (2 * w), w / 2])
+    se = None if zeta_stderr is None else np.asarray(zeta_stderr, float)
+    if se is not None and not np.all(np.isfinite(se) & (se > 0)):
+        se = None
+    weights = np.ones_like(z) if se is None else 1 / se**2
+    res = sm.WLS(z, X, weights=weights).fit()
+    params = np.asarray(res.params, float)
+    p_value = np.nan
+    dof = f.size - 2
+    if se is not None:
+        # the ratios' standard errors are taken as known (absolute sigma); with dof >= 1 the covariance is
+        # scaled up by the reduced χ² when the modes scatter more than their errors (Birge ratio)
+        cov = np.linalg.inv(X.T @ (weights[:, None] * X))
+        if dof >= 1:
+            chi2 = float(np.sum(weights * np.asarray(res.resid) ** 2))
+            p_value = float(stats.chi2.sf(chi2, dof))
+            cov = cov * max(1.0, chi2 / dof)
+    elif dof >= 1:
+        cov = np.asarray(res.cov_params(), float)
+    else:
+        cov = np.full((2, 2), np.nan)
+    return RayleighFit(alpha=float(params[0]), beta=float(params[1]), alpha_stderr=float(np.sqrt(cov[0, 0])),
+                       beta_stderr=float(np.sqrt(cov[1, 1])), covariance=cov, n_modes=int(f.size),
+                       chi2_p_value=p_value)

@@ -1,17 +1,23 @@
 """Node coordinates of structured blocks: bilinear quadrilaterals, annular sectors/rings, profiled rectangles.
 
-Pure geometry (numpy only): each function returns the ``(ny+1, n_cols, 2)`` coordinate grid that
+Geometry (numpy only): each function returns the ``(ny+1, n_cols, 2)`` coordinate grid that
 :class:`fivid.fe.model.Block` stores, ``coords[j, i]`` being local node ``(i, j)``. Divisions may be
-graded: :func:`graded_fractions` gives the node positions along one direction.
+graded: :func:`graded_fractions` gives the node positions along one direction. :func:`block_coords` is the
+grid of a validated ``bodies`` entry of a model file (:class:`fivid.fe.config.BodyConfig`), a measured
+profile read from its file by :func:`read_profile_table`.
 
 Units: SI (m, rad).
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 __all__ = [
+    "block_coords",
+    "read_profile_table",
     "graded_fractions",
     "bilinear_coords",
     "annulus_coords",
@@ -131,3 +137,104 @@ def sine_profile(x: np.ndarray, amplitude: float, wavelength: float, phase: floa
 def gaussian_profile(x: np.ndarray, amplitude: float, width: float, center: float) -> np.ndarray:
     """A Gaussian bump ``h(x) = amplitude exp(-(x - center)^2 / (2 width^2))`` [m] at ``x`` [m]."""
     return amplitude * np.exp(-0.5 * ((np.asarray(x, float) - center) / width) ** 2)
+
+
+def _fractions(n: int, graded: str | None, ratio: float, axis: str) -> np.ndarray:
+    """Node fractions along ``axis`` ("s": c0->c1, bottom-to-top "t") with the grading toward ``graded``."""
+    ends = {"s": ("left", "right"), "t": ("bottom", "top")}[axis]
+    if graded not in ends:
+        return graded_fractions(n)
+    return graded_fractions(n, ratio, toward_end=graded == ends[1])
+
+
+def block_coords(body, source, key: str) -> tuple[np.ndarray, str, bool]:
+    """``(coords (ny+1, n_cols, 2) [m], shape, periodic)`` of a validated body (:class:`fivid.fe.config.BodyConfig`).
+
+    ``source`` (:class:`fivid.config_layer.ConfigSource`) and ``key`` (``bodies.upper``) name the file and key of
+    an error found only here: a profile file that cannot be read, a profile that does not cover the edge or folds
+    the body.
+    """
+    nx, ny = body.divisions
+    graded = body.graded_edge
+    ratio = body.grading.ratio if body.grading is not None else 1.0
+    if body.annulus is not None:
+        a = body.annulus
+        a0, a1 = a.angle_range
+        t = _fractions(ny, graded, ratio, "t")
+        return annulus_coords(a.center, a.inner_radius, a.outer_radius, a0, a0 + 2.0 * np.pi if a.periodic else a1,
+                              nx, t, periodic=a.periodic), "annulus", a.periodic
+    corners = np.array(body.corners, dtype=float)
+    s, t = _fractions(nx, graded, ratio, "s"), _fractions(ny, graded, ratio, "t")
+    if body.profile is None:
+        return bilinear_coords(corners, s, t), "quad", False
+    heights = _profile_heights(body.profile, corners, s, source, f"{key}.profile")
+    return profile_coords(corners, body.profile.edge, heights, s, t), "profile", False
+
+
+def _profile_heights(p, corners: np.ndarray, s: np.ndarray, source, key: str) -> np.ndarray:
+    """Heights [m] of profile ``p`` (:class:`fivid.fe.config.ProfileConfig`) at the node columns of the rectangle."""
+    length = corners[1, 0] - corners[0, 0]
+    xs = length * s  # node x measured from the left end
+    if p.sine is not None:
+        h = sine_profile(xs, p.sine.amplitude, p.sine.wavelength, p.sine.phase)
+    elif p.gaussian is not None:
+        h = gaussian_profile(xs, p.gaussian.amplitude, p.gaussian.width, p.gaussian.center)
+    else:
+        if p.file is not None:
+            path = Path(p.file)
+            if not path.is_absolute() and source.file is not None:
+                path = Path(source.file).parent / path
+            try:
+                x, z = read_profile_table(path)
+            except ValueError as exc:
+                raise source.error(f"{key}.file", str(exc)) from None
+        else:
+            x, z = np.array(p.x, dtype=float), np.array(p.z, dtype=float)
+        x, z = x * p.units.scale("x"), z * p.units.scale("z")
+        tol = 1e-9 * length
+        if x[0] > tol or x[-1] < length - tol:
+            raise source.error(f"{key}.x", f"the profile covers x = [{x[0]:.6g}, {x[-1]:.6g}] m from the body's left "
+                                           f"end; it must cover the whole edge [0, {length:.6g}] m")
+        h = np.interp(xs, x, z)
+    depth = corners[3, 1] - corners[0, 1]
+    if (p.edge == "bottom" and h.max() >= depth) or (p.edge == "top" and -h.min() >= depth):
+        raise source.error(key, f"profile heights [{h.min():.3g}, {h.max():.3g}] m fold the body (depth {depth:.3g} m)")
+    return h
+
+
+def read_profile_table(path) -> tuple[np.ndarray, np.ndarray]:
+    """``(x, z)`` of a two-column text table (comma, semicolon or blank separated; ``#`` comments and one header
+    line allowed), in the file's units; x strictly increasing.
+
+    Raises
+    ------
+    ValueError
+        The file cannot be read, is not a table of numbers, has fewer than 2 rows or x does not increase.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text().replace(",", " ").replace(";", " ")
+    except OSError as exc:
+        raise ValueError(f"cannot read the profile file {str(path)!r}: {exc.strerror}") from None
+    rows = [r for r in (ln.split() for ln in text.splitlines()) if r and not r[0].startswith("#")]
+    if rows and not _is_number(rows[0][0]):
+        rows = rows[1:]  # a header line
+    try:
+        table = np.array([[float(v) for v in r[:2]] for r in rows])
+    except (ValueError, IndexError):
+        raise ValueError(f"{str(path)!r} is not a two-column table of numbers (x, z)") from None
+    if table.ndim != 2 or table.shape[0] < 2 or table.shape[1] != 2:
+        raise ValueError(f"{str(path)!r} needs at least 2 rows of (x, z)")
+    if not np.all(np.isfinite(table)):
+        raise ValueError(f"{str(path)!r} contains values that are not finite")
+    if not np.all(np.diff(table[:, 0]) > 0):
+        raise ValueError(f"{str(path)!r}: profile x must increase strictly")
+    return table[:, 0], table[:, 1]
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -526,7 +526,7 @@ def load_model(source: str | PathLike | Mapping[str, Any]) -> Model:
     A name without a folder or suffix (``"triboair_coarse"``) that is not a file is one of the example
     models shipped with fivid (``configs/models/``, installed with the package: :mod:`fivid.builtin`).
     """
-    from fivid.fe.config import build_model
+    from fivid.fe.build import build_model
 
     return build_model(_resolve_model_name(source))
 

@@ -7,7 +7,7 @@
   simulated acceleration level match the measured one in a band.
 """
 
-from fivid.identify.damping import DampingIdentification, RayleighFit, fit_rayleigh, identify_damping
+from fivid.identify.damping import DampingIdentification, RayleighFit, identify_damping
 from fivid.identify.inverse import InverseAmplitude, inverse_amplitude_scale
 from fivid.identify.amplitude_fit import (SELECTION_RULE, FormFit, akaike_weights, candidate_forms, choose_form,
                                           fit_amplitude_forms)
@@ -21,7 +21,6 @@ __all__ = [
     "InverseAmplitude",
     "DampingIdentification",
     "RayleighFit",
-    "fit_rayleigh",
     "FrictionIdentification",
     "fit_amplitude_forms",
     "choose_form",

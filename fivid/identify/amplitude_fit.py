@@ -54,7 +54,8 @@ from fivid.friction.amplitude import (
     coefficient_units,
 )
 
-__all__ = ["FormFit", "fit_amplitude_forms", "choose_form", "akaike_weights", "distinct_levels", "SELECTION_RULE",
+__all__ = ["FormFit", "fit_amplitude_forms", "choose_form", "not_compared_reason", "constant_law_warning",
+           "CONSTANT_SPREAD_WARN", "CV_ERROR_WARN", "akaike_weights", "distinct_levels", "SELECTION_RULE",
            "candidate_forms", "cross_validation_error", "condition_groups", "influential_runs", "COOKS_RULE"]
 
 SELECTION_RULE = (
@@ -525,6 +526,8 @@ def choose_form(fits: list[FormFit]) -> tuple[FormFit | None, str]:
         return cv_best, why + (f"; d{name}: {others}" if others else "")
     if chosen is best:
         why = f"{chosen.form} has the lowest {name} ({score[chosen.form]:.2f})"
+        if len(ok) == 1 and sum(f.fitted for f in fits) > 1:
+            why = f"{chosen.form} is the only form with an {name} ({score[chosen.form]:.2f}): the others need more runs"
         if len(close) > 1:
             why += f" and the smallest cross-validation error ({chosen.cv_error:.3g}) of the forms within d{name} < 2"
     else:
@@ -533,6 +536,52 @@ def choose_form(fits: list[FormFit]) -> tuple[FormFit | None, str]:
     if others:
         why += f"; d{name} of the others: {others}"
     return chosen, why
+
+
+#: a constant amplitude law is flagged when the used runs' amplitudes spread more than this (max / min)
+CONSTANT_SPREAD_WARN = 2.0
+#: ... or when its cross-validation error (RMS of ln(A_pred / A)) exceeds this: ln 1.5, a left-out condition
+#: mispredicted by a factor of about 1.5 or more, on average
+CV_ERROR_WARN = float(np.log(1.5))
+
+
+def not_compared_reason(fit: FormFit, fits: list[FormFit]) -> str:
+    """Why ``fit`` takes no part in the choice, in runs needed vs given ("" when it does).
+
+    A form not fitted says why (its design, or ``n <= p``); a fitted form without an AICc
+    (``n <= k + 1``, k = p + 1) is left out when another form has one (:func:`choose_form` compares like with like).
+    """
+    if not fit.fitted:
+        return fit.reason
+    ok, crit = _criterion(fits)
+    if fit in ok:
+        return ""
+    k = fit.n_params + 1
+    return f"its AICc needs at least {k + 2} runs for {fit.n_params} coefficients, {fit.n_runs} given"
+
+
+def constant_law_warning(chosen: FormFit | None, amplitude) -> str:
+    """A warning when the chosen amplitude law is the constant although the data say otherwise ("" when not).
+
+    Flagged: the used runs' amplitudes ``amplitude`` spread more than :data:`CONSTANT_SPREAD_WARN` times
+    (max / min), or the constant's cross-validation error exceeds :data:`CV_ERROR_WARN`.
+    """
+    if chosen is None or chosen.form != "constant":
+        return ""
+    a = np.asarray(amplitude, float)
+    a = a[np.isfinite(a) & (a > 0)]
+    spread = float(a.max() / a.min()) if a.size else 1.0
+    why = []
+    if spread > CONSTANT_SPREAD_WARN:
+        why.append(f"the runs' amplitudes spread {spread:.2g}x (more than {CONSTANT_SPREAD_WARN:g}x)")
+    if np.isfinite(chosen.cv_error) and chosen.cv_error > CV_ERROR_WARN:
+        why.append(f"its cross-validation error {chosen.cv_error:.2g} exceeds {CV_ERROR_WARN:.2f} (= ln 1.5: "
+                   f"left-out conditions mispredicted by a factor of about {np.exp(chosen.cv_error):.2g})")
+    if not why:
+        return ""
+    return ("a constant amplitude law was chosen although " + " and ".join(why) + ": it holds only because the "
+            "other forms could not be compared with these runs (see the table); record runs at more conditions, "
+            "or treat the amplitude as condition-dependent with care")
 
 
 def akaike_weights(fits: list[FormFit]) -> dict:

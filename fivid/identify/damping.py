@@ -18,7 +18,7 @@ curve fit
     parameter variances by ``1 + 2 (4/9 + 1/36) = 1.94``: the standard errors are scaled by sqrt(1.94).
 
 Rayleigh damping (DESIGN §4): ``ζ_i = α / (2 ω_i) + β ω_i / 2`` is linear in (α, β); it is fitted by
-weighted least squares (statsmodels WLS, weights 1/se(ζ_i)^2). The covariance takes the ratios'
+weighted least squares (statsmodels WLS, weights 1/se(ζ_i)^2; :func:`fivid.fe.damping.fit_rayleigh_least_squares`). The covariance takes the ratios'
 standard errors as known, ``(X' W X)^-1``; with more modes than two a χ² goodness-of-fit p-value says
 whether Rayleigh damping describes the measured ratios within their errors, and the covariance is
 scaled by the reduced χ² when it exceeds 1 (Birge ratio). Without standard errors (half-power
@@ -33,15 +33,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError, FividError
+from fivid.fe.damping import RayleighFit, fit_rayleigh_least_squares
 
 __all__ = [
     "ModalPeak",
-    "RayleighFit",
     "DampingIdentification",
     "find_resonance_peaks",
     "half_power_damping",
     "fit_mode",
-    "fit_rayleigh",
     "identify_damping",
     "HANN_CORRELATION_INFLATION",
 ]
@@ -66,33 +65,6 @@ class ModalPeak:
     def to_json(self) -> dict:
         """A JSON-ready dict of the fields: frequencies [Hz], damping ratios [-] and their standard errors."""
         return dict(self.__dict__)
-
-
-@dataclass
-class RayleighFit:
-    """Rayleigh coefficients α [s-1], β [s] with standard errors and covariance."""
-
-    alpha: float
-    beta: float
-    alpha_stderr: float
-    beta_stderr: float
-    covariance: np.ndarray
-    n_modes: int
-    chi2_p_value: float = np.nan
-
-    def zeta(self, frequency) -> np.ndarray:
-        """ζ(f) = α/(2ω) + βω/2 at ``frequency`` [Hz]."""
-        w = 2 * np.pi * np.asarray(frequency, float)
-        return self.alpha / (2 * w) + self.beta * w / 2
-
-    def to_json(self) -> dict:
-        """A JSON-ready dict: ``alpha`` [s-1], ``beta`` [s], their standard errors and covariance, fit statistics."""
-        return {
-            "alpha": self.alpha, "alpha_stderr": self.alpha_stderr, "alpha_units": "s-1",
-            "beta": self.beta, "beta_stderr": self.beta_stderr, "beta_units": "s",
-            "covariance": np.asarray(self.covariance).tolist(), "n_modes": self.n_modes,
-            "chi2_p_value": self.chi2_p_value,
-        }
 
 
 @dataclass
@@ -255,54 +227,6 @@ def fit_mode(frequency, psd, k, zeta0, *, window="hann", nperseg=None, response_
     return float(popt[1]), float(se[1]), zeta, float(zeta * se[2]), ""
 
 
-def fit_rayleigh(frequency, zeta, zeta_stderr=None) -> RayleighFit:
-    """Fit ``ζ = α/(2ω) + βω/2`` to modal damping ratios (see the module docstring).
-
-    Parameters
-    ----------
-    frequency : array_like
-        Modal frequencies [Hz].
-    zeta : array_like
-        Damping ratios [-].
-    zeta_stderr : array_like, optional
-        Their standard errors [-]; without them, unweighted least squares.
-    """
-    import statsmodels.api as sm
-    from scipy import stats
-
-    f = np.asarray(frequency, float)
-    z = np.asarray(zeta, float)
-    if f.size < 2:
-        raise FividError(f"a Rayleigh fit needs at least two modes; got {f.size}")
-    if np.unique(np.round(f, 9)).size < 2:
-        raise FividError("a Rayleigh fit needs two distinct modal frequencies")
-    w = 2 * np.pi * f
-    X = np.column_stack([1 / (2 * w), w / 2])
-    se = None if zeta_stderr is None else np.asarray(zeta_stderr, float)
-    if se is not None and not np.all(np.isfinite(se) & (se > 0)):
-        se = None
-    weights = np.ones_like(z) if se is None else 1 / se**2
-    res = sm.WLS(z, X, weights=weights).fit()
-    params = np.asarray(res.params, float)
-    p_value = np.nan
-    dof = f.size - 2
-    if se is not None:
-        # the ratios' standard errors are taken as known (absolute sigma); with dof >= 1 the covariance is
-        # scaled up by the reduced χ² when the modes scatter more than their errors (Birge ratio)
-        cov = np.linalg.inv(X.T @ (weights[:, None] * X))
-        if dof >= 1:
-            chi2 = float(np.sum(weights * np.asarray(res.resid) ** 2))
-            p_value = float(stats.chi2.sf(chi2, dof))
-            cov = cov * max(1.0, chi2 / dof)
-    elif dof >= 1:
-        cov = np.asarray(res.cov_params(), float)
-    else:
-        cov = np.full((2, 2), np.nan)
-    return RayleighFit(alpha=float(params[0]), beta=float(params[1]), alpha_stderr=float(np.sqrt(cov[0, 0])),
-                       beta_stderr=float(np.sqrt(cov[1, 1])), covariance=cov, n_modes=int(f.size),
-                       chi2_p_value=p_value)
-
-
 def _response_power(units: str) -> int:
     """q of the mode model from the spectrum's units: 4 acceleration, 2 velocity, 0 displacement.
 
@@ -394,7 +318,7 @@ def identify_damping(source, *, band, n_peaks: int = 4, nperseg: int | None = No
     if len(usable) >= 2:
         freq = [pk.frequency_fit if method == "curve_fit" else pk.frequency for pk in usable]
         zs = [_zeta_of(pk, method) for pk in usable]
-        rayleigh = fit_rayleigh(freq, [z for z, _ in zs], [s for _, s in zs] if method == "curve_fit" else None)
+        rayleigh = fit_rayleigh_least_squares(freq, [z for z, _ in zs], [s for _, s in zs] if method == "curve_fit" else None)
     elif len(peaks) >= 2:
         messages.append("fewer than two peaks have a usable damping ratio (unresolved or failed fits)")
     return DampingIdentification(peaks=peaks, rayleigh=rayleigh, method=method, band=band, messages=messages)

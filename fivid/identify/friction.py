@@ -22,7 +22,8 @@ import numpy as np
 from fivid.errors import ConfigError, DataQualityError, FividError
 from fivid.friction import AmplitudeModel, ConditionDomain, PerturbedCoulombLaw, coefficient_units, law_dataset
 from fivid.identify.amplitude_fit import (COOKS_RULE, SELECTION_RULE, FormFit, akaike_weights, candidate_forms,
-                                          choose_form, fit_amplitude_forms, influential_runs)
+                                          choose_form, constant_law_warning, fit_amplitude_forms, influential_runs,
+                                          not_compared_reason)
 from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis,
                                   RunAnalysisSettings, analyse_run)
 from fivid.identify.shape import SpectralShape, identify_shape, shape_dependence
@@ -52,6 +53,7 @@ class FrictionIdentification:
     settings: dict = field(default_factory=dict)
     domain: ConditionDomain | None = None
     shape_test: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
 
     @property
     def used_runs(self) -> list:
@@ -69,7 +71,7 @@ class FrictionIdentification:
                 "form": f.form, "fitted": f.fitted, "chosen": self.chosen is f, "n_params": f.n_params,
                 "aicc": _num(f.aicc), "delta_aicc": _num(f.aicc - best), "akaike_weight": weights.get(f.form),
                 "cv_error": _num(f.cv_error), "aic": _num(f.aic), "bic": _num(f.bic),
-                "reason": f.reason or f.cv_reason,
+                "reason": not_compared_reason(f, self.form_fits) or f.cv_reason,
             })
         return rows
 
@@ -120,6 +122,7 @@ class FrictionIdentification:
             "injection": self.law.injection,
             "runs": runs,
             "messages": list(self.messages),
+            "warnings": list(self.warnings),
             "settings": dict(self.settings),
             "law_sha256": self.law.sha256,
         }
@@ -133,7 +136,9 @@ class FrictionIdentification:
             f"band {self.band[0]:g}-{self.band[1]:g} Hz; amplitude form {self.law.amplitude_model.form}: {self.why}",
         ]
         for row in self.selection_table():
-            if row["fitted"]:
+            if row["fitted"] and row["aicc"] is None and row["reason"]:
+                lines.append(f"  {row['form']:26s} not compared: {row['reason']}")
+            elif row["fitted"]:
                 w = row["akaike_weight"]
                 lines.append(f"  {row['form']:26s} AICc {_fmt(row['aicc'], '9.2f')}  dAICc {_fmt(row['delta_aicc'], '7.2f')}  "
                              f"weight {_fmt(w, '.3f')}  CV error {_fmt(row['cv_error'], '.3g')}"
@@ -147,6 +152,7 @@ class FrictionIdentification:
                 d, flag = influence[r.run_id]
                 state += f", Cook's D {d:.2g}" + (" > 4/n: influential (kept)" if flag else "")
             lines.append(f"  run {r.run_id}: mu {r.mu_mean:.4f}, A {r.mu_rms:.3g} ± {r.mu_rms_stderr:.2g} ({state})")
+        lines += [f"warning: {m}" for m in self.warnings]
         lines += [f"note: {m}" for m in self.messages]
         return "\n".join(lines)
 
@@ -170,6 +176,7 @@ class FrictionIdentification:
             "law_across_runs": int(self.law_across_runs),
             "shape_method": self.shape_method,
             "messages": "\n".join(self.messages),
+            "warnings": "\n".join(self.warnings),
             "source": "; ".join(f"{r.run_id}: {r.source}" for r in self.runs),
             "history": new_history(f"identify: friction law from {len(self.used_runs)} of {len(self.runs)} runs",
                                    timestamp=False),  # same runs, same law file bytes (issue 18)
@@ -397,6 +404,7 @@ def identify_friction_law(
     tolerance: float = 0.05,
     min_normal_force: float = 0.1,
     tare=None,
+    window=None,
     mains_frequency: float | None = 50.0,
     noise_correction: bool = True,
     glitch_repair: bool | None = None,
@@ -430,6 +438,9 @@ def identify_friction_law(
         Runs with a mean normal force below this on the window are excluded [N].
     tare : (float, float), optional
         Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
+    window : (float, float), optional
+        Steady-sliding window [s] for every run; default from each run's encoder signal (``velocity`` or
+        ``position``), or from its forces when it has neither (:func:`fivid.signal.steady_force_window`).
     mains_frequency : float or None, default 50.0
         Mains harmonics standing out of the PSD are interpolated over [Hz], in runs whose Welch bins
         are <= mains/4 (else left in, with a message); None disables.
@@ -485,6 +496,7 @@ def identify_friction_law(
     band = _check_band(band, datasets)
     settings = RunAnalysisSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
                            tare=None if tare is None else tuple(float(x) for x in tare),
+                           window=None if window is None else tuple(float(x) for x in window),
                            mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence,
                            glitch_repair=glitch_repair)
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
@@ -494,6 +506,9 @@ def identify_friction_law(
         reasons = "; ".join(f"{r.run_id}: {r.reason}" for r in analyses)
         raise DataQualityError(f"no usable run among {len(analyses)}: {reasons}")
     messages = [f"run {r.run_id} excluded: {r.reason}" for r in analyses if not r.used]
+    messages += [f"run {r.run_id}: steady window {r.t_start:.4g}-{r.t_stop:.4g} s from the forces (no velocity or "
+                 "position recorded; check it, or give it with --window T0 T1)" for r in used
+                 if r.window_source.startswith("forces")]
     messages += [f"run {r.run_id}: mains-line removal {r.mains_removal}" for r in used
                  if r.mains_removal.startswith("not done")]
     messages += [f"run {r.run_id}: {r.glitches_replaced} force sample(s) replaced as DAQ glitches (spikes or "
@@ -519,11 +534,15 @@ def identify_friction_law(
     else:
         fits, chosen, why = [], None, ""
     law_across_runs = chosen is not None
+    warnings = []
     if chosen is not None:
         model = chosen.model
         for f in fits:
             if not f.fitted and f.form != "constant":
                 messages.append(f"amplitude form {f.form} not fitted: {f.reason}")
+        warning = constant_law_warning(chosen, amplitude)
+        if warning:
+            warnings.append(warning)
         for r, d, flag in zip(used, chosen.cooks_distance, influential_runs(chosen)):
             if flag:
                 messages.append(f"run {r.run_id} is influential in the {chosen.form} fit: Cook's distance {d:.3g} > "
@@ -562,6 +581,6 @@ def identify_friction_law(
     }
     return FrictionIdentification(
         law=law, mu0=mu0, mu0_ci=mu0_ci, band=band, runs=analyses, shape=shape, shape_method=shape_method,
-        form_fits=fits, chosen=chosen, why=why, law_across_runs=law_across_runs, messages=messages,
+        form_fits=fits, chosen=chosen, why=why, law_across_runs=law_across_runs, messages=messages, warnings=warnings,
         settings=recorded, domain=domain, shape_test=shape_test,
     )

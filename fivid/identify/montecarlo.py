@@ -26,6 +26,7 @@ import logging
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.signal.steady import steady_part
 
 __all__ = ["draw_coefficients", "law_with_coefficients", "sample_seeds", "monte_carlo_laws", "sample_spectrum",
            "SAMPLED", "NOT_SAMPLED"]
@@ -139,7 +140,7 @@ def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration",
     from fivid.solver import simulate
 
     ds = simulate(model, law=law, progress=False, **params)
-    steady = ds.sel(time=slice(float(ds.attrs["transient_end"]) + float(settle), None))
+    steady = steady_part(ds, settle=settle)  # from the simulation's transient_end
     label = f"Monte-Carlo sample (seed {params.get('seed')})"
     da = _signal(steady, variable, sensor, label)
     psd = welch_psd(da, nperseg=int(nperseg), noverlap=noverlap, window=window, detrend=detrend,

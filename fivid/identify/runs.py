@@ -51,6 +51,10 @@ class RunAnalysisSettings:
         Runs whose mean normal force on the window is below this [N] are excluded.
     tare : (float, float) or None
         Unloaded interval [s] whose mean forces are subtracted as sensor offsets.
+    window : (float, float) or None
+        Steady-sliding window [s] given by hand for every run; None: from the encoder signal
+        (``velocity`` or ``position``), or from the forces when a run has neither
+        (:func:`fivid.signal.measured_window`).
     mains_frequency : float or None
         Mains frequency [Hz] whose harmonics are removed from the PSD when they stand out; None: off.
     noise_correction : bool
@@ -70,6 +74,7 @@ class RunAnalysisSettings:
     tolerance: float = 0.05
     min_normal_force: float = 0.1
     tare: tuple | None = None
+    window: tuple | None = None
     mains_frequency: float | None = 50.0
     noise_correction: bool = True
     glitch_repair: bool | None = None
@@ -83,6 +88,7 @@ class RunAnalysisSettings:
             "tolerance": self.tolerance,
             "min_normal_force": self.min_normal_force,
             "tare": self.tare,
+            "window": self.window,
             "mains_frequency": self.mains_frequency,
             "noise_correction": self.noise_correction,
             "glitch_repair": "auto" if self.glitch_repair is None else self.glitch_repair,
@@ -108,6 +114,7 @@ class RunAnalysis:
     reason: str = ""
     t_start: float = np.nan
     t_stop: float = np.nan
+    window_source: str = ""
     normal_force_mean: float = np.nan
     mu_mean: float = np.nan
     mu_mean_ci: tuple = (np.nan, np.nan)
@@ -134,6 +141,7 @@ class RunAnalysis:
             "used": self.used,
             "reason": self.reason,
             "window": [self.t_start, self.t_stop],
+            "window_source": self.window_source,
             "normal_force_mean": self.normal_force_mean,
             "mu_mean": self.mu_mean,
             "mu_mean_ci": list(self.mu_mean_ci),
@@ -301,7 +309,7 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
     """
     import xarray as xr
 
-    from fivid.signal import steady_sliding_window, welch_psd
+    from fivid.signal import measured_window, welch_psd
 
     run_id = str(ds.attrs.get("run_id", "?"))
     label = f"run {run_id!r}"
@@ -334,11 +342,17 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
     tare_sel = None
     if settings.tare is not None:
         ft, fn, tare_sel = _tare(t, ft, fn, settings, label)
-    try:
-        t0, t1 = steady_sliding_window(ds, tolerance=settings.tolerance)
-    except DataQualityError as exc:
-        res.reason = f"not in steady sliding: {exc.message}"
-        return res
+    if settings.window is not None:
+        t0, t1 = _given_window(t, settings.window, label)
+        res.window_source = "given (--window)"
+    else:
+        try:
+            t0, t1 = measured_window(ds, tolerance=settings.tolerance)
+        except DataQualityError as exc:
+            res.reason = f"not in steady sliding: {exc.message}"
+            return res
+        encoder = "velocity" in ds.variables or "position" in ds.variables
+        res.window_source = "encoder" if encoder else "forces (no encoder signal)"
     if settings.tare is not None and settings.tare[0] < t1 and settings.tare[1] > t0:
         raise FividError(
             f"{label}: tare interval {settings.tare[0]:g}-{settings.tare[1]:g} s overlaps the steady-sliding window "
@@ -421,6 +435,17 @@ def _mains_removal_state(resolution, mains_frequency, n_samples, fs):
     return (f"not done: Welch resolution {resolution:.4g} Hz > mains/4 = {mains_frequency / 4:.4g} Hz would take "
             f"broadband power for lines (needs segments of >= {int(np.ceil(4 * fs / mains_frequency))} samples; "
             f"the window has {n_samples}); the hum power stays in A")
+
+
+def _given_window(t, window, label):
+    """The first and last sample times [s] of a window given by hand, checked against the record."""
+    lo, hi = float(window[0]), float(window[1])
+    half = 0.5 / _rate_of(t)
+    if not (lo < hi and lo >= t[0] - half and hi <= t[-1] + half):
+        raise FividError(f"{label}: --window {lo:g} s {hi:g} s must be an increasing interval inside the record "
+                         f"{t[0]:g}-{t[-1]:g} s")
+    sel = t[(t >= lo) & (t <= hi)]
+    return float(sel[0]), float(sel[-1])
 
 
 def _rate_of(t) -> float:

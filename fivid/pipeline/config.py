@@ -42,7 +42,6 @@ __all__ = [
     "load_plan",
     "load_recipe",
     "load_run_config",
-    "read_yaml",
     "line_of_key",
 ]
 
@@ -126,12 +125,6 @@ class Plan:
     recipe_sha256: str
     config: RunConfig
     extra: dict = field(default_factory=dict)
-
-
-def read_yaml(path: str | os.PathLike, what: str) -> tuple[dict, str]:
-    """Load a YAML mapping (:func:`fivid.config_layer.read_yaml`); returns ``(mapping, sha256 of the file bytes)``."""
-    source = config_layer.read_yaml(path, what)
-    return source.data, source.sha256
 
 
 def line_of_key(path, key: str) -> int | None:

@@ -11,13 +11,16 @@ For the pipeline's model (matched by file name, then checked by its largest elem
 
 - ``band_level_error_db``: ``|band_level_deviation_db|``, the model's mesh's level of the scoring band minus
   the Richardson-extrapolated level (the finest mesh's where the three levels do not converge monotonically),
-  computed from the study's PSDs of the three meshes (at the solver's step) that the table carries;
+  computed from the study's PSDs of the three meshes (at the solver's step) that the table carries, with the
+  scores' bin weights (:func:`fivid.signal.levels.bin_weights`, as ``level_diff_db``);
   ``band_lsd_db``: the log-spectral distance between the model's mesh's PSD and the finest mesh's over the
   band's bins (the study's record: one realisation, the same seed on every mesh). A table without PSDs gives
   instead the largest error over the one-third-octave bands the scoring band overlaps: a band's power is the
   sum of its parts' powers, so if every part is off by a factor within ``[a, b]`` the band is too;
-- ``third_octaves``: the breakdown, each one-third-octave band overlapping the scoring band with its level error
-  on the model's mesh, observed order and reference;
+- ``third_octaves``: the breakdown, each one-third-octave band with its level error on the model's mesh, observed
+  order and reference: from the PSDs, exactly the bands of the scores' ``band_level_error_db`` (IEC 61260-1
+  base-10 bands inside the scoring band, :func:`fivid.signal.levels.third_octave_weights`); from a table without
+  PSDs, its bands (the same IEC grid over the study's PSD range) that overlap the scoring band;
 - ``peaks``: each prominent PSD peak inside the band, its frequency shift on the model's mesh [Hz] and that shift
   in Welch bins of the scoring (``sample_rate / nperseg``); ``peak_shift_bins`` the largest;
 - ``time_step``: the largest PSD log-spectral distance [dB] between the solver's step and the smallest step of
@@ -38,6 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from fivid.pipeline.cache import file_sha256
+from fivid.signal.compare import band_distance, band_levels_db
+from fivid.signal.levels import bin_weights, third_octave_weights
+from fivid.study.convergence import BAND_LEVEL_REFERENCE, observed_order
 
 __all__ = ["DEFAULT_TABLE", "discretisation_estimate", "model_mesh", "write_convergence_table"]
 
@@ -66,6 +72,36 @@ def _pick(deviation, h_list, h) -> float | None:
         if abs(hk - h) <= H_TOLERANCE * h:
             return float(deviation[k])
     return None
+
+
+def _part(band, oo, h) -> dict:
+    """One one-third-octave band of the breakdown: its level's deviation on the model's mesh [dB], order, reference."""
+    return {"band": [float(band[0]), float(band[1])], "deviation_db": _pick(oo["deviation"], oo["h"], h),
+            "order": oo["order"], "reference": "extrapolated" if oo["order"] is not None else "finest mesh"}
+
+
+def _from_spectra(spectra: dict, h: float, lo: float, hi: float) -> tuple[dict, list[dict]]:
+    """Band level error, its order and the LSD to the finest mesh in ``[lo, hi]`` [Hz], and the breakdown over the
+    scores' one-third-octave bands, from the table's PSDs of the meshes (the scores' band grid and bin weights:
+    :func:`fivid.signal.levels.third_octave_weights`, :func:`fivid.signal.compare.band_distance`)."""
+    f = np.asarray(spectra["frequency"], float)
+    psd = np.asarray(spectra["psd"], float)  # (mesh, frequency)
+    hs = [float(x) for x in spectra["element_size"]]
+    k_model = next(k for k, x in enumerate(hs) if abs(x - h) <= H_TOLERANCE * h)
+    # Richardson needs three meshes: the three finest, the model's among them (else the two finest and it)
+    three = [int(k) for k in np.argsort(hs)[:3]]
+    if k_model not in three:
+        three = three[:2] + [k_model]
+    h3 = [hs[k] for k in three]
+    oo = observed_order(h3, band_levels_db(psd[three], bin_weights(f, lo, hi), reference=BAND_LEVEL_REFERENCE))
+    dev = _pick(oo["deviation"], oo["h"], h)
+    lsd, _ = band_distance(f, psd[int(np.argmin(hs))], psd[k_model], (lo, hi))
+    thirds, weights = third_octave_weights(f, lo, hi, min_bins=1.0)
+    levels = band_levels_db(psd[three], weights, reference=BAND_LEVEL_REFERENCE)  # (3, band)
+    parts = [_part(band, observed_order(h3, levels[:, b]), h)
+             for b, band in enumerate(zip(thirds["lower"], thirds["upper"]))]
+    return ({"band_level_error_db": abs(dev), "band_level_deviation_db": dev, "band_level_order": oo["order"],
+             "band_lsd_db": lsd if np.isfinite(lsd) else None}, parts)
 
 
 def discretisation_estimate(model_path, band, table_path, *, bin_width: float) -> dict:
@@ -114,28 +150,12 @@ def discretisation_estimate(model_path, band, table_path, *, bin_width: float) -
     parts = []
     for b in m.get("band_level_db", [])[:-1]:  # the last entry is the whole PSD range
         if b["band"][1] > lo and b["band"][0] < hi:
-            parts.append({"band": b["band"], "deviation_db": _pick(b["deviation"], b["h"], h), "order": b["order"],
-                          "reference": "extrapolated" if b["order"] is not None else "finest mesh"})
+            parts.append(_part(b["band"], b, h))
     level = {"band_level_error_db": max((abs(o["deviation_db"]) for o in parts), default=None),
              "band_level_deviation_db": None, "band_level_order": None, "band_lsd_db": None}
     spectra = table.get("psd")
     if spectra and _pick(spectra["element_size"], spectra["element_size"], h) is not None:
-        from fivid.study.convergence import band_levels_db, observed_order
-
-        f = np.asarray(spectra["frequency"], float)
-        psd = np.asarray(spectra["psd"], float)  # (mesh, frequency)
-        hs = [float(x) for x in spectra["element_size"]]
-        k_model = next(k for k, x in enumerate(hs) if abs(x - h) <= H_TOLERANCE * h)
-        # Richardson needs three meshes: the three finest, the model's among them (else the two finest and it)
-        three = [int(k) for k in np.argsort(hs)[:3]]
-        if k_model not in three:
-            three = three[:2] + [k_model]
-        oo = observed_order([hs[k] for k in three], [band_levels_db(f, psd[k], [(lo, hi)])[0] for k in three])
-        dev = _pick(oo["deviation"], oo["h"], h)
-        sel = (f >= lo) & (f <= hi)
-        d = 10.0 * np.log10(psd[k_model, sel] / psd[int(np.argmin(hs)), sel])
-        level = {"band_level_error_db": abs(dev), "band_level_deviation_db": dev, "band_level_order": oo["order"],
-                 "band_lsd_db": float(np.sqrt(np.mean(d * d))) if d.size else None}
+        level, parts = _from_spectra(spectra, h, lo, hi)
     peaks = []
     for p in m.get("psd_peak_frequency", []):
         if lo <= p["peak"] <= hi:

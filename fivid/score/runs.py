@@ -12,16 +12,7 @@ import numpy as np
 
 from fivid.errors import ConfigError, SchemaError, UnitError
 from fivid.schema import apply_cf_attrs, new_history
-from fivid.score.metrics import (
-    band_levels_db,
-    level_difference_db,
-    log_psd_db,
-    log_spectral_distance,
-    match_peaks,
-    refine_peak,
-    shape_correlation,
-    spectral_peaks,
-)
+from fivid.score.metrics import shape_correlation
 from fivid.score.uncertainty import (
     correlation_ceiling,
     log_psd_bias_db,
@@ -29,7 +20,9 @@ from fivid.score.uncertainty import (
     relative_power_std,
     rms_threshold_db,
 )
+from fivid.signal.compare import band_levels_db, level_difference_db, log_psd_db, log_spectral_distance
 from fivid.signal.levels import bin_weights, third_octave_weights
+from fivid.signal.peaks import match_peaks, refine_peak, spectral_peaks
 from fivid.signal.resample import resample_to
 from fivid.signal.sampling import run_label, sample_rate_of
 from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, check_nperseg, segment_window

@@ -30,6 +30,7 @@ __all__ = [
     "segment_count",
     "SpectralSettings",
     "averaged_spectra",
+    "welch_density",
     "equivalent_degrees_of_freedom",
     "bin_correlation",
     "bin_degrees_of_freedom",
@@ -209,6 +210,61 @@ def averaged_spectra(x: np.ndarray, settings: SpectralSettings, y: np.ndarray | 
         _one_sided_density(sxy, settings, w, k_total),
         k_total,
     )
+
+
+def welch_density(x, fs: float, *, nperseg: int, noverlap: int | None = None, window="hann",
+                  detrend="constant") -> tuple[np.ndarray, np.ndarray]:
+    """One-sided Welch PSD of a plain array: ``(frequency [Hz], density [u2 Hz-1])``.
+
+    The array-level entry of fivid's spectra for code that holds numbers, not DataArrays (study points, profiles
+    over ``x`` with ``fs = 1 / dx`` [m-1]): :func:`scipy.signal.welch` with every setting explicit
+    (``scaling="density"``, ``average="mean"``, one-sided, no padding). The DataArray entry with units, χ² bounds
+    and recorded settings is :func:`fivid.signal.welch_psd` (:func:`averaged_spectra`, pyfftw), which agrees with
+    it to round-off (tests/test_signal_compare.py).
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Uniformly sampled signal [u], finite, ``n >= nperseg``.
+    fs : float
+        Sampling rate [Hz] (or samples per unit of whatever ``x`` is sampled over).
+    nperseg : int
+        Segment length [samples].
+    noverlap : int, optional
+        Overlap [samples]; default ``nperseg // 2``.
+    window : str, tuple or ndarray, default "hann"
+        Taper (:func:`segment_window`).
+    detrend : {"constant", "linear", "none"} or False, default "constant"
+        Per-segment detrending.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        Frequencies ``k fs / nperseg`` and the density; ``sum(p) * fs / nperseg`` is the variance of the
+        detrended signal.
+
+    Examples
+    --------
+    White noise of variance 1 sampled at 1 kHz has the density 2 / fs = 2e-3 Hz-1:
+
+    >>> x = np.random.default_rng(0).standard_normal(2**16)
+    >>> f, p = welch_density(x, 1000.0, nperseg=256)
+    >>> bool(abs(p[1:-1].mean() / 2e-3 - 1) < 0.02)
+    True
+    """
+    import scipy.signal
+
+    nperseg = check_nperseg(nperseg)
+    noverlap = nperseg // 2 if noverlap is None else int(noverlap)
+    detrend = "none" if detrend in (None, False) else detrend
+    SpectralSettings(fs=float(fs), nperseg=nperseg, noverlap=noverlap, window=window, detrend=detrend)  # checks
+    x = np.asarray(x, dtype=np.float64)
+    if x.size < nperseg:
+        raise ConfigError(f"signal of {x.size} samples is shorter than one segment (nperseg = {nperseg})",
+                          key="nperseg")
+    return scipy.signal.welch(x, fs=float(fs), window=window, nperseg=nperseg, noverlap=noverlap,
+                              detrend=False if detrend == "none" else detrend, scaling="density",
+                              return_onesided=True, average="mean")
 
 
 def equivalent_degrees_of_freedom(window: np.ndarray, nsegments: int, step: int) -> float:

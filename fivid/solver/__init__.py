@@ -9,7 +9,7 @@ when a simulation runs.
 """
 
 from fivid.solver.driver import SimulationDiverged, simulate
-from fivid.solver.study import time_step_study
+from fivid.solver.step_halving import time_step_halving
 from fivid.solver.timestep import critical_time_step, stable_step
 
-__all__ = ["simulate", "critical_time_step", "stable_step", "time_step_study", "SimulationDiverged"]
+__all__ = ["simulate", "critical_time_step", "stable_step", "time_step_halving", "SimulationDiverged"]

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.signal.spectral import welch_density
 from fivid.signal.transient import envelope, envelope_growth_rate, growth_phase
 
 __all__ = ["GROSS_STICK", "STICK_SHARE", "analyse_transient"]
@@ -36,10 +37,8 @@ GROSS_STICK = 0.9
 
 
 def _peak_frequency(x, fs: float) -> float:
-    from scipy.signal import welch
-
     n = min(x.size, 4096)
-    f, p = welch(x - x.mean(), fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant")
+    f, p = welch_density(x - x.mean(), fs, nperseg=n)
     return float(f[1:][np.argmax(p[1:])])
 
 

@@ -12,26 +12,36 @@ dominant frequency (the last is resolution-limited by the Welch bin, ``fs / nper
 task, to
 
 - ``band_level_db``: the PSD's level [dB re 1e-6 of the response unit, i.e. re 1e-12 (unit)^2] in each
-  one-third-octave band (base 2: centres 1000 * 2^(k/3) Hz, edges centre * 2^(-1/6) and centre * 2^(1/6), clipped
-  to the PSD's frequency range, at least two bins) and, last, over the whole PSD range;
+  one-third-octave band of the PSD scores (IEC 61260-1 base-10 bands lying inside the PSD's frequency range, at
+  least one bin wide, bins weighted by the fraction of their rectangle inside the band:
+  :func:`fivid.signal.levels.third_octave_weights`) and, last, over the whole PSD range
+  (:func:`fivid.signal.levels.bin_weights`) -- so the errors qualify the scores' own band levels;
 - ``psd_peak_frequency``: the frequency of each prominent peak of the finest mesh's PSD (prominence >= 20 dB:
   a single Welch bin of broadband noise is chi2 with 2 degrees of freedom, 20 dB above a neighbouring dip has
   probability below 1e-4 per bin pair), located to a fraction of a bin by a parabola through the log PSD at the
   peak bin and its neighbours (exact for a Gaussian peak), matched to the nearest peak of the same kind on the
-  coarser meshes (within a quarter of the peak frequency).
+  coarser meshes (within a tenth of the peak frequency): :func:`fivid.signal.peaks.track_peaks`.
 
 Time step: points that differ only in ``time_step`` (fractions of the critical step) are compared to the smallest
-step: the log-spectral distance of their PSDs (dB) and their level difference (dB), as the solver's own
-time-step study (:func:`fivid.solver.time_step_study`); with three or more steps the same observed orders as
-for the mesh (``order``, with ``time_step`` in the place of ``h``) for the band levels and the peak
-frequencies.
+step: the log-spectral distance of their PSDs (dB) and their level difference (dB) over the PSD's range, as the
+solver's own time-step halving (:func:`fivid.signal.compare.band_distance`); with three or more steps the same
+observed orders as for the mesh (``order``, with ``time_step`` in the place of ``h``) for the band levels and the
+peak frequencies.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["observed_order", "convergence_summary", "third_octave_bands", "band_levels_db", "psd_peaks"]
+from fivid.signal.compare import band_distance, band_levels_db
+from fivid.signal.levels import bin_weights, third_octave_weights
+from fivid.signal.peaks import track_peaks
+
+__all__ = ["observed_order", "convergence_summary", "band_level_grid", "BAND_LEVEL_REFERENCE"]
+
+#: reference power of the band levels [(unit)^2]: 1e-12, i.e. re 1e-6 of the response unit (ISO 1683's
+#: acceleration reference for m s-2)
+BAND_LEVEL_REFERENCE = 1e-12
 
 #: prominence [dB] of a PSD peak that is tracked (module docstring: a noise bin pair reaches it with p < 1e-4)
 PEAK_PROMINENCE_DB = 20.0
@@ -90,58 +100,15 @@ def observed_order(h, q) -> dict:
     return out
 
 
-def third_octave_bands(f_lo: float, f_hi: float) -> list[tuple[float, float]]:
-    """One-third-octave bands [Hz] (base 2: centres 1000 * 2^(k/3), edges centre * 2^(-+1/6)) overlapping
-    ``[f_lo, f_hi]``, clipped to it.
-
-    >>> [(round(a), round(b)) for a, b in third_octave_bands(800.0, 1500.0)]
-    [(800, 891), (891, 1122), (1122, 1414), (1414, 1500)]
-    """
-    out = []
-    for k in range(-36, 37):
-        c = 1000.0 * 2.0 ** (k / 3.0)
-        lo, hi = c * 2.0 ** (-1.0 / 6.0), c * 2.0 ** (1.0 / 6.0)
-        if hi > f_lo and lo < f_hi:
-            out.append((max(lo, f_lo), min(hi, f_hi)))
-    return out
-
-
-def band_levels_db(f, p, bands) -> list[float]:
-    """Level [dB re 1e-12 (unit)^2, i.e. re 1e-6 of the PSD's amplitude unit] of the PSD ``p(f)`` in each band
-    (sum of the bins whose centre is inside, times the bin width)."""
-    f, p = np.asarray(f, float), np.asarray(p, float)
-    df = float(np.median(np.diff(f)))
-    out = []
-    for lo, hi in bands:
-        power = float(np.sum(p[(f >= lo) & (f <= hi)])) * df
-        out.append(10.0 * np.log10(power / 1e-12) if power > 0 else float("-inf"))
-    return out
-
-
-def psd_peaks(f, p, prominence_db: float = PEAK_PROMINENCE_DB) -> np.ndarray:
-    """Frequencies [Hz] of the peaks of ``p(f)`` with at least ``prominence_db`` of prominence, each refined by the
-    parabola through the log PSD at the peak bin and its two neighbours.
-
-    >>> f = np.arange(0.0, 2000.0, 25.0)
-    >>> p = 1e-6 + np.exp(-0.5 * ((f - 1010.0) / 30.0) ** 2)  # a Gaussian peak between two bins
-    >>> [round(float(x), 3) for x in psd_peaks(f, p)]
-    [1010.0]
-    """
-    from scipy.signal import find_peaks
-
-    f, p = np.asarray(f, float), np.asarray(p, float)
-    ok = p > 0
-    level = np.full(p.shape, -np.inf)
-    level[ok] = 10.0 * np.log10(p[ok])
-    level[~ok] = level[ok].min() if ok.any() else 0.0
-    idx, _ = find_peaks(level, prominence=prominence_db)
-    df = float(np.median(np.diff(f)))
-    out = []
-    for k in idx:
-        a, b, c = level[k - 1], level[k], level[k + 1]
-        den = a - 2.0 * b + c
-        out.append(f[k] + (0.5 * (a - c) / den * df if den < 0 else 0.0))
-    return np.array(out)
+def band_level_grid(f) -> tuple[list[tuple[float, float]], np.ndarray]:
+    """The bands of ``band_level_db`` on the frequency grid ``f`` [Hz]: the scores' one-third-octave bands inside
+    ``[f[0], f[-1]]`` (at least one bin wide) and, last, the whole range; ``(bands [Hz], weights (bin, band)
+    [Hz])``."""
+    f = np.asarray(f, float)
+    lo, hi = float(f[0]), float(f[-1])
+    thirds, weights = third_octave_weights(f, lo, hi, min_bins=1.0)
+    bands = [(float(a), float(b)) for a, b in zip(thirds["lower"], thirds["upper"])] + [(lo, hi)]
+    return bands, np.column_stack([weights, bin_weights(f, lo, hi)])
 
 
 def _spectral_series(ds, idx, x) -> dict:
@@ -149,21 +116,12 @@ def _spectral_series(ds, idx, x) -> dict:
     ``ds``) whose refinement parameter is ``x`` (element size or time step; any order)."""
     f = ds["frequency"].values
     psd = ds["psd"].values[idx]
-    bands = [b for b in third_octave_bands(float(f[0]), float(f[-1])) if np.count_nonzero((f >= b[0]) & (f <= b[1])) >= 2]
-    bands.append((float(f[0]), float(f[-1])))
-    levels = np.array([band_levels_db(f, p, bands) for p in psd])  # (3, band)
+    bands, weights = band_level_grid(f)
+    levels = band_levels_db(psd, weights, reference=BAND_LEVEL_REFERENCE)  # (3, band)
     out = {"band_level_db": [dict(observed_order(x, levels[:, b]), band=list(bands[b])) for b in range(len(bands))]}
-    finest = int(np.argmin(x))
-    peaks = []
-    for f_ref in psd_peaks(f, psd[finest]):
-        found = []
-        for k in range(len(idx)):
-            cand = psd_peaks(f, psd[k], MATCH_PROMINENCE_DB) if k != finest else np.array([f_ref])
-            near = cand[np.argmin(np.abs(cand - f_ref))] if cand.size else np.nan
-            found.append(near if abs(near - f_ref) <= MATCH_WINDOW * f_ref else np.nan)
-        if np.all(np.isfinite(found)):
-            peaks.append(dict(observed_order(x, found), peak=float(f_ref)))
-    out["psd_peak_frequency"] = peaks
+    tracks = track_peaks(f, psd, int(np.argmin(x)), prominence_db=PEAK_PROMINENCE_DB,
+                         match_prominence_db=MATCH_PROMINENCE_DB, window=MATCH_WINDOW)
+    out["psd_peak_frequency"] = [dict(observed_order(x, found), peak=f_ref) for f_ref, found in tracks]
     return out
 
 
@@ -210,15 +168,12 @@ def convergence_summary(ds, table, done) -> dict | None:
             if len(members) < 2:
                 continue
             members = sorted(members)
-            ref = pts[members[0][1]]
-            p_ref = ds["psd"].values[ref]
+            f = ds["frequency"].values
+            p_ref = ds["psd"].values[pts[members[0][1]]]
             for frac, i in members[1:]:
-                p = ds["psd"].values[pts[i]]
-                ok = (p > 0) & (p_ref > 0)
-                d = 10 * np.log10(p[ok] / p_ref[ok])
+                lsd, level = band_distance(f, p_ref, ds["psd"].values[pts[i]], (f[0], f[-1]))
                 steps.append({"conditions": dict(key), "time_step": frac, "reference_time_step": members[0][0],
-                              "lsd_db": float(np.sqrt(np.mean(d * d))),
-                              "level_diff_db": float(10 * np.log10(p.sum() / p_ref.sum()))})
+                              "lsd_db": lsd, "level_diff_db": level})
             if len(members) >= 3 and "psd" in ds:  # the three smallest steps: observed orders in the step
                 three = members[:3]
                 steps_order.append({"conditions": dict(key), "time_step": [m[0] for m in three],

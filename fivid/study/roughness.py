@@ -22,6 +22,8 @@ import copy
 
 import numpy as np
 
+from fivid.signal.steady import steady_part
+
 __all__ = ["LV_REFERENCE", "synthetic_rough_profiles", "rough_pair_config", "vibration_level", "detect_shocks",
            "dissipated_power", "friction_coefficient_statistics", "roughness_metrics", "identification_run",
            "build_point_model", "simulate_rough_run",
@@ -52,9 +54,9 @@ def synthetic_rough_profiles(ra: float, length: float, *, correlation_length: fl
 
 
 def _si(ctx, value, key, units="m") -> float:
-    from fivid.fe.config import _quantity
+    from fivid.config_layer import quantity_at
 
-    return _quantity(ctx, value, key, units)
+    return quantity_at(ctx, value, key, units)
 
 
 def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None):
@@ -153,16 +155,14 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
 
 
 def _steady(ds, start=None):
-    t = ds["time"].values
-    t0 = float(ds.attrs.get("transient_end", 0.0)) if start is None else float(start)
-    return t >= t0
+    """The run from ``start`` [s], by default its steady part (:func:`fivid.signal.steady_part`)."""
+    return steady_part(ds) if start is None else ds.sel(time=slice(float(start), None))
 
 
 def vibration_level(ds, *, start=None, reference: float = LV_REFERENCE) -> tuple[float, float]:
     """(Lv [dB], V_RMS [m s-1]): RMS over the steady time and every sensor of ``sensor_velocity``, each sensor's
     mean removed; ``Lv = 20 log10(V_RMS / reference)`` (seed 003: reference 1e-9 m s-1, back-face nodes)."""
-    sel = _steady(ds, start)
-    v = np.asarray(ds["sensor_velocity"].values, float)[sel]
+    v = np.asarray(_steady(ds, start)["sensor_velocity"].values, float)
     v = v.reshape(v.shape[0], -1)
     v = v - v.mean(axis=0)
     vrms = float(np.sqrt(np.mean(v * v)))
@@ -221,22 +221,22 @@ def detect_shocks(time, contact_normal_force, open_fraction, n_slave: int, *, mi
 
 def dissipated_power(ds, *, start=None) -> float:
     """Mean friction power [W]: least-squares slope of ``friction_dissipation`` over the steady part."""
-    sel = _steady(ds, start)
-    t, e = ds["time"].values[sel], ds["friction_dissipation"].values[sel]
+    part = _steady(ds, start)
+    t, e = part["time"].values, part["friction_dissipation"].values
     return float(np.polyfit(t - t[0], e, 1)[0]) if t.size > 1 else np.nan
 
 
 def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
     """Lv, V_RMS, shocks, dissipated power and mean forces of a rough-pair run (steady part)."""
-    sel = _steady(ds, start)
+    part = _steady(ds, start)
     lv, vrms = vibration_level(ds, start=start)
-    sh = detect_shocks(ds["time"].values[sel], ds["contact_normal_force"].values[sel], ds["open_fraction"].values[sel],
+    sh = detect_shocks(part["time"].values, part["contact_normal_force"].values, part["open_fraction"].values,
                        n_slave, **shock_options)
     return {"vibration_level": lv, "velocity_rms": vrms, "shock_rate": sh["rate"], "shock_impulse": sh["mean_impulse"],
             "shock_count": sh["count"], "dissipated_power": dissipated_power(ds, start=start),
-            "mean_normal_force": float(np.mean(ds["contact_normal_force"].values[sel])),
-            "mean_friction_force": float(np.mean(ds["friction_force"].values[sel])),
-            "open_fraction": float(np.mean(ds["open_fraction"].values[sel])), "shocks": sh,
+            "mean_normal_force": float(np.mean(part["contact_normal_force"].values)),
+            "mean_friction_force": float(np.mean(part["friction_force"].values)),
+            "open_fraction": float(np.mean(part["open_fraction"].values)), "shocks": sh,
             **friction_coefficient_statistics(ds, start=start)}
 
 
@@ -247,9 +247,9 @@ def friction_coefficient_statistics(ds, *, start=None) -> dict:
     its mean; ``friction_coefficient_rms``: RMS of mu - mean (the perturbation's amplitude over all frequencies
     up to the output Nyquist). The same mu(t) as :func:`identification_run` hands to ``fivid identify``. NaN
     without a transducer (a zero friction_force)."""
-    sel = _steady(ds, start)
-    ft = np.abs(np.asarray(ds["friction_force"].values, float)[sel])
-    fn = float(np.mean(np.asarray(ds["contact_normal_force"].values, float)[sel])) if np.any(sel) else 0.0
+    part = _steady(ds, start)
+    ft = np.abs(np.asarray(part["friction_force"].values, float))
+    fn = float(np.mean(np.asarray(part["contact_normal_force"].values, float))) if part.sizes["time"] else 0.0
     if not np.any(ft) or not fn > 0:
         return {"friction_coefficient": np.nan, "friction_coefficient_rms": np.nan}
     mu = ft / fn
@@ -271,7 +271,7 @@ def identification_run(ds):
     """
     import xarray as xr
 
-    out = ds.isel(time=_steady(ds))
+    out = _steady(ds)
     scale = float(np.mean(np.abs(out["contact_normal_force"].values))) if "contact_normal_force" in out else 0.0
 
     def negligible(name):  # a transducer that does not measure this component reads round-off

@@ -24,6 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.signal.spectral import welch_density
+from fivid.signal.steady import steady_part
+from fivid.signal.transient import narrowband_fraction
+
 __all__ = ["REGIMES", "element_size", "evaluate_point", "refined_model"]
 
 REGIMES = ("stable", "mode_coupling", "stick_slip")
@@ -71,14 +75,10 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
 
         fs = 1.0 / float(np.median(np.diff(t)))
         a = analyse_transient(t, x, sliding=state["sliding"], stick=state["stick"])
-        from scipy.signal import welch
-
-        from fivid.signal.transient import narrowband_fraction
-
         late = x[x.size // 2:]  # levels and spectra of the steady state: the record's second half
         rms = float(np.sqrt(np.mean((late - late.mean()) ** 2)))
         n_nb = min(late.size, 4096)
-        fb, pb = welch(late, fs=fs, window="hann", nperseg=n_nb, noverlap=n_nb // 2, detrend="constant")
+        fb, pb = welch_density(late, fs, nperseg=n_nb)
         data["narrowband_fraction"] = ((), narrowband_fraction(fb, pb), {
             "units": "1", "long_name": "share of the response power in prominent spectral peaks",
             "nperseg": n_nb})
@@ -111,10 +111,8 @@ def evaluate_point(system: dict, tasks: dict, conditions: dict):
             data["level_db"] = ((), 20.0 * np.log10(rms / 1e-6) if rms > 0 else -np.inf,
                                 {"units": "dB", "long_name": "acceleration level re 1e-6 m s-2"})
         if "psd" in tasks:
-            from scipy.signal import welch
-
             n = min(tasks["psd"]["nperseg"], late.size)
-            f, p = welch(late, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
+            f, p = welch_density(late, fs, nperseg=n)
             if "band" in tasks["psd"]:
                 sel = (f >= tasks["psd"]["band"][0]) & (f <= tasks["psd"]["band"][1])
                 f, p = f[sel], p[sel]
@@ -199,15 +197,15 @@ def _fe_transient(model, tasks, conditions):
         kw["safety"] = float(conditions["time_step"])
     ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"],
                   seed=int(conditions.get("seed", 0)), progress=False, **kw)
-    steady = ds["time"].values >= ds.attrs["transient_end"]
+    ds = steady_part(ds)  # from the run's transient_end
     acc = ds["acceleration"]
     if "sensor" in acc.dims:
         acc = acc.isel(sensor=0)
-    t = ds["time"].values[steady]
-    x = acc.values[steady]
+    t = ds["time"].values
+    x = acc.values
     if "stick_fraction" in ds:  # per pair: share of the slave nodes sticking (open ones count as neither)
         stick = ds["stick_fraction"]
-        stick = (stick.mean("contact") if "contact" in stick.dims else stick).values[steady]
+        stick = (stick.mean("contact") if "contact" in stick.dims else stick).values
     else:
         stick = np.zeros(t.size)
     # the CEA's sliding equilibrium: the contact slides as a whole (most of it; a few nodes of a large contact

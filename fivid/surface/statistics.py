@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.signal.spectral import welch_density
 from fivid.surface.profile import sampling_step
 
 __all__ = ["height_distribution", "profile_psd", "autocorrelation", "correlation_length"]
@@ -62,10 +63,9 @@ def profile_psd(profile, *, nperseg: int | None = None, noverlap: int | None = N
     xarray.DataArray
         Density such that ``sum(psd) * df`` is the variance of the detrended heights [m2]; all the
         settings, ``sample_spacing`` [m] and ``frequency_resolution`` [m-1] in attrs. Computed by
-        :func:`scipy.signal.welch` with ``fs = 1 / Δx`` and ``scaling="density"``.
+        fivid's Welch estimator (:func:`fivid.signal.spectral.welch_density`) with ``fs = 1 / Δx``.
     """
     import xarray as xr
-    from scipy.signal import welch
 
     step = sampling_step(profile)
     z = np.asarray(profile.values, dtype=np.float64)
@@ -74,13 +74,12 @@ def profile_psd(profile, *, nperseg: int | None = None, noverlap: int | None = N
         raise ConfigError(f"nperseg must be between 2 and the {z.size} samples of the profile, got {nperseg}",
                           key="nperseg")
     noverlap = nperseg // 2 if noverlap is None else int(noverlap)
-    f, psd = welch(z, fs=1.0 / step, window=window, nperseg=nperseg, noverlap=noverlap, detrend=detrend,
-                   scaling="density", return_onesided=True, average="mean")
+    f, psd = welch_density(z, 1.0 / step, nperseg=nperseg, noverlap=noverlap, window=window, detrend=detrend)
     return xr.DataArray(
         psd, dims="spatial_frequency", name="psd_height",
         coords={"spatial_frequency": ("spatial_frequency", f, {"units": "m-1", "long_name": "spatial frequency"})},
         attrs={"units": "m3", "long_name": "power spectral density of the profile heights",
-               "estimator": "Welch (scipy.signal.welch), average='mean'", "scaling": "density", "window": window,
+               "estimator": "Welch (fivid.signal.spectral.welch_density), average='mean'", "scaling": "density", "window": window,
                "nperseg": nperseg, "noverlap": noverlap, "detrend": str(detrend), "sample_spacing": step,
                "sample_spacing_units": "m", "frequency_resolution": 1.0 / (nperseg * step),
                "frequency_resolution_units": "m-1"},

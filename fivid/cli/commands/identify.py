@@ -41,6 +41,10 @@ def register(subparsers) -> None:
     p.add_argument("--tare", nargs=2, type=quantity("s", nonnegative=True), metavar=("T0", "T1"),
                    help="unloaded interval [s]: its mean forces are subtracted (sensor offsets) and its noise PSD "
                    "is removed from the perturbation PSD")
+    p.add_argument("--window", nargs=2, type=quantity("s", nonnegative=True), metavar=("T0", "T1"),
+                   help="steady-sliding window [s] of every run, e.g. --window '50 ms' '0.4 s' (default: where the "
+                   "encoder velocity is on its plateau; without velocity or position columns, where the normal "
+                   "force is loaded and Ft/Fn on its plateau)")
     p.add_argument("--mains-frequency", type=quantity("Hz", nonnegative=True), default=50.0,
                    help="mains frequency [Hz] whose harmonics are removed when they stand out (0 disables; default 50)")
     p.add_argument("--shape", choices=("smoothed", "rolloff"), default="smoothed",
@@ -98,6 +102,7 @@ def _run(args) -> int:
         tolerance=args.tolerance,
         min_normal_force=args.min_normal_force,
         tare=args.tare,
+        window=args.window,
         mains_frequency=args.mains_frequency or None,
         shape_method=args.shape,
         injection=args.injection,

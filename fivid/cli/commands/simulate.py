@@ -110,7 +110,7 @@ def run(args) -> int:
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
 
-    def si(value):  # a parsed Quantity -> plain float (None stays None)
+    def si(value):  # a parsed QuantityArgument -> plain float (None stays None)
         return None if value is None else float(value)
 
     if args.samples is not None and not args.law:
@@ -137,15 +137,17 @@ def run(args) -> int:
 
     append_history(ds, _command_line(args))
     write_run(ds, args.output, overwrite=args.overwrite)
-    steady = ds.time >= ds.attrs["transient_end"]
+    from fivid.signal.steady import steady_part
+
+    steady = steady_part(ds)  # from the run's transient_end
     summary = {
         "output": str(args.output),
         "samples": int(ds.sizes["time"]),
         "time_step_s": ds.attrs["time_step"],
         "critical_time_step_s": ds.attrs["critical_time_step"],
         "transient_end_s": ds.attrs["transient_end"],
-        "mean_normal_force_n": float(ds.normal_force.where(steady).mean()),
-        "mean_friction_force_n": float(ds.friction_force.where(steady).mean()),
+        "mean_normal_force_n": float(steady.normal_force.mean()),
+        "mean_friction_force_n": float(steady.friction_force.mean()),
         "max_energy_balance_error_j": float(np.abs(ds.energy_balance_error).max()),
         "friction": ds.attrs["friction"],
     }

@@ -1,13 +1,23 @@
-"""Time-step study (DESIGN §5: friction needs it): the same run at dt and dt/2, PSDs compared."""
+"""Time-step halving (DESIGN §5: friction needs it): the same run at dt and dt/2, PSDs compared.
+
+A check of one simulation's step, not a parametric study (those are :mod:`fivid.study`); the PSDs and their
+distance come from :mod:`fivid.signal.compare`.
+"""
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-__all__ = ["time_step_study", "steady_psds", "band_distance"]
+from fivid.fe.model import Model, load_model
+from fivid.signal.compare import band_distance, steady_psds
+from fivid.solver.driver import simulate
+from fivid.solver.timestep import stable_step
+from fivid.units import power_units
+
+__all__ = ["time_step_halving"]
 
 
-def time_step_study(model, *, time_step=None, variable="acceleration", band=None, nperseg=None, **simulate_kwargs):
+def time_step_halving(model, *, time_step=None, variable="acceleration", band=None, nperseg=None, **simulate_kwargs):
     """Run :func:`fivid.solver.simulate` at ``dt`` and ``dt/2`` and report how the PSD changes.
 
     Parameters
@@ -31,19 +41,13 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     xarray.Dataset
         ``psd_coarse``, ``psd_fine`` [unit2 Hz-1] on ``frequency`` [Hz]; attrs ``time_step_coarse``,
         ``time_step_fine`` [s], ``lsd_db`` (RMS of 10 log10(P_fine/P_coarse) over the band [dB]),
-        ``level_diff_db`` (10 log10 of the ratio of band powers [dB]), ``band`` [Hz] and the Welch settings.
+        ``level_diff_db`` (10 log10 of the ratio of band powers [dB]; :func:`fivid.signal.compare.band_distance`), ``band`` [Hz] and the Welch settings.
         Only the steady-sliding part (time >= ``transient_end``) is analysed.
     """
     import xarray as xr
-    from fivid.fe.model import Model, load_model
-    from fivid.solver.driver import simulate
-    from fivid.solver.timestep import stable_step
-    from fivid.units import power_units
 
     if not isinstance(model, Model):
         model = load_model(model)
-    import math
-
     if time_step is None:
         time_step = float(simulate_kwargs.pop("safety", 0.9)) * stable_step(model).critical_time_step
     # the solver fits a whole number of steps in each recording interval: take that step and exactly half of it
@@ -54,7 +58,7 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
     f, psds, n = steady_psds(runs, variable=variable, nperseg=nperseg)
     fs = float(runs[0].attrs["sample_rate"])
     lo, hi = band if band is not None else (0.0, 0.8 * fs / 2)
-    lsd, level, sel = band_distance(f, psds[0], psds[1], (lo, hi))
+    lsd, level = band_distance(f, psds[0], psds[1], (lo, hi))
     units = power_units(runs[0][variable].attrs.get("units", "1"))
     out = xr.Dataset(
         {"psd_coarse": (("frequency",), psds[0], {"units": units}),
@@ -71,41 +75,3 @@ def time_step_study(model, *, time_step=None, variable="acceleration", band=None
         "welch": f"hann, nperseg {n}, noverlap {n // 2}, detrend constant, density",
     })
     return out
-
-
-def steady_psds(runs, *, variable="acceleration", nperseg=None):
-    """Welch PSDs of ``variable`` over the steady part of each run (:func:`fivid.signal.steady_part`; Hann, 50 %
-    overlap, constant detrend, density; first sensor): ``(frequency [Hz], [psd, ...], nperseg)``.
-
-    One ``nperseg`` for all runs: the one given (default :func:`fivid.signal.welch.default_nperseg` of the shortest
-    steady part), capped at the shortest steady part."""
-    from scipy.signal import welch
-
-    from fivid.signal.steady import steady_part
-    from fivid.signal.welch import default_nperseg
-
-    signals = []
-    for ds in runs:
-        da = steady_part(ds)[variable]
-        if "sensor" in da.dims:
-            da = da.isel(sensor=0)
-        signals.append((np.asarray(da.values), float(ds.attrs["sample_rate"])))
-    shortest = min(x.size for x, _ in signals)
-    n = default_nperseg(signals[0][1], shortest) if nperseg is None else int(nperseg)
-    n = min(n, shortest)
-    psds = []
-    for x, fs in signals:
-        f, p = welch(x, fs=fs, window="hann", nperseg=n, noverlap=n // 2, detrend="constant", scaling="density")
-        psds.append(p)
-    return f, psds, n
-
-
-def band_distance(f, p_ref, p, band):
-    """``(lsd_db, level_diff_db, selection)`` of ``p`` against ``p_ref`` over ``band`` [Hz]: the RMS of
-    ``10 log10(p / p_ref)`` and ``10 log10`` of the ratio of band powers [dB] (NaN on an empty band)."""
-    lo, hi = band
-    sel = (f >= lo) & (f <= hi) & (p_ref > 0) & (p > 0)
-    ratio_db = 10.0 * np.log10(p[sel] / p_ref[sel])
-    lsd = float(np.sqrt(np.mean(ratio_db ** 2))) if ratio_db.size else float("nan")
-    level = float(10.0 * np.log10(p[sel].sum() / p_ref[sel].sum())) if sel.any() else float("nan")
-    return lsd, level, sel

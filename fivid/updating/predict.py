@@ -1,0 +1,159 @@
+"""What a model predicts for the targets of ``fivid update``: paired modal frequencies (FE models) or FRF
+peak frequencies (damper models), from a config mapping.
+
+* :class:`FEModes` — ``fivid modes`` on the config (:func:`fivid.fe.modal.modal_analysis`, same preload and
+  contact options), mode shapes read at the model's sensors, targets paired by MAC or by order.
+* :class:`DamperPeaks` — harmonic-balance FRF peak per target normal load (:func:`fivid.damper.peaks.frf_peak`).
+
+Each is called with a config mapping and returns one predicted frequency [Hz] per target mode, plus what
+the report needs (paired model mode, MAC).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fivid.damper.model import damper_model_from_dict
+from fivid.damper.peaks import frf_peak
+from fivid.errors import ConfigError
+from fivid.fe.modal import modal_analysis
+from fivid.fe.model import load_model
+
+__all__ = ["Prediction", "FEModes", "DamperPeaks", "mac", "is_damper_config", "predictor_for"]
+
+#: a shape target pairs with a model mode only at or above this MAC
+PAIRING_MAC = 0.6
+
+
+def mac(a, b) -> float:
+    """Modal assurance criterion ``|a^H b|^2 / ((a^H a)(b^H b))`` of two (complex) shape vectors [1]."""
+    a = np.asarray(a, dtype=complex)
+    b = np.asarray(b, dtype=complex)
+    den = np.real(np.vdot(a, a) * np.vdot(b, b))
+    return float(abs(np.vdot(a, b)) ** 2 / den) if den > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Model values paired with the target modes.
+
+    Attributes
+    ----------
+    frequency : ndarray
+        Predicted frequency per target [Hz].
+    model_mode : list of int or None
+        1-based elastic model mode paired with each target (None for FRF peaks).
+    mac : list of float or None
+        MAC of the paired shapes (None where the target has no shape).
+    all_frequencies : ndarray
+        Every computed model frequency [Hz] (for ``count_below``; empty for damper models).
+    """
+
+    frequency: np.ndarray
+    model_mode: list
+    mac: list
+    all_frequencies: np.ndarray
+
+
+def is_damper_config(data) -> bool:
+    """A damper model config (``configs/dampers``: a ``beam`` with a ``contact``) rather than an FE model."""
+    return isinstance(data, dict) and "beam" in data and "bodies" not in data
+
+
+def predictor_for(data, targets):
+    """The predictor for this kind of model config."""
+    return DamperPeaks(targets) if is_damper_config(data) else FEModes(targets)
+
+
+class FEModes:
+    """Modal frequencies of an FE model config paired with target modes (see the module docstring)."""
+
+    #: relative finite-difference step of the sensitivities (eigenvalues are exact to ~1e-12)
+    diff_step = 1e-6
+
+    def __init__(self, targets):
+        self.targets = targets
+        self.n_modes = targets.n_modes or max(10, 2 * len(targets.modes))
+        for t in targets.modes:
+            if t.normal_load is not None:
+                raise targets.source.error(f"{t.key}.normal_load", "normal_load is for damper models (FRF peak "
+                                                                    "per normal load); an FE model's preload is "
+                                                                    "the top-level 'load'")
+
+    def __call__(self, data) -> Prediction:
+        """Predictions for the config mapping ``data``."""
+        model = load_model(data)
+        ds = modal_analysis(model, self.n_modes, mass=self.targets.mass, include_contact=self.targets.contact,
+                            normal_load=self.targets.load)
+        freq = ds["frequency"].values
+        elastic = np.flatnonzero(freq > 1e-6 * max(freq.max(), 1e-300))
+        shapes = ds["mode_shape"].values
+        sensors = {s.name: s for s in model.sensors}
+        used, out_f, out_mode, out_mac = set(), [], [], []
+        order_k = 0
+        src = self.targets.source
+        for t in self.targets.modes:
+            if t.shape is not None:
+                missing = [s for s in t.sensors if s not in sensors]
+                if missing:
+                    raise src.error(f"{t.key}.shape.sensors", f"no sensor {missing[0]!r} in the model; its sensors: "
+                                                              f"{', '.join(sensors) or '(none)'}")
+                phi = np.array([[shapes[j, sensors[s].node] @ sensors[s].direction for s in t.sensors]
+                                for j in elastic])
+                macs = np.array([mac(t.shape, p) if j not in used else -1.0 for j, p in zip(elastic, phi)])
+                best = int(np.argmax(macs))
+                if macs[best] < PAIRING_MAC:
+                    raise src.error(f"{t.key}.shape", f"no model mode pairs with this shape: the best unpaired MAC "
+                                                      f"among {elastic.size} elastic modes is {max(macs[best], 0):.2f}"
+                                                      f" (< {PAIRING_MAC}); compute more modes (n_modes) or check "
+                                                      "the sensors' order")
+                j = int(elastic[best])
+                out_mac.append(float(macs[best]))
+            else:
+                idx = (t.model_mode - 1) if t.model_mode is not None else order_k
+                order_k += 1
+                if idx >= elastic.size:
+                    raise src.error(t.key, f"cannot pair this target: the model has {elastic.size} elastic modes among "
+                                           f"the {self.n_modes} computed and the target is number {idx + 1} by order; "
+                                           "raise n_modes or give 'mode: N'")
+                j = int(elastic[idx])
+                out_mac.append(None)
+            used.add(j)
+            out_f.append(freq[j])
+            out_mode.append(int(np.searchsorted(elastic, j)) + 1)
+        return Prediction(np.array(out_f), out_mode, out_mac, freq)
+
+
+class DamperPeaks:
+    """FRF peak frequencies of a damper model config at the targets' normal loads."""
+
+    #: relative finite-difference step: the peak is refined to 1e-7 Hz, the step moves it by ~1e-3 Hz
+    diff_step = 1e-4
+
+    def __init__(self, targets):
+        self.targets = targets
+        for t in targets.modes:
+            if t.normal_load is None:
+                raise targets.source.error(t.key, "a damper model's target is the FRF peak at a normal load: add "
+                                                  "'normal_load: 40 N'")
+            if t.shape is not None:
+                raise targets.source.error(f"{t.key}.shape", "a damper model has one sensor: no shape to pair")
+        if targets.count_below:
+            raise targets.source.error(targets.count_below[0].key, "count_below is for FE models (modal analysis)")
+
+    def __call__(self, data) -> Prediction:
+        """Predictions for the config mapping ``data``."""
+        model = damper_model_from_dict(data)
+        peaks = {}
+        for t in self.targets.modes:
+            if t.normal_load not in peaks:
+                p = frf_peak(model, t.normal_load, xatol=1e-7)
+                if p.on_edge:
+                    raise ConfigError(f"the FRF peak at {t.normal_load:g} N is at the edge of the model's "
+                                      f"frequency_range ({p.frequency:.4g} Hz): widen frequency_range",
+                                      key="frequency_range")
+                peaks[t.normal_load] = p.frequency
+        f = np.array([peaks[t.normal_load] for t in self.targets.modes])
+        return Prediction(f, [None] * f.size, [None] * f.size, np.zeros(0))
