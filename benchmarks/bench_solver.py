@@ -335,7 +335,7 @@ def _auto_path(model_path, duration):
 
     import xarray as xr
 
-    from fivid.solver.study import band_distance, steady_psds
+    from fivid.signal.compare import band_distance, steady_psds
 
     cmd = [sys.executable, "-m", "fivid", "simulate", str(ROOT / model_path), "--mu", "0.3", "--velocity", "10 mm/s",
            "--load", "5 N"]
