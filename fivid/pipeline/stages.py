@@ -206,8 +206,10 @@ def solver_path(config) -> dict:
     """The solver-path arguments of :func:`fivid.solver.simulate` from ``simulate.solver`` (auto, full, reduced) and
     ``simulate.reduced_tolerance`` [dB] of the run configuration, the estimate's band being the scoring band (part
     of the simulate tasks' parameters, hence of their cache keys)."""
-    return {"reduced": {"full": None}.get(config.solver, config.solver),
-            "reduced_tolerance": float(config.reduced_tolerance), "error_band": [float(b) for b in config.band]}
+    solver = getattr(config, "solver", "auto")  # a hand-built config (tests) may lack them: the defaults
+    return {"reduced": {"full": None}.get(solver, solver),
+            "reduced_tolerance": float(getattr(config, "reduced_tolerance", 0.5)),
+            "error_band": [float(b) for b in config.band] if hasattr(config, "band") else None}
 
 
 class Simulate:
