@@ -31,6 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "sample_data"))
 
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, the script's own folder)
+
 
 def _psd(ds):
     from scipy.signal import welch
@@ -54,7 +56,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="the coarse rig (2 mm mesh) instead of the default rig")
     ap.add_argument("--cutoff", default="60 kHz", help="cut-off of the band-limited scheme (default 60 kHz)")
     ap.add_argument("--duration", default=None, help="steady duration [s] (default 0.1 s)")
-    args = ap.parse_args(argv)
+    args, load = parse_guarded(ap, argv)
 
     import yaml
 
@@ -101,6 +103,7 @@ def main(argv=None) -> int:
     out["fast_band_lsd_db"] = round(_lsd(f, p_ref, p_fast, 200.0, 1e4), 4)
     out["fast_scored_band_lsd_db"] = round(_lsd(f, p_ref, p_fast, 800.0, 5e3), 4)
     out["fast_rms_ratio"] = round(rms_fast / rms_ref, 4)
+    out["load_average_1min"] = load
     print(json.dumps(out))
     return 0
 

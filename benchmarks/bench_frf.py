@@ -30,12 +30,13 @@ from fivid.damper.continuation import continue_frequency_response  # noqa: E402
 from fivid.damper.hbm import HarmonicBalance  # noqa: E402
 from fivid.damper.model import load_damper_model  # noqa: E402
 from fivid.damper.timedomain import steady_state_response  # noqa: E402
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="time the time-domain reference on every 10th point")
-    args = ap.parse_args()
+    args, load = parse_guarded(ap)
     model = load_damper_model(ROOT / "configs" / "dampers" / "seed004_model1.yaml")
     fn = 2.0
     freqs = np.linspace(*model.frequency_range, 200)
@@ -71,6 +72,7 @@ def main():
         "time_domain_s": round(t_td, 3), "time_domain_points_timed": int(idx.size),
         "ratio_time_domain_over_hbm": round(t_td / best, 1),
         "max_rel_amplitude_difference": float(f"{max(diffs):.3g}"),
+        "load_average_1min": load,
     }))
 
 

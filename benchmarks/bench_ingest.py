@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
 HEADER = [
     "# fivid-rig-csv: 1",
@@ -108,7 +109,7 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="300,000 rows instead of 3,000,000")
     parser.add_argument("--rows", type=int, default=None, help="number of data rows")
     parser.add_argument("--repeat", type=int, default=3, help="timings of each (the minimum is kept)")
-    args = parser.parse_args(argv)
+    args, load = parse_guarded(parser, argv)
     rows = args.rows or (300_000 if args.quick else 3_000_000)
 
     import pandas as pd
@@ -152,6 +153,7 @@ def main(argv=None) -> int:
         "fivid_peak_rss_mb": fivid_rss,
         "pandas_peak_rss_mb": pandas_rss,
         "cpu_count": os.cpu_count(),
+        "load_average_1min": load,
     }))
     return 0
 

@@ -24,6 +24,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
 
 def _full_order_point(model, mu, n_eig, normal_load):
@@ -53,7 +54,7 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="coarse model (fast)")
     parser.add_argument("--normal-load", type=float, default=5.0, metavar="N",
                         help="normal load [N] of the preload the CEA linearises about (default 5, the sample runs')")
-    args = parser.parse_args(argv)
+    args, load = parse_guarded(parser, argv)
 
     import scipy.linalg  # noqa: F401  (imports outside the timed regions)
     import scipy.sparse.linalg as spla
@@ -101,6 +102,7 @@ def main(argv=None) -> int:
         "cea_unstable_modes": int(np.isfinite(ds["critical_mu"].values).sum()),
         "full_order_point_s": round(full_s, 4),
         "cea_speedup": round(mu.size * full_s / cea_s, 2),
+        "load_average_1min": load,
     }))
     return 0
 

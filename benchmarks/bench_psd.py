@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
 
 def best_time(fn, repeats: int) -> float:
@@ -33,7 +34,7 @@ def best_time(fn, repeats: int) -> float:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="2**22 samples, one repeat")
-    args = parser.parse_args(argv)
+    args, load = parse_guarded(parser, argv)
     import scipy.signal
 
     from fivid.signal.spectral import SpectralSettings, averaged_spectra
@@ -68,7 +69,7 @@ def main(argv=None) -> int:
         "time_fivid_first_call_incl_pyfftw_import_s": round(t_first, 4),
         "time_fivid_numpy_s": round(t_numpy, 4),
         "time_fivid_pyfftw_2_threads_s": round(t_two, 4),
-        "load_average_1min": round(__import__("os").getloadavg()[0], 2),
+        "load_average_1min": load,
         "speedup_vs_scipy_welch": round(t_scipy / t_fivid, 3),
         "speedup_numpy_backend": round(t_scipy / t_numpy, 3),
         "max_relative_difference": float(np.max(np.abs(p_fast - p_ref) / p_ref)),

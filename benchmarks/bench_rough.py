@@ -23,13 +23,15 @@ import json
 import time
 from pathlib import Path
 
+from _load_guard import parse_guarded  # benchmarks/, this script's folder
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="the quick study's model and shorter runs (noisier)")
-    args = ap.parse_args(argv)
+    args, load = parse_guarded(ap, argv)
 
     from fivid.fe import load_model
     from fivid.solver.driver import prepare_run
@@ -89,6 +91,7 @@ def main(argv=None) -> int:
         "rough_cpu_dof_updates_per_s": rough.n_dofs * rough_steps / c_rough,
         "default_cpu_dof_updates_per_s": default.n_dofs * default_steps / c_default,
         "rough_over_default_cpu": (rough.n_dofs * rough_steps / c_rough) / (default.n_dofs * default_steps / c_default),
+        "load_average_1min": load,
     }
     print(json.dumps(out))
     return 0

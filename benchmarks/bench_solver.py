@@ -1,9 +1,11 @@
 """Speed of the explicit contact solver (issue 5), as ratios measured in one run.
 
-    python benchmarks/bench_solver.py [--quick]
+    python benchmarks/bench_solver.py [--quick] [--force]
 
-Prints one JSON line: ``dofs``, ``steps``, ``dof_updates_per_s`` and ``ns_per_element_cycle`` of fivid's full
-step on the default rig (stencil K(u + beta v), central-difference update, constraints, contact with
+Refuses to run when the 1-minute load average exceeds the core count, unless ``--force``
+(``benchmarks/_load_guard.py``); the load at the start is ``load_average_1min`` (and at the end
+``load_average_1min_end``). Prints one JSON line: ``dofs``, ``steps``, ``dof_updates_per_s`` and
+``ns_per_element_cycle`` (wall time of one step per element) of fivid's full step on the default rig (stencil K(u + beta v), central-difference update, constraints, contact with
 Coulomb friction, energy bookkeeping, records) during a preload-and-slide run; ``speedup_vs_scipy_csr``
 against a plain scipy loop doing the same arithmetic (``K @ (u + beta v)`` and the lumped-mass update) on the
 same model; ``fraction_of_bare_stencil`` against the fastest bare stencil + update kernel written here for
@@ -19,7 +21,11 @@ Mapped blocks (per-node stencil patches, DESIGN §7/§11): the same ``fraction_o
 profiled, graded blocks in sliding contact) as ``rough_fraction_of_bare_stencil``; each against the bare
 rectangular stencil on a ghost-padded grid of the same node count per block (the speed the model would have
 if its blocks were uniform rectangles). ``rough_no_contact_*`` is the rough model with its contact pair removed:
-the mapped stencil's own cost, separated from the contact solve over its 481 slave nodes.
+the mapped stencil's own cost, separated from the contact solve over its 481 slave nodes; and
+``*_stencil_fraction_of_bare_stencil``: fivid's stencil pass alone (``block_forces``) against the bare stencil alone,
+separating the stencil from the rest of the step. The same ns-per-element-cycle figure is printed for the scipy loop
+and the bare stencil (``scipy_csr_ns_per_element_cycle``, ``bare_stencil_ns_per_element_cycle``), and the scipy loop
+against the bare stencil as ``scipy_csr_fraction_of_bare_stencil``.
 
 Two cores: ``parallel_efficiency_2_cores = t_1 / (2 t_2)`` of the ``prange`` stencil + update kernel with numba's
 threads set to 1 and 2 in the same run, and ``parallel_forkjoin_us_per_step`` (one empty two-iteration parallel
@@ -48,6 +54,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _load_guard import parse_guarded  # benchmarks/, this script's folder
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -90,9 +97,34 @@ def _bare_layout(model, c_rect):
     return off, blocks, c_uni
 
 
+def _stencil_loops():
+    """``(bare, fivid)``: ``nsteps`` passes of the bare rectangular stencil alone (no update) and of fivid's
+    :func:`fivid.solver._stencil_kernels.block_forces` alone, to separate the stencil's cost from the rest of the step."""
+    from numba import njit
+
+    from fivid.solver._stencil_kernels import _rect_component, block_forces
+
+    def bare_stencil(nsteps, npd, blocks, c_uni, w, f):
+        wx = w[:npd]
+        wy = w[npd:]
+        for _ in range(nsteps):
+            for b in range(blocks.shape[0]):
+                for a in range(2):
+                    _rect_component(wx, wy, f[a * npd:(a + 1) * npd], c_uni[b], a, blocks[b, 0], blocks[b, 1],
+                                    blocks[b, 2], blocks[b, 3])
+
+    def fivid_stencil(nsteps, w, f, stencil):
+        for _ in range(nsteps):
+            block_forces(w, f, stencil)
+
+    return njit(cache=False)(bare_stencil), njit(cache=False)(fivid_stencil)
+
+
 def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
-    """``(fraction_of_bare_stencil, dof_updates_per_s, mapped node share, mean Gauss-Seidel sweeps or None)`` of a
-    model with mapped blocks."""
+    """``(fraction_of_bare_stencil, dof_updates_per_s, mapped node share, mean Gauss-Seidel sweeps or None,
+    stencil_fraction_of_bare_stencil)`` of a model with mapped blocks: its full step against the bare stencil + update
+    on a ghost-padded grid of the same node count per block, and its stencil pass alone (``block_forces``) against the
+    bare stencil alone (interleaved rounds, best of each)."""
     from fivid.solver.driver import prepare_run
 
     prep = prepare_run(model, duration=duration, **kw)
@@ -103,16 +135,28 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
     mb = np.full(2 * npd, 1.0 / float(np.mean(prep.arrays.mass[prep.arrays.mass > 0])))
     dt, a, b = s.time_step, model.rayleigh_alpha, model.rayleigh_beta
     bare(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    bare_stencil, fivid_stencil = _stencil_loops()
+    st = prep.stencils
+    rng = np.random.default_rng(0)
+    w_st = np.zeros(2 * st.npd)
+    w_st[st.dof_index(np.arange(model.n_dofs))] = rng.standard_normal(model.n_dofs)
+    f_st = np.zeros_like(w_st)
+    w_bare = rng.standard_normal(2 * npd)
+    f_bare = np.zeros_like(w_bare)
+    bare_stencil(2, npd, blocks, c_uni, w_bare, f_bare)
+    fivid_stencil(2, w_st, f_st, st.kernel_args)
     prep.run(progress=False)  # compile/load the kernels for this model's argument types
-    t_run = t_bare = np.inf
+    t_run = t_bare = t_st = t_bare_st = np.inf
     for _ in range(rounds):
         t0 = time.perf_counter()
         ds = prep.run(progress=False)
         t_run = min(t_run, (time.perf_counter() - t0) / steps)
         t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
-    st = prep.stencils
+        t_st = min(t_st, _time(fivid_stencil, steps, w_st, f_st, st.kernel_args, repeat=1) / steps)
+        t_bare_st = min(t_bare_st, _time(bare_stencil, steps, npd, blocks, c_uni, w_bare, f_bare, repeat=1) / steps)
     mapped = int(st.blocks[st.blocks[:, 4] == 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)
-    return t_bare / t_run, model.n_dofs / t_run, mapped / model.n_nodes, ds.attrs.get("contact_gs_mean_sweeps")
+    return (t_bare / t_run, model.n_dofs / t_run, mapped / model.n_nodes, ds.attrs.get("contact_gs_mean_sweeps"),
+            t_bare_st / t_st)
 
 
 def _time(fn, *args, repeat=3):
@@ -130,36 +174,67 @@ def main(argv=None) -> int:
     ap.add_argument("--mass-scaling", type=float, default=None, metavar="FACTOR",
                     help="fast reduced path: fixed-interface modes and selective mass scaling at FACTOR x the band top "
                          "(sample_rate / 2; default 18 on the default rig: 460.8 kHz, 6 with --quick: 153.6 kHz)")
-    args = ap.parse_args(argv)
+    args, load = parse_guarded(ap, argv)
     import tempfile  # reduced set-up times are builds: an empty basis cache for this run (fivid.solver.basis_cache)
 
     os.environ["FIVID_CACHE_DIR"] = tempfile.mkdtemp(prefix="fivid-bench-bases-")
 
-    from fivid.fe import load_model, lumped_mass, stiffness_matrix
+    from fivid.fe import load_model
     from fivid.solver.driver import prepare_run
-    from fivid.solver.stencil import block_stencils
 
     default = load_model(ROOT / "configs/models/triboair.yaml")
     coarse = load_model(ROOT / "configs/models/triboair_coarse.yaml")
-    run_kw = dict(mu=0.3, sliding_velocity=0.01, normal_load=5.0, sample_rate=51200.0, preload_time=2e-4,
-                  settle_time=0.0, base_ramp_time=1e-4, progress=False)
+    kw = dict(mu=0.3, sliding_velocity=0.01, normal_load=5.0, sample_rate=51200.0, preload_time=2e-4,
+              settle_time=0.0, base_ramp_time=1e-4)
     # warm-up: load the cached kernels
-    prepare_run(coarse, duration=1e-4, **{k: v for k, v in run_kw.items() if k != "progress"}).run(progress=False)
-
-    # ---- the three loops on the same model, interleaved (the machine is shared: best of each over rounds)
+    prepare_run(coarse, duration=1e-4, **kw).run(progress=False)
+    out = {"benchmark": "solver", "quick": bool(args.quick), "load_average_1min": load}
+    rounds = 2 if args.quick else 3
     duration = 1e-4 if args.quick else 5e-4
-    kw = {k: v for k, v in run_kw.items() if k != "progress"}
-    prep = prepare_run(default, duration=duration, **kw)
+    bare, bare_par = _bare_kernels()
+    throughput, timing = _full_path_throughput(default, kw, duration, rounds, args.quick, bare, bare_par)
+    out.update(throughput)
+    out.update(_mapped_blocks(kw, duration / 2, rounds, timing["c_rect"], bare))
+    out.update(_coarse_wall(coarse, kw, args.quick))
+    # ---- two cores: the prange stencil with 1 and 2 threads, same run (numba.set_num_threads)
+    steps = timing["steps"]
+    eff, t1, t2, tfj = _parallel_efficiency(bare_par, steps, timing["bare_args"], rounds)
+    out["parallel_efficiency_2_cores"] = eff
+    out["parallel_forkjoin_us_per_step"] = tfj * 1e6  # two parallel regions per bare step (stencil, update)
+    out["parallel_1thread_us_per_step"] = t1 / steps * 1e6
+    out["parallel_1thread_dof_updates_per_s"] = default.n_dofs * steps / t1
+    out["parallel_2thread_dof_updates_per_s"] = default.n_dofs * steps / t2
+    # ---- reduced-order path (Craig-Bampton) against the full model: default rig, coarse rig in --quick
+    rmodel, rpath = (coarse, "configs/models/triboair_coarse.yaml") if args.quick else \
+        (default, "configs/models/triboair.yaml")
+    out["reduced_model"] = rpath
+    factor = args.mass_scaling if args.mass_scaling is not None else 6.0 if args.quick else 18.0
+    out.update(_reduced_comparison(rmodel, kw, 0.03 if args.quick else 0.05, rounds, factor))
+    out.update(_auto_path(rpath, "0.03 s" if args.quick else "0.1 s"))  # the reduced path by default (issue 30)
+    out["load_average_1min_end"] = round(os.getloadavg()[0], 2)
+    print(json.dumps(out))
+    return 0
+
+
+def _full_path_throughput(model, kw, duration, rounds, quick, bare, bare_par):
+    """The three loops on the default rig, interleaved in rounds (best of each): fivid's full step, a plain scipy CSR
+    loop doing the same arithmetic (``K @ (u + beta v)`` and the lumped-mass update), the bare stencil + update
+    (serial and ``prange``). Returns ``(JSON entries, timing)``; ``timing`` holds what the other parts reuse: the
+    rig's interior rectangular stencil ``c_rect``, the bare kernel's arguments ``bare_args`` and ``steps``."""
+    from fivid.fe import lumped_mass, stiffness_matrix
+    from fivid.solver.driver import prepare_run
+    from fivid.solver.stencil import block_stencils
+
+    prep = prepare_run(model, duration=duration, **kw)
     s = prep.settings
     steps = s.n_intervals * s.steps_per_interval
-    n_dofs = default.n_dofs
-    n_el = sum(b.n_elements for b in default.blocks)
-    K = stiffness_matrix(default).tocsr()
-    m = lumped_mass(default)
-    minv = 1.0 / m
-    minv[default.fixed_dofs] = 0.0
-    dt, a, b = s.time_step, default.rayleigh_alpha, default.rayleigh_beta
-    n_scipy = min(steps, 3000 if args.quick else 20000)
+    n_dofs = model.n_dofs
+    n_el = sum(b.n_elements for b in model.blocks)
+    K = stiffness_matrix(model).tocsr()
+    minv = 1.0 / lumped_mass(model)
+    minv[model.fixed_dofs] = 0.0
+    dt, a, b = s.time_step, model.rayleigh_alpha, model.rayleigh_beta
+    n_scipy = min(steps, 3000 if quick else 20000)
 
     def scipy_loop(n):
         # the same arithmetic as a plain scipy program: K @ (u + beta v), lumped-mass central difference
@@ -170,46 +245,51 @@ def main(argv=None) -> int:
             v += dt * (-minv * f - a * v)
             u += dt * v
 
-    st = block_stencils(default)
-    bare, bare_par = _bare_kernels()
+    st = block_stencils(model)
     c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
-    npd, blocks, c_uni = _bare_layout(default, c_rect)
+    npd, blocks, c_uni = _bare_layout(model, c_rect)
     arrays = [np.zeros(2 * npd) for _ in range(4)]
     mb = np.full(2 * npd, minv[minv > 0].mean())
-    bare(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
-    bare_par(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    bare_args = (dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    bare(10, *bare_args)
+    bare_par(10, *bare_args)
     t_fivid = t_scipy = t_bare = t_par = np.inf
-    contact_active = False
-    for _ in range(2 if args.quick else 3):
+    for _ in range(rounds):
         t0 = time.perf_counter()
         ds = prep.run(progress=False)
         t_fivid = min(t_fivid, (time.perf_counter() - t0) / steps)
-        contact_active = float(ds.contact_normal_force.max()) > 0.0
-        t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
+        t_bare = min(t_bare, _time(bare, steps, *bare_args, repeat=1) / steps)
         t_scipy = min(t_scipy, _time(scipy_loop, n_scipy, repeat=1) / n_scipy)
-        t_par = min(t_par, _time(bare_par, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
-
+        t_par = min(t_par, _time(bare_par, steps, *bare_args, repeat=1) / steps)
     out = {
-        "benchmark": "solver",
-        "quick": bool(args.quick),
         "model": "configs/models/triboair.yaml",
         "dofs": n_dofs,
         "elements": n_el,
         "steps": steps,
         "time_step_s": dt,
-        "contact_active": contact_active,
+        "contact_active": float(ds.contact_normal_force.max()) > 0.0,
         "contact_gs_mean_sweeps": ds.attrs["contact_gs_mean_sweeps"],
         "dof_updates_per_s": n_dofs / t_fivid,
         "ns_per_element_cycle": t_fivid / n_el * 1e9,
         "scipy_csr_dof_updates_per_s": n_dofs / t_scipy,
+        "scipy_csr_ns_per_element_cycle": t_scipy / n_el * 1e9,
         "speedup_vs_scipy_csr": t_scipy / t_fivid,
         "bare_stencil_dof_updates_per_s": n_dofs / t_bare,
+        "bare_stencil_ns_per_element_cycle": t_bare / n_el * 1e9,
         "bare_stencil_parallel_dof_updates_per_s": n_dofs / t_par,
         "fraction_of_bare_stencil": t_bare / t_fivid,
+        "scipy_csr_fraction_of_bare_stencil": t_bare / t_scipy,
         "wall_0p1s_default_projected_s": 0.1 / dt * t_fivid,
     }
-    # ---- mapped blocks: a curved (annular, periodic) and a rough-edged (profiled, graded, contact) model
-    rounds = 2 if args.quick else 3
+    return out, {"c_rect": c_rect, "bare_args": bare_args, "steps": steps}
+
+
+def _mapped_blocks(kw, duration, rounds, c_rect, bare):
+    """Mapped blocks: a curved (annular, periodic) and a rough-edged (profiled, graded, contact) model, and the rough
+    one without its contact pair, each against the bare rectangular stencil (:func:`_mapped_fraction`)."""
+    from fivid.fe import load_model
+
+    out = {}
     for key, path, extra in (("curved", "configs/models/ring_pressure.yaml", {"sliding_velocity": None}),
                              ("rough", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03}),
                              ("rough_no_contact", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03})):
@@ -217,43 +297,32 @@ def main(argv=None) -> int:
         model = load_model(ROOT / path)
         if key == "rough_no_contact":  # the same mapped mesh without its contact pair: the stencil's own cost
             model = dataclasses.replace(model, contacts=())
-        frac, rate, share, sweeps = _mapped_fraction(model, c_rect, bare, mkw, duration / 2, rounds)
+        frac, rate, share, sweeps, stencil_frac = _mapped_fraction(model, c_rect, bare, mkw, duration, rounds)
         out[f"{key}_model"] = path
         out[f"{key}_fraction_of_bare_stencil"] = frac
+        out[f"{key}_stencil_fraction_of_bare_stencil"] = stencil_frac
         out[f"{key}_dof_updates_per_s"] = rate
         out[f"{key}_mapped_node_share"] = share
         if sweeps is not None:
             out[f"{key}_contact_gs_mean_sweeps"] = sweeps
-    # ---- wall time to simulate 0.1 s
-    cprep = prepare_run(coarse, duration=1e-3 if args.quick else 0.1 - (2e-4 + 1e-4), **kw)
+    return out
+
+
+def _coarse_wall(coarse, kw, quick):
+    """Wall time to simulate 0.1 s of the coarse rig: measured (full mode) or projected from the step rate
+    (``--quick``)."""
+    from fivid.solver.driver import prepare_run
+
+    cprep = prepare_run(coarse, duration=1e-3 if quick else 0.1 - (2e-4 + 1e-4), **kw)
     t0 = time.perf_counter()
     cprep.run(progress=False)
     cwall = time.perf_counter() - t0
     csteps = cprep.settings.n_intervals * cprep.settings.steps_per_interval
     ctotal = csteps * cprep.settings.time_step
-    if args.quick:
-        out["wall_0p1s_coarse_projected_s"] = cwall * 0.1 / ctotal
-    else:
-        out["wall_0p1s_coarse_s"] = cwall
+    out = {"wall_0p1s_coarse_projected_s": cwall * 0.1 / ctotal} if quick else {"wall_0p1s_coarse_s": cwall}
     out["coarse_dofs"] = coarse.n_dofs
     out["coarse_dof_updates_per_s"] = coarse.n_dofs * csteps / cwall
-    # ---- two cores: the prange stencil with 1 and 2 threads, same run (numba.set_num_threads)
-    eff, t1, t2, tfj = _parallel_efficiency(bare_par, steps, (dt, a, b, npd, blocks, c_uni, mb, *arrays), rounds)
-    out["parallel_efficiency_2_cores"] = eff
-    out["parallel_forkjoin_us_per_step"] = tfj * 1e6  # two parallel regions per bare step (stencil, update)
-    out["parallel_1thread_us_per_step"] = t1 / steps * 1e6
-    out["load_average_1min"] = os.getloadavg()[0]
-    out["parallel_1thread_dof_updates_per_s"] = n_dofs * steps / t1
-    out["parallel_2thread_dof_updates_per_s"] = n_dofs * steps / t2
-    # ---- reduced-order path (Craig-Bampton) against the full model: default rig, coarse rig in --quick
-    rmodel, rpath = (coarse, "configs/models/triboair_coarse.yaml") if args.quick else \
-        (default, "configs/models/triboair.yaml")
-    out["reduced_model"] = rpath
-    factor = args.mass_scaling if args.mass_scaling is not None else 6.0 if args.quick else 18.0
-    out.update(_reduced_comparison(rmodel, kw, 0.03 if args.quick else 0.05, rounds, factor))
-    out.update(_auto_path(rpath, "0.03 s" if args.quick else "0.1 s"))
-    print(json.dumps(out))
-    return 0
+    return out
 
 
 def _reduced_comparison(model, kw, duration, rounds, scaling_factor):

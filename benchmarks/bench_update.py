@@ -32,6 +32,7 @@ from fivid.fe.modal import modal_analysis  # noqa: E402
 from fivid.fe.model import load_model  # noqa: E402
 from fivid.updating import load_targets, update_model  # noqa: E402
 from fivid.updating.paths import replace_values  # noqa: E402
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
 MODEL = ROOT / "configs" / "models" / "triboair_coarse.yaml"
 PARAMS = [("materials.steel.E", "210 GPa", "218.4 GPa", "150 GPa", "300 GPa"),
@@ -82,9 +83,9 @@ def bench_ema(n_frf: int, n_lines: int) -> dict:
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smoke run: smaller update and EMA")
-    args = ap.parse_args()
+    args, load = parse_guarded(ap)
     with tempfile.TemporaryDirectory() as tmp:
-        out = {"benchmark": "update", "quick": args.quick}
+        out = {"benchmark": "update", "quick": args.quick, "load_average_1min": load}
         out.update(bench_update(2, 3, Path(tmp)) if args.quick else bench_update(3, 6, Path(tmp)))
         out.update(bench_ema(2, 1024) if args.quick else bench_ema(8, 4096))
     print(json.dumps(out))

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from contact_models import block_on_belt, block_on_line
-from fivid.contact import GreenwoodWilliamson, NormalLaw, TangentialLaw
+from fivid.contact import GreenwoodWilliamson, NormalLaw
+from fivid.friction import FrictionCurve
 from fivid.errors import ConfigError
 from fivid.fe import load_model
 from fivid.solver import simulate
@@ -73,7 +74,7 @@ def test_tangent_and_energy_are_derivative_and_integral_of_the_pressure(law):
 
 
 def test_stribeck_curve_values():
-    f = TangentialLaw(mu_static_excess=0.2, stribeck_velocity=0.01, viscous=1.0)
+    f = FrictionCurve(mu_static_excess=0.2, stribeck_velocity=0.01, viscous=1.0)
     assert f.coefficient(0.3, 0.0) == pytest.approx(0.5)
     assert f.coefficient(0.3, -0.05) == pytest.approx(0.3 + 0.2 * math.exp(-5) + 0.05)
 
@@ -119,3 +120,36 @@ def test_rigid_circle_speed_in_rpm():
     g, n, t, vt = pair.rigid.geometry(np.array([[5e-3, 0.0]]))
     assert g[0] == pytest.approx(0.0, abs=1e-15) and n[0].tolist() == pytest.approx([0.0, 1.0])
     assert vt[0] == pytest.approx(2 * math.pi * 0.02)  # counter-clockwise: the top moves along t = (-1, 0)
+
+
+def test_the_pair_record_is_written_and_read_by_its_named_columns():
+    """kernel_row puts every law at its named column of the one layout module (not at positions known elsewhere)."""
+    from fivid.contact import RigidSurface, kernel_row
+    from fivid.contact import _layout_kernels as L
+
+    curve = FrictionCurve(mu_static_excess=0.15, stribeck_velocity=2e-3, viscous=0.5)
+    law = NormalLaw("power", 3e9, 1.5, "given")
+    circle = RigidSurface("circle", np.array([0.1, -0.2]), radius=0.05, side="inside", angular_velocity=3.0,
+                          start=0.01, ramp_time=0.02)
+    row = kernel_row(law, curve, circle)
+    assert row.shape == (L.NPAR,)
+    expected = {L.LAW: L.LAW_POWER, L.LAW_COEFFICIENT: 3e9, L.LAW_EXPONENT: 1.5, L.MU_STATIC_EXCESS: 0.15,
+                L.STRIBECK_VELOCITY: 2e-3, L.VISCOUS: 0.5, L.MASTER: L.MASTER_CIRCLE, L.SURFACE_X: 0.1,
+                L.SURFACE_Y: -0.2, L.SURFACE_A: 0.05, L.SURFACE_B: -1.0, L.SURFACE_SX: 3.0, L.SURFACE_SY: 0.0,
+                L.SURFACE_START: 0.01, L.SURFACE_RAMP: 0.02}
+    assert sorted(expected) == list(range(L.NPAR))  # every column named once
+    assert {c: row[c] for c in expected} == expected
+    edge = kernel_row(NormalLaw(), FrictionCurve(), None)
+    assert edge[L.MASTER] == L.MASTER_EDGE and edge[L.LAW] == L.LAW_RIGID
+
+
+def test_no_bare_column_index_of_a_pair_record_outside_the_layout_module():
+    """``pair_par[p, 13]`` or ``par_p[3]`` anywhere in fivid would bypass the one layout (issue 29 item 5)."""
+    import re
+    from pathlib import Path
+
+    pkg = Path(__file__).resolve().parents[1] / "fivid"
+    bare = re.compile(r"\b(pair_par\[[^\]\[]*,\s*\d+\s*\]|par_p\[\s*\d+\s*\]|row\[\s*\d+\s*(:\s*\d+\s*)?\])")
+    hits = [f"{p.relative_to(pkg)}:{i}: {ln.strip()}" for p in pkg.rglob("*.py") if p.name != "_layout_kernels.py"
+            for i, ln in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if bare.search(ln)]
+    assert not hits, "\n".join(hits)

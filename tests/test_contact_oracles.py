@@ -7,7 +7,6 @@ free decay, the torque balance of a held ring on a rotating shaft.
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from contact_models import block_on_belt, block_on_line, ring_on_shaft
 from fivid.fe import load_model
@@ -15,21 +14,11 @@ from fivid.fe.modal import modal_analysis
 from fivid.fe.static import preload_state
 from fivid.solver import simulate
 from fivid.verify import evaluate_case, select_cases
+from fivid.verify.cases.contact_rough_ringing import N_POW, POWER_LAW, bar_on_spring_frequency
 
 E, RHO = 210e9, 7850.0
 W, H, T = 0.01, 0.002, 0.01  # block_on_line
-C_POW, N_POW = 2e13, 1.5  # power law p = c d^n [Pa]: contact stiffness ~1e7 N/m, 1e-3 of the block's E A / H
-LAW = {"law": "power", "coefficient": C_POW, "exponent": N_POW}
-
-
-def _bar_on_spring_frequency(force):
-    """Vertical frequency [Hz] of the block (an elastic bar of height H, free top) on the contact's tangent
-    stiffness k = n F / d at the static penetration d = (F / (A c))^(1/n): beta tan beta = k H / (E A)."""
-    d = (force / (W * T * C_POW)) ** (1 / N_POW)
-    k = N_POW * force / d
-    ratio = k * H / (E * W * T)
-    beta = brentq(lambda b: b * np.tan(b) - ratio, 1e-9, 1.0)
-    return beta * np.sqrt(E / RHO) / (2 * np.pi * H), k, d
+LAW = POWER_LAW
 
 
 def test_power_law_static_stiffness_is_the_laws_derivative():
@@ -40,7 +29,7 @@ def test_power_law_static_stiffness_is_the_laws_derivative():
         model = load_model(block_on_line(law=LAW, pressure=p))
         state = preload_state(model, None)
         force = p * W * T
-        _, k, d = _bar_on_spring_frequency(force)
+        _, k, d = bar_on_spring_frequency(force)
         (pair,) = state.summary(model)
         assert pair["normal_force_n"] == pytest.approx(force, rel=1e-8)
         assert pair["normal_stiffness_n_per_m"] == pytest.approx(k, rel=1e-8)
@@ -55,7 +44,7 @@ def test_modes_move_with_load_as_the_contact_tangent():
     freqs = []
     for p in (2e5, 1e6):
         ds = modal_analysis(load_model(block_on_line(law=LAW, pressure=p)), 4, include_contact=True)
-        f_ref = _bar_on_spring_frequency(p * W * T)[0]
+        f_ref = bar_on_spring_frequency(p * W * T)[0]
         f = ds.frequency.values
         bounce = f[np.argmin(np.abs(f - f_ref))]
         assert bounce == pytest.approx(f_ref, rel=1e-4)
@@ -64,29 +53,17 @@ def test_modes_move_with_load_as_the_contact_tangent():
 
 
 def test_mass_on_rough_contact_rings_at_sqrt_k_over_m_in_the_explicit_solver():
-    """A 2 % pressure step (1 us, << the 75 us period) on the preloaded block: the explicit solver's ringing has
-    the bar-on-spring frequency of the tangent at the final load. Tolerance 5e-4: the amplitude (1.3 % of d)
-    shifts a power-law oscillator by O((a/d)^2) ~ 2e-4, the penalty's end-of-step treatment by
-    (omega dt)^2 / 2 ~ 4e-5, zero crossings interpolated at 150 samples per period.
-    The energy balance closes to round-off with the stored contact energy."""
-    p, kick = 1e6, 2e4
-    model = load_model(block_on_line(law=LAW, pressure=p, kick=kick))
-    ds = simulate(model, duration=2e-3, sample_rate=2e6, oversample=1, progress=False, settle_time=0.0)
-    f_ref = _bar_on_spring_frequency((p + kick) * W * T)[0]
-    t, x = ds.time.values, ds.sensor_displacement.values
-    sel = t > 1.1e-3
-    xs, ts = x[sel] - x[sel].mean(), t[sel]
-    up = np.flatnonzero((xs[:-1] < 0) & (xs[1:] >= 0))
-    tc = ts[up] - xs[up] * (ts[up + 1] - ts[up]) / (xs[up + 1] - xs[up])
-    f = (len(tc) - 1) / (tc[-1] - tc[0])
-    assert f == pytest.approx(f_ref, rel=5e-4)
-    work = float(ds.load_work.max())
-    assert np.abs(ds.energy_balance_error.values).max() <= 1e-9 * work
-    # the stored energy A c d^(n+1)/(n+1) at the final equilibrium; the record's last sample sits somewhere on the
-    # ringing of amplitude ~ the kick's penetration change, 1.02^(1/n) - 1 = 1.3 % of d, i.e. +-(n+1) 1.3 % = 3.3 %
-    # of the energy: 5 %
-    assert float(ds.contact_energy[-1]) == pytest.approx(
-        C_POW * W * T * _bar_on_spring_frequency((p + kick) * W * T)[2] ** (N_POW + 1) / (N_POW + 1), rel=0.05)
+    """A 2 % pressure step on the preloaded block: the explicit solver's ringing has the bar-on-spring frequency of
+    the tangent at the final load (case rough_contact_ringing, 5e-4, the basis there). Further: the energy balance
+    closes to round-off with the stored contact energy, and the stored energy A c d^(n+1)/(n+1) at the final
+    equilibrium is matched to 5 % (the record's last sample sits somewhere on the ringing of amplitude ~ the kick's
+    penetration change, 1.02^(1/n) - 1 = 1.3 % of d, i.e. +-(n+1) 1.3 % = 3.3 % of the energy)."""
+    (case,) = select_cases(["rough_contact_ringing"])
+    result = evaluate_case(case, False, None)
+    assert result.status == "passed", result
+    d = result.outcome.details
+    assert d["largest energy-balance error / load work"] <= 1e-9
+    assert d["final contact energy / A c d^(n+1)/(n+1)"] == pytest.approx(1.0, rel=0.05)
 
 
 def test_belt_stick_slip_with_static_and_kinetic_friction():
@@ -140,20 +117,17 @@ def test_ring_on_frictionless_rotating_shaft_stays_at_rest():
 
 def test_friction_torque_of_a_rotating_shaft_is_mu_n_r():
     """mu = 0.1, shaft at 600 rpm (1.9 m/s at the surface, far above the ring's vibration speeds): every contact
-    node slips, the friction torque is mu (sum of normal forces) R and the holder springs carry it. Tolerance:
-    static equilibrium reached to 1e-6 (the holder's oscillation decays by exp(-alpha t / 2) ~ 1e-13)."""
-    mu, k_hold, R, R_out = 0.1, 1e6, 0.03, 0.05
-    model = load_model(ring_on_shaft(mu, holder=k_hold))
-    ds = simulate(model, duration=0.03, sample_rate=20e3, progress=False, settle_time=0.0, record_state=True)
-    N, Ft = float(ds.contact_normal_force[-1]), float(ds.contact_tangential_force[-1])
-    assert float(ds.slip_fraction[-1]) == 1.0
-    assert Ft / N == pytest.approx(mu, rel=1e-12)
-    u = ds.attrs["final_u"].reshape(-1, 2)
-    torque = sum(-y * (-k_hold * u[s.node_a, 0]) for s, y in zip(model.springs, (R_out, -R_out)))
-    assert abs(torque) == pytest.approx(mu * N * R, rel=1e-6)
-    # the drive's work goes into friction (and the holder's spring energy)
-    assert float(ds.drive_work[-1]) == pytest.approx(float(ds.friction_dissipation[-1]), rel=2e-3)
-    assert np.abs(ds.energy_balance_error.values).max() <= 1e-10 * float(ds.drive_work[-1])
+    node slips and the holder springs carry the friction torque mu N R (case shaft_friction_torque, 1e-6). Further:
+    the multipliers on the cone (Ft / N = mu to 1e-12), the drive's work goes into friction (and the holder's
+    spring energy, 2e-3), the energy balance to 1e-10."""
+    (case,) = select_cases(["shaft_friction_torque"])
+    result = evaluate_case(case, False, None)
+    assert result.status == "passed", result
+    d = result.outcome.details
+    assert d["slip fraction at the end"] == 1.0
+    assert d["Ft / N / μ at the end"] == pytest.approx(1.0, rel=1e-12)
+    assert d["drive work / friction dissipation"] == pytest.approx(1.0, rel=2e-3)
+    assert d["largest energy-balance error / drive work"] <= 1e-10
 
 
 @pytest.mark.parametrize("name", ["hertz_half_width", "hertz_peak_pressure"])

@@ -17,6 +17,8 @@ import pytest
 from fivid.cli import main
 from fivid.damper.model import load_damper_model
 from fivid.damper.peaks import frf_peak
+from fivid.verify.registry import registered_cases
+from fivid.verify.runner import evaluate_case
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs" / "dampers"
 
@@ -42,13 +44,17 @@ def test_peak_of_a_stuck_contact_is_the_linear_resonance(models):
     assert abs(p.frequency - f_r) <= 10 * 0.005**2 * f_r
 
 
-def test_seed004_acceptance(models):
-    stuck1 = frf_peak(models[1], 40.0).frequency
-    stuck2 = frf_peak(models[2], 40.0).frequency
-    assert stuck1 == pytest.approx(86.0, abs=0.05)  # what the identification fitted (4-digit rounding)
-    assert 7.0 <= stuck2 - stuck1 <= 13.0  # prediction: the paper's ~10 Hz; fivid 11.6 Hz
-    for n in (1, 2):
-        assert abs(frf_peak(models[n], 0.1).frequency - 24.0) <= 1.0  # free: 24.09 Hz (tip mass placeholder)
+def test_seed004_acceptance():
+    """The issue's acceptance bands, from the verification catalogue (one home per oracle):
+    stuck 86 +- 3 Hz (the identification datum), Model 2 - Model 1 = 10 +- 3 Hz (prediction; fivid 11.6 Hz),
+    free 24 +- 1 Hz (tip-mass placeholder; fivid 24.09 Hz)."""
+    cases = {c.name: c for c in registered_cases() if c.name.startswith("seed004_")}
+    assert set(cases) == {"seed004_stuck_peak", "seed004_model2_offset", "seed004_free_peak"}
+    for case in cases.values():
+        result = evaluate_case(case, False, None)
+        assert result.passed, (case.name, result.outcome, result.reason)
+    stuck = evaluate_case(cases["seed004_stuck_peak"], False, None)
+    assert stuck.outcome.value == pytest.approx(86.0, abs=0.05)  # what the identification fitted (4-digit rounding)
 
 
 @pytest.mark.slow

@@ -90,7 +90,7 @@ _QUICK_SIM = ('the 1 mm rig for 0.1 s is minutes of solver time (docs/solver.md:
 DECISIONS: dict[str, Decision] = {
     # README.md and docs/verification.md (fivid verify, issue 28)
     "fivid verify --quick -o verification": slow(
-        "all 21 cases at --quick resolution: ~20 s of compute plus the dask start-up, a minute on a loaded machine "
+        "every case at --quick resolution: ~20 s of compute plus the dask start-up, a minute on a loaded machine "
         "(CI also runs it as a step of its own); the fast test runs two of its cases in-process",
         quick="fivid verify --quick --case welch_parseval --case hoffmann_threshold --workers 0 -o verification"),
     "fivid verify -o verification": slow("the full manual: every case at full resolution, 1-2 min on 2 cores"),
@@ -98,6 +98,8 @@ DECISIONS: dict[str, Decision] = {
     "fivid study configs/studies/hoffmann_mu_sweep.yaml -o out/hoffmann": slow(
         "a 5-point study with transients (~1 min on a loaded 2-core machine, most of it dask start-up); the "
         "fast test runs docs/studies.md's --quick variant of the same study"),
+    "python -m venv .venv && . .venv/bin/activate": skip(
+        "creates a virtual environment in the reader's checkout; the tests run in the environment already set up"),
     f'python -m pip install -e ".[all,test]" -c constraints.txt && {_PIPELINE}': skip(
         "pip install needs the network (CI installs before the tests); the pipeline command after it is "
         "docs/pipeline.md's, run by the slow test"),

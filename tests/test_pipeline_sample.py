@@ -90,7 +90,7 @@ def _truth(root):
 
 
 @pytest.mark.slow
-def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path):
+def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path, capfd):
     import xarray as xr
 
     from fivid.cli import main
@@ -107,6 +107,9 @@ def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path):
     print(f"pipeline on the twin: {elapsed:.0f} s; status {summary['status']}; scores {summary['scores']}")
     assert status == 0, summary["checks"]
     assert all(c["pass"] for c in summary["checks"]) and summary["checks"]
+    err = capfd.readouterr().err.strip().splitlines()  # no terminal: a line per task, the report's path last
+    assert err[-1] == f"open the report: {out / 'report.html'}" and "  score/" in "\n".join(err)
+    assert not [ln for ln in err if "Warning" in ln or "8787" in ln], err
 
     # the fine model, the one that generated the twin, on the automatically chosen reduced path: the estimated
     # model error against the data is the reduction's (issue 30: <= 1 dB), stated with the direct check

@@ -12,8 +12,9 @@ import pytest
 from fivid.fe import load_model
 from fivid.fe.config import read_config
 from fivid.solver import simulate
-from fivid.study.roughness import (detect_shocks, rough_pair_config, roughness_metrics, synthetic_rough_profiles,
-                                   vibration_level)
+from fivid.fe.rough_pair import rough_pair_config
+from fivid.score.roughness import detect_shocks, roughness_metrics, vibration_level
+from fivid.surface.rough_pair import synthetic_rough_profiles
 
 LENGTH = 5e-3
 RUN = dict(sample_rate=100e3, progress=False, settle_time=0.05e-3, base_ramp_time=0.2e-3, gs_tolerance=1e-6,

@@ -13,9 +13,10 @@ import pytest
 from fivid.fe import load_model
 from fivid.fe.config import read_config
 from fivid.solver import simulate
-from fivid.study.roughness import (RSM_LEVELS, RSM_PER_CORRELATION_LENGTH, ROUGHNESS_TASK, build_point_model,
-                                   point_profiles_design, rough_pair_config, roughness_metrics,
-                                   synthetic_rough_profiles, vibration_level)
+from fivid.fe.rough_pair import rough_pair_config
+from fivid.score.roughness import roughness_metrics, vibration_level
+from fivid.study.roughness import RSM_LEVELS, ROUGHNESS_TASK, build_point_model, point_profiles_design
+from fivid.surface.rough_pair import RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs/models/rough_pair_graded_quick.yaml"

@@ -90,7 +90,7 @@ def test_bad_settings_are_refused(bad):
 def test_friction_injection_modes():
     """uniform: one signal; per_node: independent signals; convected: node k sees node 0's signal delayed by
     (x_k - x_0)/V (a field frozen on the surface moving at V, mu_p(x - V t))."""
-    from fivid.solver.friction_input import friction_table
+    from fivid.friction.injection import friction_table
 
     model = load_model(block_on_base())
     pairs = np.zeros(3, dtype=np.int64)
@@ -115,7 +115,7 @@ def test_friction_law_protocol():
     """The laws and a duck-typed stand-in satisfy fivid.friction.FrictionLaw; an object lacking members is refused
     with the members named (not an AttributeError deep in the solver)."""
     from fivid.friction import CoulombLaw, FrictionLaw
-    from fivid.solver.friction_input import friction_table
+    from fivid.friction.injection import friction_table
 
     assert isinstance(CoulombLaw(0.3), FrictionLaw) and isinstance(StandInLaw(), FrictionLaw)
 

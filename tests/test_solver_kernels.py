@@ -48,7 +48,7 @@ def test_mapped_block_uses_per_node_coefficients():
 
 
 def _prepare(model, n_int, n_sub, dt):
-    from fivid.solver.friction_input import friction_table
+    from fivid.friction.injection import friction_table
     from fivid.solver.setup import Schedule, kernel_arrays
 
     st = block_stencils(model)

@@ -60,11 +60,10 @@ def test_regimes_across_the_threshold_and_stick_slip():
     with a small disturbance stays stable (a run that never sticks cannot show static friction)."""
     mc = HoffmannSystem().critical_mu()
     study = _study([1.6 * mc], cea=False, duration="0.3 s")
-    from fivid.study.tasks import evaluate_point
-
-    ds = evaluate_point({"lumped": study.lumped}, study.points, {"mu": 1.6 * mc})
+    kind = study.kind
+    ds = kind.evaluate(kind.system(study), study.points, {"mu": 1.6 * mc})
     assert str(ds["regime"].values) == "stick_slip" and float(ds["stick_fraction"]) > 0.01
-    ds = evaluate_point({"lumped": study.lumped}, study.points, {"mu": 0.5, "mu_static": 0.8})
+    ds = kind.evaluate(kind.system(study), study.points, {"mu": 0.5, "mu_static": 0.8})
     assert str(ds["regime"].values) == "stable"
 
 
@@ -223,7 +222,7 @@ def test_coupling_indicator_spans_uncoupled_to_tied():
 
 
 def test_transition_load_is_bracketed():
-    from fivid.study.runner import _transition_load
+    from fivid.study.kinds.weak_strong import _transition_load
 
     pts = [{"normal_load": f, "coupling_indicator": k} for f, k in ((0.5, 0.1), (2.0, 0.3), (8.0, 0.7), (32.0, 0.9))]
     t = _transition_load(pts)

@@ -93,7 +93,7 @@ def test_ring_study_quick(tmp_path, capsys):
 def test_transition_load_per_roughness():
     """With roughness swept too, summary.json gives the transition per roughness (a rougher surface is more
     compliant: it couples the beams at a higher load), besides the first group's."""
-    from fivid.study.runner import _transitions
+    from fivid.study.kinds.weak_strong import transitions as _transitions
 
     pts = [{"normal_load": f, "roughness_ra": ra, "coupling_indicator": k}
            for ra, ks in ((0.4e-6, (0.3, 0.6, 0.8)), (1.6e-6, (0.1, 0.3, 0.9)))

@@ -151,3 +151,14 @@ def test_shipped_cases_run_on_dask(tmp_path, capsys):
                    str(tmp_path / "v"), "--no-progress"])
     doc = json.loads(capsys.readouterr().out)
     assert status == 0 and doc["passed"] and [c["status"] for c in doc["cases"]] == ["passed", "passed"]
+
+
+def test_the_docs_list_every_shipped_case(root):
+    """docs/verification.md's catalogue names every case the registry ships (and no other)."""
+    import re
+
+    text = (root / "docs" / "verification.md").read_text(encoding="utf-8")
+    table = text.split("## The catalogue", 1)[1].split("\n\n", 2)[1]
+    documented = set(re.findall(r"^\| `(\w+)` \|", table, flags=re.M))
+    shipped = {c.name for c in registered_cases() if c.compute.__module__.startswith("fivid.verify.cases.")}
+    assert documented == shipped

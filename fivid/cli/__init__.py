@@ -24,7 +24,7 @@ from fivid import __version__
 from fivid.cli.types import QuantityArgument, integer_at_least, quantity
 from fivid.errors import FividError, Interrupted
 
-__all__ = ["main", "build_parser", "integer_at_least", "quantity", "QuantityArgument",
+__all__ = ["main", "build_parser", "integer_at_least", "quantity", "QuantityArgument", "quiet",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD", "exit_status_of_signal"]
 
 EXIT_OK = 0
@@ -94,6 +94,11 @@ def _subparsers(parser: argparse.ArgumentParser):
             for child in dict.fromkeys(action.choices.values()):  # aliases map to the same parser
                 yield child
                 yield from _subparsers(child)
+
+
+def quiet(args: argparse.Namespace) -> bool:
+    """True when ``-q`` outweighs ``-v`` (before and after the sub-command): print results, no per-item chatter."""
+    return _verbosity(args) < 0
 
 
 def _verbosity(args: argparse.Namespace) -> int:

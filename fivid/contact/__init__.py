@@ -11,11 +11,10 @@ from fivid.contact.laws import (
     GreenwoodWilliamson,
     NormalLaw,
     RigidSurface,
-    TangentialLaw,
     composite_modulus,
     kernel_row,
     kernel_tables,
 )
 
-__all__ = ["RIGID", "GreenwoodWilliamson", "NormalLaw", "RigidSurface", "TangentialLaw", "composite_modulus",
+__all__ = ["RIGID", "GreenwoodWilliamson", "NormalLaw", "RigidSurface", "composite_modulus",
            "kernel_row", "kernel_tables"]

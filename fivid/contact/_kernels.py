@@ -5,44 +5,19 @@ Every analysis calls these same functions: the explicit solver's contact correct
 linearisation for modes/CEA (:mod:`fivid.fe.contact`) -- so the three cannot disagree. They are jitted
 scalar functions, callable from Python too.
 
-Per contact pair the parameters are one row ``par`` of :data:`NPAR` floats (built by
+Per contact pair the parameters are one row ``par`` of the record :mod:`fivid.contact._layout_kernels` (built by
 :func:`fivid.contact.kernel_row`) and, for a tabulated normal law, a table ``tab`` (2, m) of pressures and
-energies on a uniform penetration grid (:func:`fivid.contact.kernel_tables`):
-
-==== ===========================================================================================
-col  meaning
-==== ===========================================================================================
-0    normal law: 0 rigid (Lagrange multipliers, no penetration), 1 linear ``p = c d``,
-     2 power ``p = c d**n``, 3 table (``d`` penetration [m], ``p`` pressure [Pa])
-1    ``c`` [Pa m-1] (linear), [Pa m-n] (power) or the table's penetration step [m]
-2    ``n`` [-] (power)
-3    ``mu_s - mu_k``: static excess of the friction coefficient [-]
-4    Stribeck velocity ``v_s`` [m s-1] (0: no Stribeck curve, a step from ``mu_s`` to ``mu_k``)
-5    viscous friction coefficient ``c_v`` [s m-1]: ``mu(v) = mu_k + (mu_s - mu_k) exp(-|v|/v_s) + c_v |v|``
-6    master: 0 a deformable body's edge (node-to-segment), 1 rigid line, 2 rigid circle
-7, 8 line: a point on it [m]; circle: centre [m]
-9,10 line: unit normal pointing to the slave side; circle: radius [m] and side (+1: slave outside, -1 inside)
-11,12 line: surface velocity [m s-1] (along the line); circle: angular velocity [rad s-1] (counter-clockwise
-     positive) and unused
-13,14 surface motion start time and ramp time [s] (smooth ramp ``r(s) = s - sin(2 pi s)/(2 pi)``)
-==== ===========================================================================================
+energies on a uniform penetration grid (:func:`fivid.contact.kernel_tables`). The friction curve's kernel is
+:func:`fivid.friction._curve_kernels.friction_coefficient` (the friction home).
 """
 
 import math
 
 from numba import njit
 
-__all__ = ["NPAR", "LAW_RIGID", "LAW_LINEAR", "LAW_POWER", "LAW_TABLE", "MASTER_EDGE", "MASTER_LINE", "MASTER_CIRCLE",
-           "normal_pressure", "normal_energy", "friction_coefficient", "surface_ramp", "rigid_geometry"]
+from fivid.contact._layout_kernels import LAW_LINEAR, LAW_POWER, LAW_RIGID, MASTER_LINE
 
-NPAR = 15
-LAW_RIGID = 0
-LAW_LINEAR = 1
-LAW_POWER = 2
-LAW_TABLE = 3
-MASTER_EDGE = 0
-MASTER_LINE = 1
-MASTER_CIRCLE = 2
+__all__ = ["normal_pressure", "normal_energy", "surface_ramp", "rigid_geometry"]
 
 
 @njit(cache=True)
@@ -79,19 +54,6 @@ def normal_energy(kind, c, n, d, tab):
     slope = (tab[0, i + 1] - tab[0, i]) / c
     s = d - i * c
     return tab[1, i] + tab[0, i] * s + 0.5 * slope * s * s
-
-
-@njit(cache=True)
-def friction_coefficient(mu_k, excess, v_s, c_v, v):
-    """Kinetic friction coefficient at slip speed ``v`` [m s-1]: ``mu_k + excess exp(-|v|/v_s) + c_v |v|``.
-
-    ``v_s = 0``: no Stribeck curve (the static excess applies only to stick, a step at ``v = 0``).
-    """
-    av = abs(v)
-    mu = mu_k + c_v * av
-    if v_s > 0.0:
-        mu += excess * math.exp(-av / v_s)
-    return mu
 
 
 @njit(cache=True)

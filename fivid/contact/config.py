@@ -1,10 +1,10 @@
 """The contact sections of a model file, typed, and the laws built from them.
 
 A ``contacts`` item of a model config (``docs/model-config.md``) names its normal law (``normal:``), its
-friction curve (``mu``, ``mu_static``, ``stribeck_velocity``, ``viscous``) and, instead of a master edge, a
-rigid master surface (``rigid:``). The models here are the schema of those keys (part of the model file's one
-pydantic schema, :class:`fivid.fe.config.ModelConfig`); :func:`normal_law`, :func:`rigid_surface` and
-:meth:`FrictionKeys.friction_curve` turn a validated section into the law objects of :mod:`fivid.contact.laws`.
+friction curve (``mu``, ``mu_static``, ``stribeck_velocity``, ``viscous``: :class:`fivid.friction.FrictionCurve`)
+and, instead of a master edge, a rigid master surface (``rigid:``). The models here are the schema of those keys
+(part of the model file's one pydantic schema, :class:`fivid.fe.config.ModelConfig`); :func:`normal_law`,
+:func:`rigid_surface` and :meth:`FrictionKeys.friction_curve` turn a validated section into the law objects.
 
 Units: SI after validation (quantities may carry units, a bare number is SI).
 """
@@ -18,7 +18,8 @@ from pydantic import model_validator
 from pydantic_core import PydanticCustomError
 
 from fivid.config_layer import ConfigModel, Quantity, QuantityText, Vector, either, fail, quantity_parser
-from fivid.contact.laws import GreenwoodWilliamson, NormalLaw, RigidSurface, TangentialLaw, composite_modulus
+from fivid.contact.laws import GreenwoodWilliamson, NormalLaw, RigidSurface, composite_modulus
+from fivid.friction.curve import FrictionCurve
 
 __all__ = ["NormalLawConfig", "RigidLineConfig", "RigidCircleConfig", "RigidSurfaceConfig", "FrictionKeys",
            "NormalLawField", "NORMAL_LAWS", "normal_law", "rigid_surface"]
@@ -152,10 +153,10 @@ class FrictionKeys(ConfigModel):
                        at=("stribeck_velocity",))
         return self
 
-    def friction_curve(self) -> TangentialLaw:
+    def friction_curve(self) -> FrictionCurve:
         """The curve over the kinetic ``mu``: static excess, Stribeck velocity and viscous term."""
         mu_s = self.mu if self.mu_static is None else self.mu_static
-        return TangentialLaw(mu_static_excess=mu_s - self.mu, stribeck_velocity=self.stribeck_velocity,
+        return FrictionCurve(mu_static_excess=mu_s - self.mu, stribeck_velocity=self.stribeck_velocity,
                              viscous=self.viscous)
 
 

@@ -23,9 +23,10 @@ Normal laws (pressure ``p`` [Pa] against penetration ``d`` [m], per unit area of
   pressure range (:meth:`GreenwoodWilliamson.power_fit`; a power law follows GW's near-Gaussian tail only over a
   decade or two: the fit's largest deviation is recorded in ``source``).
 
-Tangential law: Coulomb with a kinetic coefficient ``mu_k`` (the pair's ``mu``, the mean of an identified
-perturbation law ``mu0 + mu_p(t)`` when one is given), a static ``mu_s >= mu_k`` that bounds stick, and an optional
-Stribeck curve plus viscous term for sliding, ``mu(v) = mu_k + (mu_s - mu_k) exp(-|v|/v_s) + c_v |v|``.
+The tangential law (Coulomb with static/kinetic coefficients, Stribeck curve, viscous term, and the perturbation
+``mu0 + mu_p(t)``) lives in the friction home, :mod:`fivid.friction` (:class:`~fivid.friction.FrictionCurve`).
+A pair's parameters reach the kernels as one record row (:func:`kernel_row`, layout
+:mod:`fivid.contact._layout_kernels`).
 """
 
 from __future__ import annotations
@@ -35,10 +36,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fivid.contact import _layout_kernels as layout
 from fivid.errors import ConfigError
+from fivid.friction.curve import FrictionCurve
 
-__all__ = ["RIGID", "GreenwoodWilliamson", "NormalLaw", "RigidSurface", "TangentialLaw", "composite_modulus",
-           "kernel_row", "kernel_tables"]
+__all__ = ["RIGID", "GreenwoodWilliamson", "NormalLaw", "RigidSurface", "composite_modulus", "kernel_row",
+           "kernel_tables"]
 
 _KINDS = {"rigid": 0, "linear": 1, "power": 2, "table": 3}
 _NO_TABLE = np.zeros((2, 2))
@@ -258,44 +261,6 @@ class GreenwoodWilliamson:
 
 
 @dataclass(frozen=True)
-class TangentialLaw:
-    """Coulomb friction with static/kinetic coefficients and an optional Stribeck curve and viscous term.
-
-    Attributes
-    ----------
-    mu_static_excess : float
-        ``mu_s - mu_k`` [-] (>= 0).
-    stribeck_velocity : float
-        ``v_s`` [m s-1]; 0: no Stribeck curve (a step from mu_s in stick to mu_k in slip).
-    viscous : float
-        ``c_v`` [s m-1].
-    """
-
-    mu_static_excess: float = 0.0
-    stribeck_velocity: float = 0.0
-    viscous: float = 0.0
-
-    def coefficient(self, mu_k, v):
-        """Sliding coefficient ``mu(v)`` [-] at slip speed ``v`` [m s-1] (array) over the kinetic ``mu_k``."""
-        from fivid.contact._kernels import friction_coefficient
-
-        v = np.asarray(v, dtype=float)
-        return np.array([friction_coefficient(float(mu_k), self.mu_static_excess, self.stribeck_velocity,
-                                              self.viscous, float(x)) for x in v.ravel()]).reshape(v.shape)
-
-    def describe(self, mu_k: float) -> str:
-        """One line for logs and reports: ``mu_k`` [-], and ``mu_s`` [-], ``v_s`` [m/s], viscous [s/m] when set."""
-        parts = [f"mu_k {mu_k:.4g}"]
-        if self.mu_static_excess:
-            parts.append(f"mu_s {mu_k + self.mu_static_excess:.4g}")
-        if self.stribeck_velocity:
-            parts.append(f"Stribeck v_s {self.stribeck_velocity:.4g} m/s")
-        if self.viscous:
-            parts.append(f"viscous {self.viscous:.4g} s/m")
-        return ", ".join(parts)
-
-
-@dataclass(frozen=True)
 class RigidSurface:
     """A rigid contact master: a line or a circle, fixed in space, whose surface may move along itself.
 
@@ -334,11 +299,12 @@ class RigidSurface:
 
     @property
     def code(self) -> int:
-        """The surface's kind as the integer the contact kernel switches on: 1 line, 2 circle."""
-        return 1 if self.kind == "line" else 2
+        """The surface's kind as the code the contact kernel switches on (:mod:`fivid.contact._layout_kernels`)."""
+        return layout.MASTER_LINE if self.kind == "line" else layout.MASTER_CIRCLE
 
     def columns(self) -> list[float]:
-        """Kernel columns 6-14 (see :mod:`fivid.contact._kernels`)."""
+        """Its record columns, :data:`~fivid.contact._layout_kernels.MASTER` to :data:`~fivid.contact._layout_kernels.SURFACE_RAMP`
+        in that order."""
         if self.kind == "line":
             a, b = (float(x) for x in self.normal)
             sx, sy = (float(x) for x in self.velocity)
@@ -383,13 +349,16 @@ def kernel_tables(laws) -> np.ndarray:
     return out
 
 
-def kernel_row(law: NormalLaw, friction: TangentialLaw, rigid: RigidSurface | None) -> np.ndarray:
-    """The pair's parameter row of :data:`fivid.contact._kernels.NPAR` floats."""
-    from fivid.contact._kernels import NPAR
-
-    row = np.zeros(NPAR)
-    row[0:6] = (law.code, law.coefficient, law.exponent, friction.mu_static_excess, friction.stribeck_velocity,
-                friction.viscous)
+def kernel_row(law: NormalLaw, friction: FrictionCurve, rigid: RigidSurface | None) -> np.ndarray:
+    """The pair's parameter record for the kernels: :data:`~fivid.contact._layout_kernels.NPAR` floats at the named columns
+    of :mod:`fivid.contact._layout_kernels` (a deformable master edge: the master columns stay 0, ``MASTER_EDGE``)."""
+    row = np.zeros(layout.NPAR)
+    row[layout.LAW] = law.code
+    row[layout.LAW_COEFFICIENT] = law.coefficient
+    row[layout.LAW_EXPONENT] = law.exponent
+    curve = friction.columns()
+    row[layout.FRICTION_FIRST:layout.FRICTION_FIRST + len(curve)] = curve
     if rigid is not None:
-        row[6:15] = rigid.columns()
+        surface = rigid.columns()
+        row[layout.MASTER:layout.MASTER + len(surface)] = surface
     return row

@@ -31,6 +31,7 @@ from fivid.fe.model import (
     Spring,
     load_model,
 )
+from fivid.fe.prestress import buckling_load_factors, geometric_stiffness_matrix
 from fivid.fe.static import preload_state
 
 __all__ = [
@@ -60,6 +61,8 @@ __all__ = [
     "linearise_contact",
     "linearise_preloaded_contact",
     "preload_state",
+    "geometric_stiffness_matrix",
+    "buckling_load_factors",
     "modal_analysis",
     "modes_to_json",
     "write_modes",

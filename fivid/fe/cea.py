@@ -238,7 +238,8 @@ def _refine_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -
 
 def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, n_modes: int = 20,
                                 n_basis: int | None = None, damping: bool = True, augment: bool = True,
-                                velocities: dict | None = None, refine: bool = True, progress=None):
+                                velocities: dict | None = None, refine: bool = True, progress=None,
+                                prestress: bool = False):
     """CEA of ``model`` over the friction coefficients ``mu``.
 
     Parameters
@@ -267,6 +268,10 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         Refine each critical μ by root finding (otherwise linear interpolation on the sweep).
     progress : callable, optional
         Called with 1 after each μ point (e.g. ``tqdm.update``).
+    prestress : bool
+        Linearise about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the preload
+        solve's static state to ``K`` (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form;
+        the Rayleigh ``beta K`` damping keeps the elastic ``K``).
 
     Returns
     -------
@@ -286,7 +291,8 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     if not np.any(contact.direction):
         raise ConfigError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
                           "motion with role 'base' to the config)", key="motions")
-    K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact)
+    K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact,
+                                      prestress=state.u if prestress else None)
     Kf = contact.friction_stiffness_matrix()[free][:, free]
     if damping:
         C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))[free][:, free]
@@ -304,10 +310,11 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     with threadpool_limits(limits=1, user_api="blas"):
         res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine, progress=progress)
     return _cea_dataset(model, res, proj.n, contact, state, normal_load=normal_load, n_modes=n_modes, damping=damping,
-                        augment=augment, refine=refine)
+                        augment=augment, refine=refine, prestress=prestress)
 
 
-def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, damping, augment, refine):
+def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, damping, augment, refine,
+                 prestress=False):
     """The CEA sweep ``res`` (:func:`complex_eigenvalue_sweep`) as a Dataset of the lowest ``n_modes`` modes, with
     the model, the basis size ``n_basis``, the contact state and the analysis settings recorded."""
     import xarray as xr
@@ -338,13 +345,14 @@ def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, d
             "n_basis": n_basis,
             "basis_augmented": int(bool(augment)),
             "damping": int(bool(damping)),
+            "prestress": int(bool(prestress)),
             "rayleigh_alpha": model.rayleigh_alpha,
             "rayleigh_beta": model.rayleigh_beta,
             "instability_tolerance": res["tolerance"],
             "contact_nodes": int(contact.stiffness.size),
             "history": new_history(f"complex_eigenvalue_analysis(normal_load={normal_load!r}, n_modes={n_modes}, "
                                    f"n_basis={n_basis}, damping={bool(damping)}, augment={bool(augment)}, "
-                                   f"refine={bool(refine)})"),
+                                   f"refine={bool(refine)}, prestress={bool(prestress)})"),
             **_contact_state_attrs(model, state),
         },
     )
@@ -379,6 +387,7 @@ def cea_to_json(ds) -> dict:
         "n_dofs": int(ds.attrs["n_dofs"]),
         "n_basis": int(ds.attrs["n_basis"]),
         "damping": bool(ds.attrs["damping"]),
+        "prestress": bool(ds.attrs.get("prestress", 0)),
         "normal_load_n": float(ds.attrs["normal_load"]),
         "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist(),
         "contact": __import__("json").loads(ds.attrs.get("contact_summary", "[]")),

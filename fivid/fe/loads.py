@@ -41,11 +41,18 @@ def external_load_vector(model) -> np.ndarray:
     return f
 
 
-def static_response(model) -> np.ndarray:
-    """Linear static displacement [m] under the full pressure loads, constrained dofs held at zero, shape (n_dofs,).
+def static_response(model, *, imposed: np.ndarray | None = None) -> np.ndarray:
+    """Linear static displacement [m] under the full pressure loads, constrained dofs held at zero (or at
+    ``imposed``), shape (n_dofs,).
 
-    Solves ``K_ff u_f = F_f`` (springs included; contacts ignored: for a contact preload use
+    Solves ``K_ff u_f = F_f - K_fc u_c`` (springs included; contacts ignored: for a contact preload use
     :func:`fivid.fe.static.preload_state`).
+
+    Parameters
+    ----------
+    model : Model
+    imposed : ndarray (n_dofs,), optional
+        Displacements [m] of the constrained dofs (``Model.fixed_dofs``; other entries ignored), default 0.
 
     Raises
     ------
@@ -60,6 +67,10 @@ def static_response(model) -> np.ndarray:
     free = model.free_dofs
     F = external_load_vector(model)
     u = np.zeros(model.n_dofs)
+    fixed = np.asarray(model.fixed_dofs, dtype=np.int64)
+    if imposed is not None:
+        u[fixed] = np.asarray(imposed, dtype=float)[fixed]
+        F = F - K[:, fixed] @ u[fixed]
     if free.size == 0:
         return u
     Kff = K[free][:, free]

@@ -15,6 +15,7 @@ from os import PathLike
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.prestress import geometric_stiffness_matrix, static_state
 
 __all__ = ["constrained_matrices", "lowest_modes", "modal_analysis", "write_modes", "modes_to_json"]
 
@@ -25,7 +26,7 @@ DENSE_LIMIT = 600
 
 
 def constrained_matrices(model, *, mass: str = "consistent", include_contact: bool = False,
-                         contact=None, normal_load: float | None = None):
+                         contact=None, normal_load: float | None = None, prestress=None):
     """Stiffness and mass restricted to the free dofs.
 
     Parameters
@@ -40,6 +41,9 @@ def constrained_matrices(model, *, mass: str = "consistent", include_contact: bo
     normal_load : float, optional
         Transducer normal force [N] of the static preload solve (:func:`fivid.fe.contact.linearise_preloaded_contact`);
         needed with ``include_contact`` unless ``contact`` is given.
+    prestress : ndarray (n_dofs,), optional
+        Static displacement [m] of a preloaded state: its initial-stress stiffness ``K_sigma``
+        (:func:`fivid.fe.prestress.geometric_stiffness_matrix`) is added to ``K``.
 
     Returns
     -------
@@ -59,6 +63,8 @@ def constrained_matrices(model, *, mass: str = "consistent", include_contact: bo
 
             contact = linearise_preloaded_contact(model, normal_load)[0]
         K = K + contact.normal_stiffness_matrix()
+    if prestress is not None:
+        K = K + geometric_stiffness_matrix(model, prestress)
     if mass == "consistent":
         M = consistent_mass(model)
     elif mass == "lumped":
@@ -134,7 +140,7 @@ def _eigen_pairs(K, M, k, sigma):
 
 
 def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", include_contact: bool = False,
-                   normal_load: float | None = None, sigma: float | None = None):
+                   normal_load: float | None = None, sigma: float | None = None, prestress: bool = False):
     """Natural frequencies and mass-normalised mode shapes of ``model`` with its constraints.
 
     Parameters
@@ -153,6 +159,13 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
         unless the model's pressure loads press the contact (then None: the state under those loads).
     sigma : float, optional
         Shift [s-2] of the shift-invert solver (default: small negative).
+    prestress : bool
+        Vibrations about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the static state
+        (with ``include_contact`` on a model with contacts the preload solve's state, otherwise the linear
+        static response to the pressure loads and the displacement motions, :func:`fivid.fe.prestress.static_state`);
+        small-strain,
+        reference-configuration form, see :mod:`fivid.fe.prestress`. Tension stiffens, compression softens;
+        a negative ``omega^2`` (frequency reported 0) means the preload exceeds a buckling load.
 
     Returns
     -------
@@ -171,7 +184,11 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
         from fivid.fe.contact import linearise_preloaded_contact
 
         contact, state = linearise_preloaded_contact(model, normal_load)
-    K, M, free = constrained_matrices(model, mass=mass, include_contact=include_contact, contact=contact)
+    u0 = None
+    if prestress:
+        u0 = state.u if state is not None else static_state(model)
+    K, M, free = constrained_matrices(model, mass=mass, include_contact=include_contact, contact=contact,
+                                      prestress=u0)
     lam, vec = lowest_modes(K, M, n_modes, sigma=sigma)
     shapes = np.zeros((len(lam), model.n_dofs))
     shapes[:, free] = vec.T
@@ -202,8 +219,10 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
             "n_free_dofs": int(free.size),
             "mass_matrix": mass,
             "include_contact": int(bool(include_contact)),
+            "prestress": int(bool(prestress)),
             "history": new_history(f"modal_analysis(n_modes={n_modes}, mass={mass!r}, "
-                                   f"include_contact={bool(include_contact)}, normal_load={normal_load!r})"),
+                                   f"include_contact={bool(include_contact)}, normal_load={normal_load!r}, "
+                                   f"prestress={bool(prestress)})"),
         },
     )
     if state is not None:
@@ -247,6 +266,7 @@ def modes_to_json(ds) -> dict:
         "n_free_dofs": int(ds.attrs["n_free_dofs"]),
         "mass_matrix": ds.attrs["mass_matrix"],
         "include_contact": bool(ds.attrs["include_contact"]),
+        "prestress": bool(ds.attrs.get("prestress", 0)),
         **({"normal_load_n": float(ds.attrs["normal_load"]),
             "closed_slave_nodes": np.atleast_1d(ds.attrs["closed_slave_nodes"]).tolist(),
             "contact": json.loads(ds.attrs.get("contact_summary", "[]"))}

@@ -337,7 +337,7 @@ class ContactPair:
         laws use their own tangent instead.
     law : fivid.contact.NormalLaw
         Normal contact law (default rigid).
-    friction : fivid.contact.TangentialLaw
+    friction : fivid.friction.FrictionCurve
         Static excess, Stribeck curve and viscous term over the kinetic ``mu`` (default: plain Coulomb).
     rigid : fivid.contact.RigidSurface or None
         A rigid master surface instead of a body's edge (then ``master_block`` is ``""`` and ``master_nodes``
@@ -356,12 +356,13 @@ class ContactPair:
     rigid: object = None
 
     def __post_init__(self):
-        from fivid.contact import RIGID, TangentialLaw
+        from fivid.contact import RIGID
+        from fivid.friction.curve import FrictionCurve
 
         if self.law is None:
             object.__setattr__(self, "law", RIGID)
         if self.friction is None:
-            object.__setattr__(self, "friction", TangentialLaw())
+            object.__setattr__(self, "friction", FrictionCurve())
 
 
 @dataclass(frozen=True, eq=False)

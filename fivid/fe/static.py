@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.friction.curve import slave_coefficients
 
-__all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement", "preload_state",
-           "slave_friction"]
+__all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement", "preload_state"]
 
 
 @dataclass(frozen=True)
@@ -413,14 +413,6 @@ def _solve_load_cases(K, G, Gt, idx, tdx, sdx, slip, mu, k_t, r, g0, e, f_ext, K
     return Kt, ua, ub, sol[nf:, 0], sol[nf:, 1]
 
 
-def slave_friction(model, mu=None) -> np.ndarray:
-    """Friction coefficient of every slave node (all pairs, in order) [-]: ``mu`` if given, else each pair's own."""
-    if not model.contacts:
-        return np.zeros(0)
-    mu_pairs = [float(mu) if mu is not None else c.mu for c in model.contacts]
-    return np.concatenate([[mu_pairs[p]] * len(c.slave_nodes) for p, c in enumerate(model.contacts)])
-
-
 def preload_state(model, normal_load: float | None, *, mu=None) -> Preload:
     """The static contact state under the transducer normal force ``normal_load`` [N], clamp lowered monotonically.
 
@@ -442,7 +434,7 @@ def preload_state(model, normal_load: float | None, *, mu=None) -> Preload:
     ConfigError
         No load motion or no reaction, a non-positive load, or a contact that the clamp does not press.
     """
-    mu_slave = mu if (mu is not None and np.ndim(mu) == 1) else slave_friction(model, mu)
+    mu_slave = mu if (mu is not None and np.ndim(mu) == 1) else slave_coefficients(model, mu)
     if normal_load is None:
         if not model.loads:
             raise ConfigError("the contact state needs a normal load (e.g. --load '5 N') or pressure loads in the "

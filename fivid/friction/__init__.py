@@ -1,4 +1,4 @@
-"""Friction laws used by the solver, and the synthesis of the friction perturbation μp(t).
+"""The friction home: the kinetic curve, the perturbation μp(t) and their compiled form for the solver.
 
 - :class:`CoulombLaw` — μ = μ0.
 - :class:`PerturbedCoulombLaw` — μ = μ0 + μp(t), μp with one-sided PSD A(V, Ra, Fn)^2 s(f) (DESIGN §3).
@@ -6,6 +6,11 @@
 - :func:`synthesise_perturbation` — random-phase / Gaussian spectral synthesis (pyfftw, seeded).
 - :class:`AmplitudeModel` — the amplitude forms A(V, Ra, Fn); :func:`predict_amplitude` — A with its
   prediction interval, checked against the identified domain (:class:`ConditionDomain`).
+- :class:`FrictionCurve` — the kinetic curve over μk: static excess μs − μk, Stribeck decay, viscous term;
+  :func:`slave_coefficients` — μk of every contact node (static preload and solver).
+- :func:`friction_table` (:class:`FrictionTable`) — μ0 + μp(t) per contact node on the solver's time grid, the
+  injection modes (uniform, per node, convected); the kernels (:mod:`fivid.friction._curve_kernels`) evaluate the
+  curve and the table, reading the curve's parameters from a pair's record (:mod:`fivid.contact._layout_kernels`).
 - :mod:`fivid.friction.jenkins` — Jenkins (Masing) and Iwan elements for friction dampers (seed 004).
 """
 
@@ -24,6 +29,8 @@ from fivid.friction.domain import ConditionDomain
 from fivid.friction.lawfile import domain_from_dataset, law_dataset, law_from_dataset, load_law, write_law
 from fivid.friction.prediction import AmplitudePrediction, ExtrapolationWarning, predict_amplitude
 from fivid.friction.laws import INJECTION_MODES, CoulombLaw, FrictionLaw, PerturbedCoulombLaw
+from fivid.friction.curve import FrictionCurve, slave_coefficients
+from fivid.friction.injection import FrictionTable, friction_table
 from fivid.friction.synthesis import synthesise_perturbation
 
 __all__ = [
@@ -43,6 +50,10 @@ __all__ = [
     "FrictionLaw",
     "PerturbedCoulombLaw",
     "INJECTION_MODES",
+    "FrictionCurve",
+    "slave_coefficients",
+    "FrictionTable",
+    "friction_table",
     "load_law",
     "write_law",
     "law_dataset",

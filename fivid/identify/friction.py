@@ -236,7 +236,8 @@ class FrictionIdentification:
             ds["form_chosen"] = ("form", np.array([r["chosen"] for r in table], np.int8))
             ds["form_n_params"] = ("form", np.array([f.n_params for f in self.form_fits], np.int32))
             ds["form_fitted"] = ("form", np.array([f.fitted for f in self.form_fits], np.int8))
-            ds["form_reason"] = ("form", np.array([f.reason for f in self.form_fits], dtype=object))
+            ds["form_reason"] = ("form", np.array([not_compared_reason(f, self.form_fits) for f in self.form_fits],
+                                                  dtype=object))
             ds["form_cv_reason"] = ("form", np.array([f.cv_reason for f in self.form_fits], dtype=object))
         for name, long in _LONG_NAMES.items():  # CF: every variable says what it is
             if name in ds and "long_name" not in ds[name].attrs:
@@ -281,7 +282,7 @@ _LONG_NAMES = {
     "form_chosen": "the chosen amplitude form (1) or not (0)",
     "form_n_params": "number of coefficients of the amplitude form",
     "form_fitted": "the amplitude form could be fitted (1) or not (0)",
-    "form_reason": "why the amplitude form could not be fitted (empty if fitted)",
+    "form_reason": "why the amplitude form could not be fitted or compared (empty if it was compared)",
     "form_cv_reason": "why the form has no cross-validation error (empty if it has one)",
 }
 

@@ -105,6 +105,18 @@ def _head_lines(path: Path, encoding: str):
         offset = stop
 
 
+def _delimiter_hint(header: str, delimiter: str) -> str:
+    """A hint when a header line is separated by another character than the profile's delimiter ("" if not)."""
+    counts = {d: header.count(d) for d in (";", "\t", "|") if d != delimiter}
+    other, n = max(counts.items(), key=lambda item: item[1])
+    if n == 0 or header.count(delimiter) >= n:
+        return ""
+    name = {";": "semicolons", "\t": "tabs", "|": "'|'"}[other]
+    return (f"; the header is separated by {name}, not {delimiter!r}: a fivid-rig-csv file uses commas and decimal "
+            f"points; for another layout (e.g. semicolons with decimal commas) give a rig profile with delimiter "
+            f"{other!r} (--rig NAME; configs/rigs/labdaq.yaml is one, docs/ingest.md §3)")
+
+
 def _split(text: str, delimiter: str, path=None, line=None) -> list[str]:
     try:
         row = next(csv.reader([text], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
@@ -361,7 +373,7 @@ def read_rig_head(path, profile: RigProfile | None = None) -> RigHead:
         if missing:
             raise SchemaError(
                 f"required column(s) {', '.join(repr(m) for m in missing)} missing; the header has "
-                f"{', '.join(repr(f) for f in fields)}",
+                f"{', '.join(repr(f) for f in fields)}{_delimiter_hint(text, profile.delimiter)}",
                 file=path, line=number, column=missing[0],
             )
         if ignored:

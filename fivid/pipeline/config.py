@@ -193,7 +193,7 @@ def _pair(units: str, example: str, *, positive: bool):
     def check(pair):
         if not pair[0] < pair[1]:
             raise fail(f"expected an increasing pair [low, high] such as {example}, found {pair!r} ({units})")
-        return tuple(pair)
+        return list(pair)  # the type is a list: a tuple here makes every model_dump warn (issue 32 item 6)
 
     item = Quantity(units, positive=positive, nonnegative=not positive)
     return Annotated[list[item], Field(min_length=2, max_length=2), AfterValidator(check)]
@@ -214,7 +214,7 @@ class _Inputs(ConfigModel):
 
 
 class _Analysis(ConfigModel):
-    band: _pair("Hz", "[500 Hz, 20 kHz]", positive=True) = (100.0, 20000.0)
+    band: _pair("Hz", "[500 Hz, 20 kHz]", positive=True) = [100.0, 20000.0]
     nperseg: _int_range(64, 2**22) | None = Field(
         None, description="Welch segment length [samples]; default: the one rule (fivid.signal.welch.default_nperseg) "
                           "on the simulated steady part")

@@ -3,7 +3,7 @@
 A simulation holds, at once: the kernel's per-interval records (``oversample * sample_rate`` rows of
 the record columns, the sensors' velocity and displacement and five numbers per contact pair, see
 :mod:`fivid.solver.integrate`), the friction table (law samples at ``min(8 fs, 1/dt)`` per slave node,
-:mod:`fivid.solver.friction_input`), the state and stencil arrays (per degree of freedom) and the
+:mod:`fivid.friction.injection`), the state and stencil arrays (per degree of freedom) and the
 output RunDataset. Their sizes are known from the model and the settings alone, so a run that cannot
 fit is refused in a second instead of failing with ``MemoryError`` after minutes, or never ending.
 """

@@ -17,6 +17,7 @@ import datetime as _dt
 import logging
 import platform
 import signal
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -75,6 +76,9 @@ class Context:
     tasks: dict = field(default_factory=dict)
     data: dict = field(default_factory=dict)
     pending: set = field(default_factory=set)  # dry run: stages with work to do (their outputs' keys are unknown)
+    notify: object = None  # callable(line): a line per stage and per finished task when no progress bar shows
+    done: dict = field(default_factory=dict)  # stage -> tasks finished in this run
+    todo: dict = field(default_factory=dict)  # stage -> tasks to run in this run
 
     @property
     def config(self):
@@ -85,6 +89,10 @@ class Context:
         """Record a task whose outputs are written (manifest last, atomically); then honour a pending signal."""
         self.digests.setdefault(task.stage, {})[task.name] = self.cache.record(task, seconds=seconds)
         log.info("%s/%s done in %.2f s", task.stage, task.name, seconds)
+        self.done[task.stage] = self.done.get(task.stage, 0) + 1
+        if self.notify is not None:
+            self.notify(f"  {task.stage}/{task.name} done in {seconds:.1f} s ({self.done[task.stage]} of "
+                        f"{self.todo.get(task.stage, '?')})")
         Interrupted.raise_if_received()
 
     def output(self, stage: str, task: str, label: str) -> Path:
@@ -143,8 +151,12 @@ def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
         else:
             stage.collect(ctx, tasks)
         return lines
+    if ctx.notify is not None:
+        ctx.notify(f"{name}: {len(tasks)} task(s), " + (f"{len(tasks) - len(todo)} cached, running {len(todo)}"
+                                                        if todo else "all cached"))
     if todo:
         log.info("stage %s: %d task(s), %d cached, running %d", name, len(tasks), len(tasks) - len(todo), len(todo))
+        ctx.todo[name] = len(todo)
         stage.execute(ctx, todo)
     else:
         log.info("stage %s: %d task(s), all cached", name, len(tasks))
@@ -169,7 +181,7 @@ def _file_handler(out: Path) -> logging.Handler:
 
 
 def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, dry_run: bool = False,
-                 force: bool = False, progress: bool | None = None, echo=None) -> tuple[int, dict]:
+                 force: bool = False, progress: bool | None = None, echo=None, notify=None) -> tuple[int, dict]:
     """Run a validated plan; returns ``(exit status, summary)``.
 
     Parameters
@@ -189,6 +201,9 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         Progress bars (default: when stderr is a terminal).
     echo : callable, optional
         Receives the dry-run plan lines.
+    notify : callable, optional
+        Receives a line per stage and per finished task when no progress bar shows (``progress`` False, or
+        None and stderr not a terminal), so that a run without a terminal is not silent for minutes.
 
     Returns
     -------
@@ -204,8 +219,9 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         check_scheduler_address(scheduler)
     out = plan.config.output
     check_output_folder(out, force=force)
+    bars = progress if progress is not None else sys.stderr.isatty()
     ctx = Context(plan=plan, out=out, cache=TaskCache(out), workers=workers, scheduler=scheduler, force=force,
-                  dry_run=dry_run, progress=progress)
+                  dry_run=dry_run, progress=progress, notify=None if bars or dry_run else notify)
     stats = [StageStats(name) for name in plan.stages]
     if dry_run:
         lines = [f"pipeline {plan.name!r} ({plan.path}) with {plan.config.path}", f"output folder: {out}",
@@ -256,7 +272,8 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         signum = getattr(exc, "signum", signal.SIGINT)
         interrupted = {"signal": signal.Signals(signum).name, "stage": current}
         status, error = 128 + int(signum), exc
-        log.warning("interrupted by %s during stage %s; finished tasks are kept", interrupted["signal"], current)
+        # to the log file only: the CLI prints the Interrupted message (once) on stderr
+        log.info("interrupted by %s during stage %s; finished tasks are kept", interrupted["signal"], current)
         raise Interrupted(signum, f"during stage {current!r}; finished tasks are kept: run the same command "
                           "again to resume") from None
     except BaseException as exc:

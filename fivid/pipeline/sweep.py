@@ -111,6 +111,7 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
         finally:
             client.close()
         return
+    _quiet_resource_tracker()
     # Each worker is a single-threaded process: numba/numpy threads inside are limited to 1 so that
     # n workers use n cores (the solver's kernels are serial).
     env = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
@@ -123,8 +124,12 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
         # reach the client as exceptions, with their own traceback.
         with _signals_deferred():  # Ctrl-C/SIGTERM during start-up: acted on once the cluster can be closed
             try:
+                # the scheduler always serves HTTP (health routes), at 8787 when no address is given: with another
+                # cluster on the machine that printed "Port 8787 is already in use"; ":0" takes a free port, and
+                # dashboard=False keeps the (unused) dashboard off
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=None, silence_logs=logging.CRITICAL)
+                                       dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                                       silence_logs=logging.CRITICAL)
             finally:
                 for k, v in old.items():
                     if v is None:
@@ -133,10 +138,52 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
                         os.environ[k] = v
         log.info("dask: LocalCluster with %d worker process(es) at %s", workers, cluster.scheduler_address)
         with Client(cluster) as client:
+            _workers_ignore_sigint(client)
             yield client
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _quiet_resource_tracker() -> None:
+    """Start multiprocessing's resource tracker (if not running) without its "leaked semaphore" warning.
+
+    A worker stopped in the middle of a task (Ctrl-C, SIGTERM) cannot release the semaphores of its process
+    queues; the tracker releases them at exit, as it should, but also printed "There appear to be 2 leaked
+    semaphore objects to clean up at shutdown" after fivid's own message: nothing the user can act on. The
+    tracker is a separate process started with the interpreter's ``-W`` options: the one option is added for
+    its start only, so no warning filter changes in this process.
+    """
+    import sys
+    from multiprocessing import resource_tracker
+
+    if getattr(resource_tracker._resource_tracker, "_fd", None) is not None:
+        return  # already running (with whatever options it was started with)
+    saved = list(sys.warnoptions)
+    sys.warnoptions.append("ignore:resource_tracker:UserWarning")
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        sys.warnoptions[:] = saved
+
+
+def _ignore_sigint():
+    """In a worker process: ignore SIGINT (a plain function, so that it pickles to the workers)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _workers_ignore_sigint(client) -> None:
+    """Ctrl-C reaches the whole process group: the local workers ignore it and the client closes them.
+
+    A worker killed by its own KeyboardInterrupt leaves its multiprocessing semaphores behind, and the resource
+    tracker warned about "leaked semaphore objects" at exit; closed by the client they clean up. A worker's loop
+    runs in its process's main thread, where ``Client.run`` calls the function.
+    """
+    client.run(_ignore_sigint)
 
 
 @contextlib.contextmanager

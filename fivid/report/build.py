@@ -23,10 +23,14 @@ from fivid.report.figures import (
     psd_envelope_figure,
     psd_overlay_figure,
 )
-from fivid.report.html import Page, table
+from fivid.report.html import Page, fmt, table
 from fivid.storage import write_text
 
-__all__ = ["render_report", "measured_peaks", "amplitude_interval"]
+__all__ = ["render_report", "measured_peaks", "amplitude_interval", "PEAK_PAIRING_TOLERANCE"]
+
+#: a model mode and a measured peak are paired only when they differ by at most this fraction of the peak [-]
+#: (the coarse model's modes sit within a few % of the measured peaks; 29 % is another feature, not the mode)
+PEAK_PAIRING_TOLERANCE = 0.10
 
 # Two-sided 95 % normal quantile for the amplitude-law interval (coefficients ~ normal with the
 # fitted covariance; the identify step reports the same level).
@@ -94,15 +98,22 @@ def _law_section(page: Page, inputs: dict) -> None:
     with xr.open_dataset(path, engine="netcdf4") as ds:
         ds = ds.load()
     law = law_from_dataset(ds, source=str(path))
-    mu0 = ds["mu0"]
-    ci = (mu0.attrs.get("ci_lower"), mu0.attrs.get("ci_upper"))
-    text = f"μ0 = {float(mu0):.4f}"
-    if ci[0] is not None:
-        text += f" (95 % interval {ci[0]:.4f} – {ci[1]:.4f})"
-    page.paragraph(text + f"; {law.describe()}")
+    page.paragraph(_mu0_sentence(ds))
     if ds.attrs.get("law") != "perturbed_coulomb":
+        page.paragraph(f"Law: {law.describe()}.")
         return
     band = (float(ds.attrs["band_lower"]), float(ds.attrs["band_upper"]))
+    injection = ds.attrs.get("injection", "uniform")
+    how = {"uniform": "one signal for the whole contact", "per_node": "an independent signal at each contact node",
+           "convected": "a spatial field frozen on the moving surface"}.get(injection, injection)
+    page.paragraph(f"Friction perturbation μp: {how} ({injection} injection), with the normalised spectrum s(f) "
+                   f"of the next figure over the valid band "
+                   f"{band[0]:g}–{band[1]:g} Hz, and an RMS amplitude A(V, Ra, Fn) of the form "
+                   f"{law.amplitude_model.form} (coefficients in the table below).")
+    if ds.attrs.get("selection_why"):
+        page.paragraph(f"Why this form: {ds.attrs['selection_why']}.")
+    for warning in filter(None, str(ds.attrs.get("warnings", "")).split("\n")):
+        page.paragraph(f"Warning: {warning}.", cls="warning")
     page.figure(law_shape_figure(ds["frequency"].values, ds["shape"].values, band),
                 "Normalised spectrum s(f) of the friction perturbation μp (∫ s df = 1 over the valid band).",
                 "perturbation spectrum")
@@ -138,20 +149,40 @@ def _law_section(page: Page, inputs: dict) -> None:
             for n, c, s, lo, hi in zip(model.names, model.coefficients, model.stderr, lower, upper)]
     page.raw(table(["coefficient", "units", "value", "standard error", "95 % CI lower", "95 % CI upper"], rows))
     if "form" in ds.dims:
-        cols = [v for v in _SELECTION_COLUMNS if v in ds]
-        cols += [v for v in ds.data_vars if ds[v].dims == ("form",) and v not in cols]
-        rows = [[str(ds["form"].values[i])] + [_py(ds[c].values[i]) for c in cols] for i in range(ds.sizes["form"])]
-        page.paragraph("Candidate amplitude forms: AICc, Akaike weight (from AICc) and leave-one-condition-out "
-                       "cross-validation error (RMS of ln(A_pred/A)); "
-                       f"selection rule: {ds.attrs.get('selection_rule', 'not recorded')}.")
-        page.raw(table(["amplitude-law form"] + [_long_name(ds[c]) for c in cols], rows))
+        _candidate_forms(page, ds)
 
 
-def _long_name(da) -> str:
-    """A column header for a variable: its CF ``long_name`` (else its name) and its units, if any."""
-    name = str(da.attrs.get("long_name") or da.name)
-    units = str(da.attrs.get("units", "")).strip()
-    return f"{name} [{units}]" if units and units != "1" else name
+def _mu0_sentence(ds) -> str:
+    """μ0 with its interval, to as many decimals as the interval needs to show its width (at least 4)."""
+    mu0 = ds["mu0"]
+    lo, hi = mu0.attrs.get("ci_lower"), mu0.attrs.get("ci_upper")
+    if lo is None or not np.isfinite(hi - lo) or hi <= lo:
+        return f"μ0 = {float(mu0):.4f}, the mean friction coefficient Ft/Fn of the steady-sliding windows."
+    decimals = int(min(8, max(4, np.ceil(-np.log10((hi - lo) / 2)) + 1)))
+    return (f"μ0 = {float(mu0):.{decimals}f} (95 % interval {lo:.{decimals}f}–{hi:.{decimals}f}), the mean friction "
+            "coefficient Ft/Fn of the steady-sliding windows.")
+
+
+def _candidate_forms(page: Page, ds) -> None:
+    """The candidate amplitude forms, compact: what the choice compared, and why a form was left out."""
+    def col(name, i, spec):
+        return fmt(_py(ds[name].values[i]), spec) if name in ds else None
+
+    rows = []
+    for i in range(ds.sizes["form"]):
+        note = " ".join(str(ds[v].values[i]) for v in ("form_reason", "form_cv_reason") if v in ds and
+                        str(ds[v].values[i]))
+        rows.append([str(ds["form"].values[i]), "chosen" if "form_chosen" in ds and ds["form_chosen"].values[i] else "",
+                     int(ds["form_n_params"].values[i]) if "form_n_params" in ds else None,
+                     col("form_aicc", i, ".2f"), col("form_delta_aicc", i, ".2f"), col("form_akaike_weight", i, ".3f"),
+                     col("form_cv_error", i, ".3f"), note])
+    header = ["form", "", "coefficients", "AICc", "ΔAICc", "Akaike weight", "CV error", "not compared because"]
+    keep = [j for j in range(len(header)) if j < 2 or any(r[j] not in (None, "") for r in rows)]
+    page.paragraph("Candidate amplitude forms. AICc: the small-sample Akaike criterion (lower is better); Akaike "
+                   "weight: the relative support of each form; CV error: leave-one-condition-out cross-validation, "
+                   "the RMS of ln(A_pred/A) (0.1 ≈ 10 % typical prediction error). AIC, BIC and the log-likelihood "
+                   f"are in the law file. Selection rule: {ds.attrs.get('selection_rule', 'not recorded')}.")
+    page.raw(table([header[j] for j in keep], [[r[j] for j in keep] for r in rows]))
 
 
 def _condition_order(item) -> tuple:
@@ -163,10 +194,6 @@ def _condition_order(item) -> tuple:
 
 def _condition_title(c: dict) -> str:
     return f"{c['sliding_velocity'] * 1e3:g} mm/s, {c['normal_load']:g} N, Ra {c['roughness_ra'] * 1e6:g} µm"
-
-
-_SELECTION_COLUMNS = ("form_chosen", "form_aicc", "form_delta_aicc", "form_akaike_weight", "form_cv_error",
-                      "form_n_params")
 
 
 def _py(x):
@@ -192,6 +219,7 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
 
     page.heading("Measured against simulated, per test condition")
     band = inputs["band"]
+    law_band = _law_band(inputs.get("law_path"))
     all_f, all_psd, units = None, [], ""
     checks = inputs.get("checks", [])
     for cond, c in sorted(inputs.get("conditions", {}).items(), key=_condition_order):
@@ -211,8 +239,8 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
             page.figure(psd_overlay_figure(f, meas, sims, band, units),
                         f"Acceleration PSD, measured (black) and simulated (colours), with χ² 95 % confidence bands "
                         f"(Welch, nperseg {ds.attrs.get('nperseg')}, {ds.attrs.get('equivalent_averages', 0):.3g} "
-                        f"equivalent averages). Shaded: scoring band {band[0]:g}–{band[1]:g} Hz.",
-                        f"PSD overlay {cond}")
+                        f"equivalent averages). Shaded: scoring band {band[0]:g}–{band[1]:g} Hz."
+                        + _law_band_note(law_band, f, band), f"PSD overlay {cond}")
             all_f = f
             all_psd.extend(m["psd"] for m in meas)
             env_file = inputs.get("envelope_files", {}).get(cond)
@@ -221,16 +249,43 @@ def _condition_sections(page: Page, inputs: dict) -> tuple:
         score_file = inputs.get("score_files", {}).get(cond)
         if score_file and Path(score_file).is_file():
             sc = json.loads(Path(score_file).read_text(encoding="utf-8"))
-            rows = [[p["measured"], p["simulated"]] + [p["scores"].get(k) for k in _SCORE_COLUMNS]
+            rows = [[p["measured"], p["simulated"]] + [_score_cell(k, p["scores"].get(k)) for k in _SCORE_COLUMNS]
                     for p in sc.get("pairs", [])]
-            rows.append(["mean", ""] + [sc["summary"].get(k) for k in _SCORE_COLUMNS])
+            rows.append(["mean", ""] + [_score_cell(k, sc["summary"].get(k)) for k in _SCORE_COLUMNS])
             page.raw(table(["measured run", "simulation"] + [SCORE_NAMES[k] for k in _SCORE_COLUMNS], rows))
         mine = [k for k in checks if k["condition"] == cond]
         if mine:
             page.raw(table(["score", "value (mean)", "threshold", "result"],
-                           [[SCORE_NAMES.get(k["score"], k["score"]), k["value"], k["threshold"], bool(k["pass"])]
-                            for k in mine]))
+                           [[SCORE_NAMES.get(k["score"], k["score"]), _score_cell(k["score"], k["value"]),
+                             k["threshold"], bool(k["pass"])] for k in mine]))
     return all_f, all_psd, units
+
+
+def _law_band(path):
+    """The identified law's valid band (lower, upper) [Hz], or None."""
+    import xarray as xr
+
+    if not path or not Path(path).is_file():
+        return None
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        if "band_lower" not in ds.attrs:
+            return None
+        return float(ds.attrs["band_lower"]), float(ds.attrs["band_upper"])
+
+
+def _law_band_note(law_band, frequency, band) -> str:
+    """A caption sentence for the simulated PSD's drop outside the law's band, when the plot shows it."""
+    if law_band is None or frequency is None or not len(frequency):
+        return ""
+    notes = []
+    if law_band[1] < float(np.max(frequency)):
+        notes.append(f"Above {law_band[1]:g} Hz the simulated PSD drops: the identified friction law holds no "
+                     f"perturbation there (its valid band ends at {law_band[1]:g} Hz), so the simulation is not "
+                     "excited above it")
+    if not notes:
+        return ""
+    outside = band[1] <= law_band[1] and band[0] >= law_band[0]
+    return " " + "; ".join(notes) + ("; outside the scoring band, not scored." if outside else ".")
 
 
 def _envelope_figure(page: Page, cond: str, path, frequency, measured: list[dict], band, units: str) -> None:
@@ -261,6 +316,15 @@ def _envelope_figure(page: Page, cond: str, path, frequency, measured: list[dict
 
 
 _SCORE_COLUMNS = ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation")
+#: one number format per score, in every table of the report (dB to 0.01, a correlation to 0.001)
+_SCORE_FORMATS = {"lsd_db": ".2f", "level_diff_db": "+.2f", "band_level_rms_error_db": ".2f", "shape_correlation": ".3f"}
+
+
+def _score_cell(score: str, value):
+    """A score value in its report format (:data:`_SCORE_FORMATS`; others to 4 significant digits)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return fmt(float(value), _SCORE_FORMATS.get(score, ".4g"))
+    return value
 #: the scores (DESIGN §6, fivid.score) as the report names them
 SCORE_NAMES = {
     "lsd_db": "log-spectral distance [dB]",
@@ -293,13 +357,19 @@ def _modal_section(page: Page, inputs: dict, frequency, psds, units: str) -> Non
             continue  # far outside the analysis band: nothing measured to compare with
         if peaks.size:
             j = int(np.argmin(np.abs(peaks - fm)))
-            rows.append([i + 1, float(fm), float(peaks[j]), float((fm - peaks[j]) / peaks[j] * 100)])
+            diff = float((fm - peaks[j]) / peaks[j])
+            paired = abs(diff) <= PEAK_PAIRING_TOLERANCE
+            rows.append([i + 1, fmt(float(fm), ".0f"), fmt(float(peaks[j]), ".0f"), fmt(100 * diff, "+.1f"),
+                         "yes" if paired else f"no: the nearest measured peak is {abs(diff) * 100:.0f} % away, more than "
+                         f"{PEAK_PAIRING_TOLERANCE * 100:.0f} %; no measured peak for this mode"])
         else:
-            rows.append([i + 1, float(fm), None, None])
-    page.raw(table(["mode", "model frequency [Hz]", "nearest measured peak [Hz]", "difference [%]"], rows))
+            rows.append([i + 1, fmt(float(fm), ".0f"), None, None, "no: no measured peak"])
+    page.raw(table(["mode", "model frequency [Hz]", "nearest measured peak [Hz]", "difference [%]", "paired"], rows))
     page.paragraph(f"Modes computed: {modal_f.size} (linearised about the preloaded contact state: normal "
                    f"penalty springs at the slave nodes closed under the normal load, tangentially free, no "
-                   f"friction); listed: those between half the band's lower edge and 1.5 times its upper edge.")
+                   f"friction); listed: those between half the band's lower edge and 1.5 times its upper edge. "
+                   f"A mode is paired with the nearest measured peak only within {PEAK_PAIRING_TOLERANCE * 100:.0f} %: "
+                   f"farther, the nearest peak is another feature of the spectrum, not this mode.")
 
 
 def _provenance(page: Page, inputs: dict) -> None:
@@ -357,7 +427,8 @@ def _discretisation(page: Page, est) -> None:
         f"{est['table']['path']}, meshes {h} mm; against the {est['reference']}): {level}; PSD peak shifts: "
         f"{peaks}; time step: PSD log-spectral distance {num('time_step_lsd_db')} dB from the study's smallest "
         f"step.{note}")
-    rows = [[f"{o['band'][0]:.0f}–{o['band'][1]:.0f}", o["deviation_db"], o["order"], o["reference"]]
+    rows = [[f"{o['band'][0]:.0f}–{o['band'][1]:.0f}", fmt(o["deviation_db"], "+.2f"),
+             fmt(o["order"], ".2f") if o["order"] is not None else None, o["reference"]]
             for o in est["third_octaves"]]
     page.raw(table(["one-third octave [Hz]", "level error of this mesh [dB]", "observed order", "against"], rows))
 
@@ -434,7 +505,8 @@ def render_report(path: str | os.PathLike, inputs: dict) -> Path:
         conditions = inputs.get("conditions", {})
         order = {k: i for i, (k, _) in enumerate(sorted(conditions.items(), key=_condition_order))}
         rows = [[_condition_title(conditions[c["condition"]]) if c["condition"] in conditions else c["condition"],
-                 SCORE_NAMES.get(c["score"], c["score"]), c["value"], c["threshold"], bool(c["pass"])]
+                 SCORE_NAMES.get(c["score"], c["score"]), _score_cell(c["score"], c["value"]), c["threshold"],
+                 bool(c["pass"])]
                 for c in sorted(checks, key=lambda c: order.get(c["condition"], len(order)))]
         page.raw(table(["condition", "score", "value", "threshold", "result"], rows))
     if inputs.get("synthetic_note"):

@@ -10,7 +10,7 @@ import base64
 import html
 import io
 
-__all__ = ["Page", "figure_data_uri", "table"]
+__all__ = ["Page", "figure_data_uri", "table", "Formatted", "fmt", "general_number"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",sans-serif;margin:2em auto;max-width:72em;padding:0 1em;color:#222}
@@ -22,6 +22,7 @@ border-radius:.3em;display:inline-block}.verdict.pass{background:#e3f4e5}.verdic
 figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}figcaption{font-size:.9em;color:#555}
 code,pre{font-family:ui-monospace,monospace;font-size:.85em}pre{background:#f7f7f7;padding:.6em;overflow-x:auto}
 .synthetic{background:#fff4d6;border:1px solid #e0b84c;padding:.5em 1em}
+.warning{background:#fbe4e7;border:1px solid #d9899a;padding:.5em 1em}
 """
 
 
@@ -36,11 +37,35 @@ def figure_data_uri(fig, *, fmt: str = "png", dpi: int = 110) -> str:
     return f"data:{mime};base64," + base64.b64encode(buf.getvalue()).decode("ascii")
 
 
+class Formatted(str):
+    """A number already formatted (:func:`fmt`): right-aligned in a table like numbers, shown as given."""
+
+
+def fmt(value, spec: str):
+    """``value`` formatted with ``spec`` (e.g. ``".2f"``) as a table cell; None for None or NaN (a dash)."""
+    if value is None or (isinstance(value, float) and value != value):
+        return None
+    return Formatted(format(value, spec))
+
+
+def general_number(x: float) -> str:
+    """4 significant digits without an exponent between 1e-4 and 1e6 (10170, 0.5274, 0.03156), else ``.4g``."""
+    import math
+
+    if x == 0:
+        return "0"
+    if 1e-4 <= abs(x) < 1e6:
+        return f"{x:.{max(0, 3 - math.floor(math.log10(abs(x))))}f}"
+    return f"{x:.4g}"
+
+
 def _cell(value) -> str:
+    if isinstance(value, Formatted):
+        return f'<td class="num">{html.escape(value)}</td>'
     if isinstance(value, float):
         if value != value:  # NaN: not computed (e.g. an amplitude form that was not fitted)
             return "<td>—</td>"
-        return f'<td class="num">{value:.4g}</td>'
+        return f'<td class="num">{general_number(value)}</td>'
     if isinstance(value, bool):
         cls = "pass" if value else "fail"
         return f'<td class="{cls}">{"pass" if value else "FAIL"}</td>'
@@ -52,7 +77,8 @@ def _cell(value) -> str:
 
 
 def table(header: list[str], rows: list[list]) -> str:
-    """An HTML table; floats to 4 significant digits, booleans as pass/FAIL, None as a dash."""
+    """An HTML table; floats to 4 significant digits (:func:`general_number`), :func:`fmt` cells as formatted,
+    booleans as pass/FAIL, None as a dash."""
     head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(_cell(v) for v in row) + "</tr>" for row in rows)
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"

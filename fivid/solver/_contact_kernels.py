@@ -3,24 +3,37 @@ Coulomb friction by projected Gauss-Seidel, the friction coefficients now, and t
 
 Used by the full model's loop (:mod:`fivid.solver._loop_kernels`, lumped inverse mass) and by the reduced
 system's (:mod:`fivid.solver._reduced_kernels`, dense inverse mass ``wmat`` of the contact dofs). The normal
-laws, friction curve and rigid surfaces are those of :mod:`fivid.contact._kernels`. Layout:
-:mod:`fivid.solver._kernels`.
+laws and rigid surfaces are those of :mod:`fivid.contact._kernels`, the friction curve and ``mu(t)`` those of
+:mod:`fivid.friction._curve_kernels`; a pair's parameters are read by the named columns of
+:mod:`fivid.contact._layout_kernels`. Record layout: :mod:`fivid.solver._kernels`.
 """
 
 import math
 
-from fivid.contact._kernels import (
+from fivid.contact._kernels import normal_energy, normal_pressure, rigid_geometry, surface_ramp
+from fivid.contact._layout_kernels import (
+    LAW,
+    LAW_COEFFICIENT,
+    LAW_EXPONENT,
     LAW_RIGID,
+    MASTER,
     MASTER_EDGE,
-    friction_coefficient,
-    normal_energy,
-    normal_pressure,
-    rigid_geometry,
-    surface_ramp,
+    MU_STATIC_EXCESS,
+    STRIBECK_VELOCITY,
+    SURFACE_A,
+    SURFACE_B,
+    SURFACE_RAMP,
+    SURFACE_START,
+    SURFACE_SX,
+    SURFACE_SY,
+    SURFACE_X,
+    SURFACE_Y,
+    VISCOUS,
 )
+from fivid.friction._curve_kernels import friction_coefficient, friction_now
 from fivid.solver._kernels import GS_CAPPED, GS_MAX, GS_SWEEPS, kernel
 
-__all__ = ["contact_solve", "contact_step", "contact_work", "friction_now", "finish_contact_record"]
+__all__ = ["contact_solve", "contact_step", "contact_work", "finish_contact_record"]
 
 
 @kernel
@@ -64,7 +77,7 @@ def _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pai
     """x-indices of slave ``k`` and of the two nodes of its current master segment (a rigid master has none:
     the slave itself is returned for both, with shape values 0, so the master terms vanish)."""
     p = slave_pair[k]
-    if pair_par[p, 6] != MASTER_EDGE:
+    if pair_par[p, MASTER] != MASTER_EDGE:
         return slave_node[k], slave_node[k], slave_node[k]
     return slave_node[k], master_nodes[master_ptr[p] + seg[k]], master_nodes[master_ptr[p] + seg[k] + 1]
 
@@ -142,17 +155,18 @@ def _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt):
     [m] over the step: stick if the multiplier that cancels it stays within ``mu_s ln``, else slip with the
     kinetic curve ``mu(v)`` at the slip rate ``v`` that force leaves at the end of the step."""
     lt_stick = lt - st / wt if wt > 0.0 else lt
-    cap = (mu_k + par_p[3]) * ln_new
+    cap = (mu_k + par_p[MU_STATIC_EXCESS]) * ln_new
     if -cap <= lt_stick <= cap:
         return lt_stick, 1
     sgn = 1.0 if lt_stick > 0.0 else -1.0
     mu = mu_k
-    if par_p[4] > 0.0 or par_p[5] != 0.0:
+    if par_p[STRIBECK_VELOCITY] > 0.0 or par_p[VISCOUS] != 0.0:
         # the slip rate the sliding force leaves at the end of the step, v = (st + wt (lt_new - lt)) / dt, and
         # mu(v): a fixed point contracting by dt lam_n |mu'| / m_node per pass (~1e-2)
         for _ in range(4):
             v_slip = (st + wt * (sgn * mu * ln_new - lt)) / dt
-            mu = friction_coefficient(mu_k, par_p[3], par_p[4], par_p[5], v_slip)
+            mu = friction_coefficient(mu_k, par_p[MU_STATIC_EXCESS], par_p[STRIBECK_VELOCITY], par_p[VISCOUS],
+                                      v_slip)
     return sgn * mu * ln_new, 2
 
 
@@ -163,7 +177,7 @@ def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master
     ns = slave_node.shape[0]
     for k in range(ns):
         p = slave_pair[k]
-        mk = int(pair_par[p, 6])
+        mk = int(pair_par[p, MASTER])
         if mk == MASTER_EDGE:
             m0 = master_ptr[p]
             nseg = master_ptr[p + 1] - m0 - 1
@@ -175,13 +189,14 @@ def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master
             geo[k, 8] = 0.0
         else:
             sn = slave_node[k]
-            g, nx, ny, tx, ty, vt = rigid_geometry(mk, pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
-                                                   pair_par[p, 10], pair_par[p, 11], pair_par[p, 12], X[sn],
+            g, nx, ny, tx, ty, vt = rigid_geometry(mk, pair_par[p, SURFACE_X], pair_par[p, SURFACE_Y],
+                                                   pair_par[p, SURFACE_A], pair_par[p, SURFACE_B],
+                                                   pair_par[p, SURFACE_SX], pair_par[p, SURFACE_SY], X[sn],
                                                    X[sn + npd], X[sn] + u[sn], X[sn + npd] + u[sn + npd])
             inside = math.isfinite(g)
             geo[k, 0] = 0.0
             geo[k, 1] = 0.0
-            geo[k, 8] = vt * surface_ramp(t_new, pair_par[p, 13], pair_par[p, 14])
+            geo[k, 8] = vt * surface_ramp(t_new, pair_par[p, SURFACE_START], pair_par[p, SURFACE_RAMP])
         geo[k, 2] = nx
         geo[k, 3] = ny
         geo[k, 4] = tx
@@ -234,19 +249,19 @@ def _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, 
         # effective inverse masses along x and y of the relative motion slave - (N0 a + N1 b)
         wx, wxy, wy = _pair_compliance(minv_c, wmat, npd, sn, a, b, n0, n1)
         # normal: gap in the current (predicted + corrected) configuration
-        if pair_par[p, 6] == MASTER_EDGE:
+        if pair_par[p, MASTER] == MASTER_EDGE:
             gx = X[sn] + u[sn] - n0 * (X[a] + u[a]) - n1 * (X[b] + u[b])
             gy = (X[sn + npd] + u[sn + npd] - n0 * (X[a + npd] + u[a + npd])
                   - n1 * (X[b + npd] + u[b + npd]))
             g = gx * nx + gy * ny
         else:
-            g = rigid_geometry(int(pair_par[p, 6]), pair_par[p, 7], pair_par[p, 8], pair_par[p, 9],
-                               pair_par[p, 10], 0.0, 0.0, X[sn], X[sn + npd], X[sn] + u[sn],
-                               X[sn + npd] + u[sn + npd])[0]
+            g = rigid_geometry(int(pair_par[p, MASTER]), pair_par[p, SURFACE_X], pair_par[p, SURFACE_Y],
+                               pair_par[p, SURFACE_A], pair_par[p, SURFACE_B], 0.0, 0.0, X[sn], X[sn + npd],
+                               X[sn] + u[sn], X[sn + npd] + u[sn + npd])[0]
         wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
         ln = lam[k, 0]
-        ln_new = _normal_update(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], law_tab[p], s_area[k], g,
-                                ln, wn)
+        ln_new = _normal_update(int(pair_par[p, LAW]), pair_par[p, LAW_COEFFICIENT], pair_par[p, LAW_EXPONENT],
+                                law_tab[p], s_area[k], g, ln, wn)
         dn = ln_new - ln
         # tangential: relative tangential increment over the step (the master's surface velocity removed),
         # including the normal correction
@@ -265,7 +280,7 @@ def _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, 
         lam[k, 0] = ln_new
         lam[k, 1] = lt_new
         cstate[k] = state
-        geo[k, 7] = -(g + dn * wn) if pair_par[p, 0] != LAW_RIGID else 0.0
+        geo[k, 7] = -(g + dn * wn) if pair_par[p, LAW] != LAW_RIGID else 0.0
         # convergence measured as the displacement the last increments moved the node pair by: the
         # positions carry round-off eps |x| ~ 1e-17 m, i.e. multiplier noise eps |x| / (dt^2 w), so a
         # relative multiplier tolerance can be unreachable at small dt
@@ -309,23 +324,6 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair,
         if change <= tol:
             break
     return sweeps
-
-
-@kernel
-def friction_now(mu_tab, mu_rate, t, mu_now):
-    """Kinetic coefficient of every slave at time ``t`` [s]: the table ``mu_tab`` (rows at ``mu_rate`` [Hz], one
-    row: constant) interpolated linearly, clipped at 0."""
-    n_mu = mu_tab.shape[0]
-    ns = mu_now.shape[0]
-    if n_mu == 1:
-        for k in range(ns):
-            mu_now[k] = mu_tab[0, k]
-    else:
-        x = t * mu_rate
-        i0 = min(int(x), n_mu - 2)
-        fr = x - i0
-        for k in range(ns):
-            mu_now[k] = max(0.0, (1.0 - fr) * mu_tab[i0, k] + fr * mu_tab[i0 + 1, k])
 
 
 @kernel
@@ -383,9 +381,9 @@ def finish_contact_record(slave_pair, pair_par, law_tab, s_area, geo, cstate, n_
     epen = 0.0
     for k in range(slave_pair.shape[0]):
         p = slave_pair[k]
-        if pair_par[p, 0] != LAW_RIGID and cstate[k] != 0:
-            epen += s_area[k] * normal_energy(int(pair_par[p, 0]), pair_par[p, 1], pair_par[p, 2], geo[k, 7],
-                                              law_tab[p])
+        if pair_par[p, LAW] != LAW_RIGID and cstate[k] != 0:
+            epen += s_area[k] * normal_energy(int(pair_par[p, LAW]), pair_par[p, LAW_COEFFICIENT],
+                                              pair_par[p, LAW_EXPONENT], geo[k, 7], law_tab[p])
     for p in range(rec_contact_r.shape[0]):
         cnt = rec_contact_r[p, 2] + rec_contact_r[p, 3] + rec_contact_r[p, 4]
         rec_contact_r[p, 0] /= n_sub

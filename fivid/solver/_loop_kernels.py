@@ -42,7 +42,7 @@ from fivid.solver._kernels import (
 )
 from fivid.solver._stencil_kernels import block_forces, spring_forces
 
-__all__ = ["Structure", "Motions", "Loads", "ContactSet", "FrictionTable", "ContactState", "State", "Records",
+__all__ = ["Structure", "Motions", "Loads", "ContactSet", "MuSeries", "ContactState", "State", "Records",
            "run_steps", "start_record", "group_velocities", "add_step_work", "finish_record", "guard_status"]
 
 # ---- the argument groups of run_steps (built by fivid.solver.integrate; float64 / int64, C-contiguous)
@@ -62,8 +62,9 @@ Loads = namedtuple("Loads", ["ld_dof", "ld_force", "ld_grp", "ld_par", "ld_scale
 ContactSet = namedtuple("ContactSet", ["X", "slave_node", "slave_pair", "master_ptr", "master_nodes", "pair_sign",
                                        "pair_par", "law_tab", "s_area", "minv_c", "cnodes", "cnode_slot",
                                        "gs_max_iter", "gs_tol"])
-#: kinetic friction coefficient of every slave, rows at ``mu_rate`` [Hz] (one row: constant)
-FrictionTable = namedtuple("FrictionTable", ["mu_tab", "mu_rate"])
+#: kinetic friction coefficient of every slave, rows at ``mu_rate`` [Hz] (one row: constant): the kernels' view of a
+#: :class:`fivid.friction.FrictionTable`
+MuSeries = namedtuple("MuSeries", ["mu_tab", "mu_rate"])
 #: the contact's state between steps: current master segment ``seg``, geometry ``geo``, multipliers ``lam``,
 #: ``cstate`` (0 open, 1 stick, 2 slip), and scratch ``mu_now``, ``vold_c`` (contact-node velocities)
 ContactState = namedtuple("ContactState", ["seg", "geo", "lam", "cstate", "mu_now", "vold_c"])
@@ -371,7 +372,7 @@ def run_steps(step0, nsteps, dt, n_sub, runaway_factor, stencil, structure, moti
         Guard: the inferred stiffness-damping loss may not fall below ``-runaway_factor (KE + U)``.
     stencil : StencilArrays
         Internal-force stencils (:mod:`fivid.solver._stencil_kernels`); ``stencil.npd`` the component length.
-    structure, motions, loads, contact, friction, cs, state : Structure, Motions, Loads, ContactSet, FrictionTable,
+    structure, motions, loads, contact, friction, cs, state : Structure, Motions, Loads, ContactSet, MuSeries,
         ContactState, State
         The argument groups (module attributes); ``cs`` and ``state`` are updated in place.
     records : Records

@@ -218,9 +218,9 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
 
-    from fivid.fe.static import slave_friction
+    from fivid.friction.curve import slave_coefficients
 
-    mu_slave = slave_friction(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
+    mu_slave = slave_coefficients(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
     schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
                                          settle_time, mu_slave)
     total = schedule.transient_end + duration
@@ -259,7 +259,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
     dt = t_int / n_sub
 
-    from fivid.solver.friction_input import friction_table
+    from fivid.friction.injection import friction_table
 
     v_signed = (sliding_velocity if sliding_velocity is not None else abs(base.amplitude) if base else 0.0)
     if base is not None and base.amplitude < 0:

@@ -58,7 +58,7 @@ def loop_arguments(model, st, ka, fric, dt: float, gs_max_iterations: int, gs_to
     contact = L.ContactSet(ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign,
                            ka.pair_par, ka.law_tab, ka.s_area, ka.minv_c, ka.cnodes, ka.cnode_slot,
                            int(gs_max_iterations), float(gs_tol))
-    friction = L.FrictionTable(np.ascontiguousarray(fric.mu), float(fric.rate))
+    friction = L.MuSeries(np.ascontiguousarray(fric.mu), float(fric.rate))
     return st.kernel_args, structure, motions, loads, contact, friction
 
 

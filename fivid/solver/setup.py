@@ -184,7 +184,7 @@ def _contact_arrays(model, st: BlockStencils) -> dict:
     """The contact fields of :class:`KernelArrays`: slaves, master segments, contact nodes, initial segments,
     the pairs' law rows and tables, the slaves' tributary areas."""
     from fivid.contact import kernel_row, kernel_tables
-    from fivid.contact._kernels import NPAR
+    from fivid.contact._layout_kernels import NPAR
     from fivid.fe.contact import slave_areas
 
     slave_nodes, slave_pair, master, ptr = [], [], [], [0]

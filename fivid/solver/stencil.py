@@ -14,6 +14,19 @@ except the last:
   in bounds); on a periodic ring the patch covers columns 1..nx-2;
 - listed nodes with explicit neighbour indices: the corners of uniform blocks and the two seam columns of
   a periodic ring (whose neighbours across the seam are ``nx - 1`` columns away).
+
+Speed of mapped patches (issue 30 item 5; bench_solver ``curved_fraction_of_bare_stencil`` and
+``*_stencil_fraction_of_bare_stencil``, measured on a loaded 2-core EPYC, AVX-512): the row loop is vectorised
+(8 lanes of 18 FMAs per force component), but a mapped node streams its 36 coefficients (288 B) from L3 every
+step (the ring's 2.2 MB do not fit the 1 MB L2), about 470 B per node and step with the update pass's arrays,
+which the stream evicts: the step is bound by L3 bandwidth. A one-pass variant ran at 3.2 ns/node on a
+cache-resident part of the ring against 4.4 ns/node on the whole ring; main's kernel takes ~5 ns/node, the bare
+rectangular stencil (13 terms, no coefficient stream) ~1.4 ns/node. Two layouts were measured and not kept
+(branches ``speed-tiled-experiment``, ``speed-symmetric-experiment``): tiles of 16 nodes with both components in
+one pass (fewer loads, bit for bit, but no faster on the ring: 0.89x, 1.2x on the rough pair) and the 19
+independent coefficients of a symmetric stencil (half the bytes, +5-10 %, results change at 1e-16). Closing the
+gap to half the bare stencil's speed needs fewer bytes per node: coefficients generated on the fly from a
+block's structure (a ring's rows are rotations of one stencil) or the stencil fused with the update pass.
 """
 
 from __future__ import annotations

@@ -7,7 +7,9 @@ A study is a sweep over conditions whose points are each a small analysis (DESIG
     description: the 2-DOF mode-coupling model across its flutter threshold
     system:                       # an FE model config, relative to this file ...
       model: ../models/triboair_coarse.yaml
-    # ... or a lumped model: {lumped: hoffmann, parameters: {mass: 1 kg, k1: 1e6 N/m, ...}}
+    # ... or a lumped kind's model: {lumped: hoffmann, parameters: {mass: 1 kg, k1: 1e6 N/m, ...}}
+    kind: weak_strong             # the study kind (fivid.study.kind registry); default: system.lumped, else the
+                                  # first kind that claims the config (docs/studies.md)
     sweep:                        # axes with units; the points are their grid (or `combine: zip`)
       mu: {values: [0.9, 1.1]}
       normal_load: {start: 0.2 N, stop: 50 N, num: 9, spacing: log}
@@ -35,25 +37,26 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
 
 import numpy as np
-from pydantic import BeforeValidator, Field, model_validator
+from pydantic import BeforeValidator, ConfigDict, Field, model_validator
 
-from fivid.config_layer import ConfigModel, Name, Number, Quantity, fail, from_mapping, read_yaml, validate
+from fivid.config_layer import (
+    ConfigModel,
+    Name,
+    Quantity,
+    fail,
+    from_mapping,
+    read_yaml,
+    unknown_key_message,
+    validate,
+)
 from fivid.errors import ConfigError
+from fivid.study.axes import AXES
+from fivid.study.kind import guess_kind, registered_kinds, study_kind
+from fivid.study.kinds import BUILTIN_KINDS  # noqa: F401  (importing it registers the shipped kinds)
 
 __all__ = ["Study", "StudyConfig", "AXES", "load_study", "STUDY_VERSION"]
 
 STUDY_VERSION = 1
-#: sweepable condition -> (SI units, long name); `seed` is an integer
-AXES = {
-    "normal_load": ("N", "normal load"),
-    "sliding_velocity": ("m s-1", "sliding velocity"),
-    "roughness_ra": ("m", "roughness Ra"),
-    "mu": ("1", "kinetic friction coefficient"),
-    "mu_static": ("1", "static friction coefficient"),
-    "seed": ("1", "random seed"),
-    "mesh": ("1", "mesh refinement factor (divisions x factor)"),
-    "time_step": ("1", "time step as a fraction of the critical step"),
-}
 
 
 @dataclass(frozen=True)
@@ -78,6 +81,10 @@ class Study:
         ``"<path> sha256:<hex>"`` of the config.
     config : dict
         The mapping read (after the ``--quick`` overrides).
+    quick : bool
+        The ``--quick`` variant.
+    kind : StudyKind
+        The study kind (:mod:`fivid.study.kind`): what every point and the whole study compute.
     """
 
     name: str
@@ -91,6 +98,7 @@ class Study:
     source: str
     config: dict = field(default_factory=dict)
     quick: bool = False
+    kind: Any = None
 
     def point_table(self) -> list[dict]:
         """Every point's conditions ``{axis: value}`` in SI (grid: last axis fastest; zip: element-wise)."""
@@ -105,11 +113,12 @@ class Study:
 
     @property
     def digest(self) -> str:
-        """sha256 of what every point depends on (system, task settings), not of the sweep itself."""
+        """sha256 of what every point depends on (kind, system, task settings), not of the sweep itself."""
         model = ""
         if self.model_path is not None:
             model = hashlib.sha256(self.model_path.read_bytes()).hexdigest()
-        text = json.dumps({"model": model, "lumped": self.lumped, "points": self.points}, sort_keys=True,
+        text = json.dumps({"kind": getattr(self.kind, "name", None), "model": model, "lumped": self.lumped,
+                           "points": self.points}, sort_keys=True,
                           default=_jsonable)
         return hashlib.sha256(text.encode()).hexdigest()
 
@@ -216,24 +225,13 @@ class _Sweep(ConfigModel):
         return self
 
 
-class _Hoffmann(ConfigModel):
-    """Parameters of the 2-DOF mode-coupling model (:class:`fivid.study.lumped.HoffmannSystem`)."""
-
-    mass: Quantity("kg", bare_is_si=True) = None
-    k1: Quantity("N m-1", bare_is_si=True) = None
-    k2: Quantity("N m-1", bare_is_si=True) = None
-    k3: Quantity("N m-1", bare_is_si=True) = None
-    damping: Quantity("N s m-1", bare_is_si=True) = None
-    preload: Quantity("N", bare_is_si=True) = None
-    belt_velocity: Quantity("m s-1", bare_is_si=True) = None
-
-
 class _System(ConfigModel):
-    """The system of every point: an FE model config (relative to the study file) or a lumped model."""
+    """The system of every point: an FE model config (relative to the study file) or a lumped kind's model (its
+    registered name, with ``parameters``: that kind's section, validated by the kind)."""
 
     model: str | None = None
-    lumped: Literal["hoffmann"] | None = None
-    parameters: _Hoffmann = _Hoffmann()
+    lumped: Name | None = Field(None, description="a lumped study kind (fivid.study.kind registry), e.g. hoffmann")
+    parameters: dict[str, Any] | None = Field(None, description="the lumped kind's parameters (its config section)")
 
     @model_validator(mode="after")
     def _exactly_one(self):
@@ -271,26 +269,15 @@ class _Psd(ConfigModel):
     band: Annotated[list[Quantity("Hz", bare_is_si=True)], Field(min_length=2, max_length=2)] | None = None
 
 
-class _Roughness(ConfigModel):
-    """seed 003's rough pair (:mod:`fivid.study.roughness`)."""
-
-    correlation_length: Quantity("m", positive=True, bare_is_si=True) = None
-    profile_step: Quantity("m", positive=True, bare_is_si=True) = None
-    seeds: Annotated[list[Annotated[int, Field(ge=0)]], Field(min_length=2, max_length=2,
-                                                              description="lower, upper profile")] = None
-    sensor_every: Annotated[int, Field(ge=1)] = None
-    gs_tolerance: Annotated[Number, Field(gt=0, lt=1)] = None
-    gs_max_iterations: Annotated[int, Field(ge=1)] = None
-    settle_time: Quantity("s", positive=True, bare_is_si=True) = None
-
-
 class _Points(ConfigModel):
-    """The analyses computed at every point."""
+    """The analyses computed at every point; a kind's own section may sit here too (``points.roughness``),
+    validated by the kind."""
+
+    model_config = ConfigDict(**{**ConfigModel.model_config, "extra": "allow"})
 
     modes: _Modes | None = None
     transient: _Transient | None = None
     psd: _Psd | None = None
-    roughness: _Roughness | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -302,6 +289,8 @@ class StudyConfig(ConfigModel):
     """A study config (``configs/studies/*.yaml``, ``docs/studies.md``)."""
 
     fivid_study: Literal[1] = Field(alias="fivid-study", description="study format version")
+    kind: Name | None = Field(None, description="the study kind (fivid.study.kind registry; docs/studies.md); "
+                                                "default: system.lumped, else the kind that claims the config")
     name: Name = "study"
     description: str = ""
     system: _System
@@ -312,11 +301,7 @@ class StudyConfig(ConfigModel):
 
     @model_validator(mode="after")
     def _consistent(self):
-        lumped, pts = self.system.lumped is not None, self.points
-        if lumped and pts.modes is not None:
-            raise fail("modes are computed for FE models (a lumped model has its closed form)", at=("points", "modes"))
-        if lumped and pts.transient is not None and pts.transient.law is not None:
-            raise fail("a lumped model takes mu from the sweep, not a law file", at=("points", "transient", "law"))
+        pts = self.points
         if pts.transient is not None and pts.transient.coulomb_reference and pts.transient.law is None:
             raise fail("compares a law with its mu0: give 'law' too", at=("points", "transient", "coulomb_reference"))
         if pts.psd is not None:
@@ -326,18 +311,58 @@ class StudyConfig(ConfigModel):
             if pts.psd.band is not None and not 0 <= pts.psd.band[0] < pts.psd.band[1] <= nyquist:
                 raise fail(f"expected 0 <= low < high <= Nyquist ({nyquist:g} Hz), found {pts.psd.band[0]:g}, "
                            f"{pts.psd.band[1]:g}", at=("points", "psd", "band"))
-        if pts.roughness is not None:
-            if lumped:
-                raise fail("the rough pair is an FE model: give system.model (e.g. ../models/rough_pair_short.yaml)",
-                           at=("points", "roughness"))
-            if pts.transient is None:
-                raise fail("a rough-pair point is a transient: give points.transient (duration, sample_rate)",
-                           at=("points", "roughness"))
-        if lumped and ({"mesh", "time_step"} & self.sweep.model_fields_set):
-            raise fail("mesh and time_step axes refine an FE model, not a lumped one", at=("sweep",))
-        if lumped and pts.transient is not None and self.sweep.mu is None:
-            raise fail("a lumped model's transient takes its friction coefficient from a 'mu' axis", at=("sweep",))
         return self
+
+
+def _kind(src, cfg: StudyConfig, data: Mapping):
+    """The study's kind: ``kind:``, else ``system.lumped``, else the first registered kind that claims the config;
+    a lumped kind needs ``system.lumped`` and an FE kind ``system.model``."""
+    if cfg.kind is not None:
+        kind = _registered(src, cfg.kind, "kind")
+    elif cfg.system.lumped is not None:
+        kind = _registered(src, cfg.system.lumped, "system.lumped")
+    else:
+        kind = guess_kind(dict(data))
+        if kind is None:
+            raise src.error("kind", "no registered study kind claims this config; name one: "
+                                    + ", ".join(registered_kinds()))
+    if kind.lumped and cfg.system.lumped != kind.name:
+        raise src.error("system", f"kind {kind.name!r} is a lumped model: give system.lumped: {kind.name} "
+                                  "(and its parameters), not an FE model")
+    if not kind.lumped and cfg.system.model is None:
+        raise src.error("system", f"kind {kind.name!r} runs an FE model: give system.model (a model config)"
+                        + (f"; system.lumped {cfg.system.lumped!r} is another kind" if cfg.system.lumped else ""))
+    return kind
+
+
+def _registered(src, name: str, key: str):
+    try:
+        return study_kind(name, key=key)
+    except ConfigError as exc:
+        raise src.error(key, exc.message) from None
+
+
+def _kind_section(src, kind, data: Mapping):
+    """The kind's section validated by its model (``kind.config``), and a check that ``points`` holds no other
+    unknown key; returns the kind's settings (SI, :meth:`StudyKind.settings`)."""
+    own = kind.section
+    extra = set(data.get("points") or {}) - set(_Points.model_fields)
+    for key in sorted(extra):
+        if own != ("points", key):
+            owners = [k.name for k in registered_kinds().values() if k.section == ("points", key)]
+            hint = f"; it belongs to kind {owners[0]!r} (kind: {owners[0]})" if owners else ""
+            raise src.error(f"points.{key}", unknown_key_message(key, list(_Points.model_fields)) + hint)
+    if own is None:
+        if (data.get("system") or {}).get("parameters") is not None:
+            raise src.error("system.parameters", f"kind {kind.name!r} takes no parameters")
+        return kind.settings(None)
+    raw = (data.get(own[0]) or {}).get(own[1])
+    section = validate(kind.config, src, data={} if raw is None else raw, prefix=own)
+    try:
+        return kind.settings(section)
+    except ConfigError as exc:
+        key = ".".join(own) + (f".{exc.key}" if exc.key and exc.key not in own else "")
+        raise src.error(key, exc.message) from None
 
 
 def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = False) -> Study:
@@ -350,20 +375,17 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
     if quick and isinstance(data.get("quick"), Mapping):
         data = _merge({k: v for k, v in data.items() if k != "quick"}, data["quick"])
     cfg = validate(StudyConfig, src, data=data)
+    kind = _kind(src, cfg, data)
+    for key, message in kind.check(cfg):
+        raise src.error(key, message)
+    settings = _kind_section(src, kind, data)
     model_path, lumped = None, None
     if cfg.system.model is not None:
         model_path = (base / cfg.system.model).resolve()
         if not model_path.is_file():
             raise src.error("system.model", f"no such model config: {str(model_path)!r}")
-    else:
-        from fivid.study.lumped import HoffmannSystem
-
-        si = cfg.system.parameters.model_dump(exclude_unset=True)
-        try:
-            HoffmannSystem(**si)
-        except ConfigError as exc:
-            raise src.error(exc.key or "system.parameters", exc.message) from None
-        lumped = {"kind": cfg.system.lumped, "parameters": si}
+    if kind.lumped:
+        lumped = {"kind": kind.name, "parameters": settings}
     axes = {}
     for name in (data.get("sweep") or {}):  # in the order of the file
         if name != "combine":
@@ -378,8 +400,11 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
             raise src.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N), "
                                    "unless the model's pressure loads press the contact")
     points = _points(src, cfg.points, base)
+    if kind.section is not None and kind.section[0] == "points":
+        points[kind.section[1]] = settings
     return Study(name=cfg.name, description=cfg.description, model_path=model_path, lumped=lumped, axes=axes,
-                 combine=cfg.sweep.combine, cea=cea, points=points, source=src.origin, config=data, quick=quick)
+                 combine=cfg.sweep.combine, cea=cea, points=points, source=src.origin, config=data, quick=quick,
+                 kind=kind)
 
 
 def _pressed_by_loads(model_path) -> bool:
@@ -409,6 +434,4 @@ def _points(src, spec: _Points, base: Path) -> dict:
         out["psd"] = {"nperseg": spec.psd.nperseg}
         if spec.psd.band is not None:
             out["psd"]["band"] = tuple(spec.psd.band)
-    if spec.roughness is not None:
-        out["roughness"] = spec.roughness.model_dump(exclude_unset=True)
     return out

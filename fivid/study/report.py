@@ -1,10 +1,13 @@
-"""The study's report section: the points table, the regime map and the CEA, as one self-contained HTML page."""
+"""The study's report section: the points table, the regime map and the CEA, then the kind's own section
+(:meth:`fivid.study.kind.StudyKind.report`), as one self-contained HTML page."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from fivid.report.html import Page, figure_data_uri, table
+from fivid.study.axes import AXES
+from fivid.study.kind import study_kind
 
 __all__ = ["render_study_report", "study_section"]
 
@@ -61,8 +64,41 @@ def _cea_figure(ds) -> str:
     return figure_data_uri(fig)
 
 
-def study_section(page: Page, ds, summary: dict) -> None:
-    """Add the study's section to ``page`` (a study report, or a pipeline report that embeds one)."""
+#: units of the points table's result columns (the swept axes take theirs from fivid.study.axes.AXES)
+_RESULT_UNITS = {"growth_rate": "s-1", "cea_growth_rate": "s-1", "frequency": "Hz", "onset_time": "s",
+                 "level_db": "dB re 1e-6 m s-2"}
+
+
+def _with_units(name: str) -> str:
+    """A column header with its units, ``normal_load [N]`` (none for a pure number or a label)."""
+    units = AXES[name][0] if name in AXES else _RESULT_UNITS.get(name, "1")
+    return name if units == "1" else f"{name} [{units}]"
+
+
+def _transition_paragraph(page: Page, summary: dict) -> None:
+    """The weak/strong transition load of a load sweep (summary ``transition_load``, ``transition_loads``)."""
+    t = summary.get("transition_load")
+    if not t:
+        return
+
+    def one(x) -> str:
+        if x.get("value") is None:
+            return x.get("note", "no transition in the swept loads")
+        return f"at {x['value']:.3g} N (between the swept loads {x['bracket'][0]:g} and {x['bracket'][1]:g} N)"
+
+    text = f"Weak/strong contact transition (coupling indicator κ = {t['threshold']:g}): {one(t)}"
+    groups = summary.get("transition_loads", [])
+    if groups:
+        text += "; per condition: " + "; ".join(
+            ", ".join(f"{k} {v:g}" + ("" if AXES[k][0] == "1" else f" {AXES[k][0]}") for k, v in g.items() if k in AXES)
+            + f": {one(g)}" for g in groups)
+    page.paragraph(text + ".")
+
+
+def study_section(page: Page, ds, summary: dict, kind=None) -> None:
+    """Add the study's section to ``page`` (a study report, or a pipeline report that embeds one): the points, the
+    growth and level figures, the CEA, then the section of the study's kind (``kind``, default the registered kind
+    named in ``summary["kind"]``; none for a summary without one)."""
     page.heading(f"Study {summary['study']}")
     if summary.get("description"):
         page.paragraph(summary["description"])
@@ -78,7 +114,8 @@ def study_section(page: Page, ds, summary: dict) -> None:
     cols = ["regime", "growth_rate", "cea_growth_rate", "frequency", "onset_time", "level_db", "status"]
     cols = [c for c in cols if any(c in p for p in summary["points"])]
     rows = [[p.get(a) for a in axes] + [p.get(c) for c in cols] for p in summary["points"]]
-    page.raw(table(axes + cols, rows))
+    page.raw(table([_with_units(c) for c in axes + cols], rows))
+    _transition_paragraph(page, summary)
     if summary["failed"]:
         page.paragraph("Failed points: " + "; ".join(f"point {f['point']}: {f['error']}" for f in summary["failed"]),
                        cls="fail")
@@ -95,56 +132,11 @@ def study_section(page: Page, ds, summary: dict) -> None:
         if "level_db" in ds:
             page.figure(_response_figure(ds, axis, "level_db", "acceleration level [dB re 1e-6 m/s²]"),
                         "Response level of each point's steady part.", "levels")
-    if "vibration_level" in ds:  # seed 003's roughness noise
-        from fivid.study.roughness_report import roughness_section
-
-        roughness_section(page, ds, summary)
     if "cea_mu" in ds.coords:
         page.figure(_cea_figure(ds), "CEA: frequencies and real parts of the eigenvalues against μ.", "CEA")
-    _convergence_tables(page, summary.get("convergence"))
-
-
-def _convergence_tables(page: Page, conv) -> None:
-    if not conv:
-        return
-    page.heading("Convergence", level=3)
-    for entry in conv.get("mesh", []):
-        h = ", ".join(f"{x * 1e3:.3g}" for x in entry["element_size"])
-        page.paragraph(f"Meshes of element size {h} mm at " + ", ".join(f"{k} {v:g}" for k, v in
-                                                                         entry["conditions"].items()) + ".")
-        rows = []
-        for name, items in (("mode", entry.get("mode_frequency", [])), ("level [dB]", [entry.get("level_db")]),
-                            ("dominant frequency [Hz]", [entry.get("response_frequency")])):
-            for it in items:
-                if it is None:
-                    continue
-                label = f"mode {it['mode']} [Hz]" if name == "mode" else name
-                rows.append([label, *(round(v, 6) for v in it["values"]), it["order"], it["extrapolated"],
-                             it["error"]])
-        rows += _spectral_rows(entry)
-        page.raw(table(["quantity", "finest", "middle", "coarsest", "observed order", "extrapolated",
-                        "error of finest"], rows))
-    for entry in conv.get("time_step_order", []):
-        page.paragraph("Time steps " + ", ".join(f"{x:g}" for x in entry["time_step"]) + " of the critical step at "
-                       + ", ".join(f"{k} {v:g}" for k, v in entry["conditions"].items()) + ".")
-        page.raw(table(["quantity", "smallest step", "middle", "largest step", "observed order", "extrapolated",
-                        "error of smallest"], _spectral_rows(entry)))
-    if conv.get("time_step"):
-        rows = [[", ".join(f"{k} {v:g}" for k, v in s["conditions"].items()), s["time_step"], s["reference_time_step"],
-                 s["lsd_db"], s["level_diff_db"]] for s in conv["time_step"]]
-        page.raw(table(["conditions", "step (x critical)", "reference step", "PSD LSD [dB]", "level diff [dB]"], rows))
-
-
-def _spectral_rows(entry) -> list[list]:
-    """Table rows of the one-third-octave band levels and PSD peak frequencies of a convergence entry."""
-    rows = []
-    for b in entry.get("band_level_db", []):
-        rows.append([f"level {b['band'][0]:.0f}–{b['band'][1]:.0f} Hz [dB]", *(round(v, 3) for v in b["values"]),
-                     b["order"], b["extrapolated"], b["error"]])
-    for p in entry.get("psd_peak_frequency", []):
-        rows.append([f"PSD peak near {p['peak']:.0f} Hz [Hz]", *(round(v, 2) for v in p["values"]), p["order"],
-                     p["extrapolated"], p["error"]])
-    return rows
+    kind = kind or (study_kind(summary["kind"]) if "kind" in summary else None)
+    if kind is not None:
+        kind.report(page, ds, summary)  # the kind's own section
 
 
 def render_study_report(path, study, ds, summary: dict):
@@ -152,5 +144,5 @@ def render_study_report(path, study, ds, summary: dict):
     from fivid.storage import write_text
 
     page = Page(f"fivid study report: {study.name}")
-    study_section(page, ds, summary)
+    study_section(page, ds, summary, study.kind)
     return write_text(path, page.render())

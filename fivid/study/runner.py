@@ -31,15 +31,10 @@ from pathlib import Path
 import numpy as np
 
 from fivid.errors import FividError
-from fivid.study.config import AXES
+from fivid.study.axes import AXES
+from fivid.study.report import render_study_report
 
 __all__ = ["run_study", "open_study", "point_key"]
-
-#: per-point results of a roughness-noise point (fivid.study.roughness) copied into summary.json
-ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impulse", "shock_count", "dissipated_power",
-                  "mean_normal_force", "mean_friction_force", "open_fraction", "friction_coefficient",
-                  "friction_coefficient_rms", "profile_rsm_target", "profile_Ra", "profile_Rq",
-                  "profile_Rz", "profile_Rsm", "simulation_seconds", "dof_updates_per_second", "n_dof", "time_step")
 
 log = logging.getLogger("fivid")
 
@@ -51,34 +46,11 @@ def point_key(study, conditions: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _system(study) -> dict:
-    """What a worker needs to build the system (plain data), with the study-wide coupling bounds when modes are
-    computed on a model with contacts (computed once here, not at every point)."""
-    if study.lumped is not None:
-        return {"lumped": study.lumped}
-    out = {"model_path": str(study.model_path)}
-    if "modes" in study.points:
-        from fivid.study.tasks import refined_model
-
-        bounds = {}
-        for factor in np.unique(study.axes.get("mesh", [1.0])):  # per mesh of the sweep
-            model = refined_model(study.model_path, float(factor))
-            if model.contacts:
-                from fivid.study.coupling import coupling_bounds
-
-                f0, fi = coupling_bounds(model, study.points["modes"]["n_modes"])
-                bounds[repr(float(factor))] = (f0.tolist(), fi.tolist())
-        if bounds:
-            out["coupling_bounds"] = bounds
-    return out
-
-
-def _safe_evaluate(system, tasks, conditions):
-    """Evaluate one point; a failure comes back as ``(None, message)`` so that the other points go on."""
-    from fivid.study.tasks import evaluate_point
-
+def _safe_evaluate(kind, system, tasks, conditions):
+    """Evaluate one point with the study's kind; a failure comes back as ``(None, message)`` so that the other
+    points go on."""
     try:
-        return evaluate_point(system, tasks, conditions), None
+        return kind.evaluate(system, tasks, conditions), None
     except Exception as exc:  # noqa: BLE001 - any failure of one point is reported, the study goes on
         return None, f"{type(exc).__name__}: {exc}"
 
@@ -123,11 +95,14 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
         table = study.point_table()
         files = [pdir / f"p{i:04d}-{point_key(study, c)[:16]}.nc" for i, c in enumerate(table)]
         missing = [i for i, f in enumerate(files) if not f.exists()]
-        system = _system(study) if missing and study.points else None
-        todo = {i: (system, study.points, table[i]) for i in missing}
+        # a point has work when the study asks for tasks, or its kind has a section of its own (its settings are
+        # what the points compute); a CEA-only study of a kind without one computes no points
+        busy = bool(study.points) or study.kind.section is not None
+        system = study.kind.system(study) if missing and busy else None
+        todo = {i: (study.kind, system, study.points, table[i]) for i in missing} if busy else {}
         log.info("study %s: %d points, %d to compute", study.name, len(table), len(todo))
         timing, failed = {}, {}
-        if todo and study.points:
+        if todo:
             if workers == 0 and scheduler is None:
                 results = _in_process(todo)
             else:
@@ -153,14 +128,7 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
         ds = _assemble(study, table, files, done, cea)
         write_netcdf(ds, outdir / "study.nc")  # text as char arrays: fivid.storage.cf_encoding
         summary = _summary(study, table, ds, done, failed, cea, timing, wall, workers if scheduler is None else None)
-        from fivid.study.convergence import convergence_summary
-
-        conv = convergence_summary(ds, table, done)
-        if conv is not None:
-            summary["convergence"] = conv
         write_json(outdir / "summary.json", summary)
-        from fivid.study.report import render_study_report
-
         render_study_report(outdir / "report.html", study, ds, summary)
     return summary
 
@@ -173,46 +141,31 @@ def _study_cea(study):
     if "mu" in study.axes:  # evaluate exactly at the transients' mu too (near a threshold Re(lambda) ~ sqrt)
         swept = study.axes["mu"]
         mu = np.union1d(mu, swept[(swept >= mu[0]) & (swept <= mu[-1])])
-    if study.lumped is not None:
-        from fivid.study.lumped import HoffmannSystem
-
-        res = HoffmannSystem(**study.lumped["parameters"]).cea(mu)
-    else:
-        from fivid.fe import load_model
-        from fivid.fe.cea import complex_eigenvalue_analysis
-
-        from fivid.study.tasks import refined_model
-
-        load = study.cea.get("normal_load")
-        meshes = np.unique(study.axes.get("mesh", [1.0]))  # one mesh swept: the CEA on it too
-        model = refined_model(study.model_path, float(meshes[0])) if meshes.size == 1 else load_model(study.model_path)
-        ds = complex_eigenvalue_analysis(model, mu, normal_load=load)
-        lam = ds["real_part"].transpose("mu", "mode").values + 2j * np.pi * ds["frequency"].transpose("mu", "mode").values
-        p = ds["partner"].values  # mode numbers (1-based), -1 for none
-        res = {"eigenvalues": lam, "critical_mu": ds["critical_mu"].values, "partner": np.where(p > 0, p - 1, -1)}
+    res = study.kind.cea(study, mu)
     return {"mu": mu, **{k: res[k] for k in ("eigenvalues", "critical_mu", "partner")}}
+
+
+def _text_variables(ds) -> list[str]:
+    """The data variables holding text (a regime, a coupling class): netCDF gives them back fixed-width."""
+    return [str(n) for n, v in ds.data_vars.items() if v.dtype.kind in "OSU"]
 
 
 def _assemble(study, table, files, done, cea):
     import xarray as xr
 
-    from fivid.study.config import AXES
-
     parts = []
     for i in done:
         with xr.open_dataset(files[i]) as d:
             part = d.load()
-        for name in ("regime", "coupling"):  # concat would truncate strings to the first point's width
-            if name in part:
-                part[name] = part[name].astype(object)
+        for name in _text_variables(part):  # concat would truncate strings to the first point's width
+            part[name] = part[name].astype(object)
         parts.append(part.assign_coords(point=i))
     if parts:
         ds = xr.concat(parts, dim="point", coords="minimal", compat="override", join="outer",
                        combine_attrs="override")  # keeps the variables' units and long names (the first point's)
         ds.attrs = {}
-        for name in ("regime", "coupling"):  # netCDF gives fixed-width strings back: keep them whole
-            if name in ds:
-                ds[name] = ds[name].astype(object)
+        for name in _text_variables(ds):  # netCDF gives fixed-width strings back: keep them whole
+            ds[name] = ds[name].astype(object)
     else:
         ds = xr.Dataset(coords={"point": ("point", np.array([], dtype=np.int64))})
     for name in study.axes:
@@ -273,12 +226,7 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
         p = {k: (int(v) if k == "seed" else float(v)) for k, v in cond.items()}
         if i in done:
             p["status"] = "done"
-            for name, key in (("regime", "regime"), ("growth_rate", "growth_rate"), ("response_frequency", "frequency"),
-                              ("onset_time", "onset_time"), ("rms", "rms"), ("level_db", "level_db"),
-                              ("stick_fraction", "stick_fraction"), ("narrowband_fraction", "narrowband_fraction"),
-                              ("coupling_indicator", "coupling_indicator"), ("coupling", "coupling"),
-                              ("perturbation_gain_db", "perturbation_gain_db"),
-                              *((n, n) for n in ROUGHNESS_KEYS)):
+            for name, key in study.kind.point_keys:
                 val = _scalar(ds, name, i)
                 if val is not None:
                     p[key] = val
@@ -289,7 +237,7 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
             if i in failed:
                 p["error"] = failed[i]
         points.append(p)
-    out = {"study": study.name, "description": study.description, "source": study.source,
+    out = {"study": study.name, "kind": study.kind.name, "description": study.description, "source": study.source,
            "fivid_version": __version__, "quick": study.quick, "n_points": len(table), "n_done": len(done),
            "failed": [{"point": i, **{k: float(v) for k, v in table[i].items()}, "error": e}
                       for i, e in sorted(failed.items())],
@@ -307,20 +255,11 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
                                   "cea_mu_range": [float(cea["mu"][0]), float(cea["mu"][-1])]}
         else:
             out["critical_mu"] = None
-    out.update(_transitions(points))
-    from fivid.study.fits import power_law_fit
-
-    fit = power_law_fit(points, "rms")
-    if fit is not None:
-        out["fits"] = {"rms": fit}
-    if any("vibration_level" in p for p in points):
-        from fivid.study.fits import roughness_noise_fits
-        from fivid.study.roughness import roughness_settings
-
-        rn = roughness_noise_fits(points)
-        out.setdefault("fits", {}).update(rn.pop("fits"))
-        out.update(rn)
-        out["roughness_settings"] = roughness_settings(study)
+    for key, value in study.kind.summarise(study, ds, points).items():  # the kind's own keys
+        if key == "fits":
+            out.setdefault("fits", {}).update(value)
+        else:
+            out[key] = value
     seconds = list(timing.values())
     out["timing"] = {"wall_s": round(wall, 3), "computed_points": len(seconds),
                      "mean_point_s": round(float(np.mean(seconds)), 3) if seconds else None}
@@ -328,54 +267,6 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
         out["timing"]["workers"] = workers
         out["timing"]["parallel_efficiency"] = round(float(np.sum(seconds) / (wall * workers)), 3)
     return out
-
-
-def _transitions(points) -> dict:
-    """``transition_load`` (the first group's, see :func:`_transition_load`) and, when other conditions vary,
-    ``transition_loads``: one per combination of them (the contact's compliance follows roughness, say)."""
-    transition = _transition_load(points)
-    if transition is None:
-        return {}
-    out = {"transition_load": transition}
-    others = sorted({k for p in points for k in p if k in AXES and k not in ("normal_load", "seed")
-                     and len({q.get(k) for q in points}) > 1})
-    if others:
-        groups = {}
-        for p in points:
-            groups.setdefault(tuple(p.get(k) for k in others), []).append(p)
-        out["transition_loads"] = [{**dict(zip(others, key)), **(_transition_load(grp) or {})}
-                                   for key, grp in groups.items()]
-    return out
-
-
-def _transition_load(points) -> dict | None:
-    """Where the coupling indicator first crosses the weak/strong threshold along the normal load.
-
-    ``{"value" [N], "bracket": [lo, hi] [N], "threshold"}``: kappa interpolated linearly in log load between the two
-    swept loads that bracket the crossing (other axes: the first point of each load, in sweep order; the summary's
-    ``transition_loads`` repeats this per combination of the other swept conditions). None without a load sweep
-    or an indicator; ``value`` null when kappa stays on one side over the swept loads.
-    """
-    from fivid.study.coupling import WEAK_STRONG_THRESHOLD
-
-    by_load = {}
-    for p in points:
-        if "normal_load" in p and "coupling_indicator" in p:
-            by_load.setdefault(p["normal_load"], p["coupling_indicator"])
-    if len(by_load) < 2:
-        return None
-    loads = np.array(sorted(by_load))
-    kappa = np.array([by_load[f] for f in loads])
-    above = kappa >= WEAK_STRONG_THRESHOLD
-    k = np.flatnonzero(~above[:-1] & above[1:])
-    if k.size == 0:
-        return {"value": None, "bracket": None, "threshold": WEAK_STRONG_THRESHOLD,
-                "note": "strong at every swept load" if above.all() else "weak at every swept load"
-                if not above.any() else "kappa does not rise through the threshold"}
-    i = int(k[0])
-    w = (WEAK_STRONG_THRESHOLD - kappa[i]) / (kappa[i + 1] - kappa[i])
-    value = float(np.exp(np.log(loads[i]) + w * (np.log(loads[i + 1]) - np.log(loads[i]))))
-    return {"value": value, "bracket": [float(loads[i]), float(loads[i + 1])], "threshold": WEAK_STRONG_THRESHOLD}
 
 
 def _cea_at(cea, mu: float) -> dict:

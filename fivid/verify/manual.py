@@ -78,7 +78,7 @@ def _case_section(page: Page, r: Result) -> None:
             ["how fivid computes it", c.method], ["tolerance and its basis", c.tolerance_basis]]
     if c.real_data:
         rows.append(["measured data", c.real_data])
-    page.raw(table(["", ""], rows))
+    page.raw(table(["", "description"], rows))
     o = r.outcome
     if o is None:
         return
@@ -113,7 +113,7 @@ def render_manual(path, results: list[Result], env: dict, *, quick: bool):
     rows += [[k, v] for k, v in env["packages"].items()]
     rows += [["platform", env["platform"]], ["CPU", env["cpu"]], ["CPU count", env["cpu_count"]],
              ["date (UTC)", env["date"]]]
-    page.raw(table(["", ""], rows))
+    page.raw(table(["", "version or value"], rows))
     for r in results:
         _case_section(page, r)
     page.raw(f"<p><small>fivid {html.escape(env['fivid_version'])} · fivid verify"

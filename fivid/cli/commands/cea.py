@@ -1,4 +1,4 @@
-"""``fivid cea MODEL.yaml [--load Q] --mu START STOP STEPS [--json]``: complex eigenvalue analysis against friction."""
+"""``fivid cea MODEL.yaml [--load Q] --mu START STOP STEPS [--prestress] [--json]``: complex eigenvalue analysis against friction."""
 
 from __future__ import annotations
 
@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     p.add_argument("--basis", type=int, default=None, metavar="B",
                    help="modal basis size (default max(3N, 40))")
     p.add_argument("--no-damping", action="store_true", help="leave out Rayleigh damping and dashpots")
+    p.add_argument("--prestress", action="store_true",
+                   help="linearise about the prestressed state: add the initial-stress (geometric) stiffness of the "
+                        "preload's static state (fivid.fe.prestress)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("-o", "--output", metavar="CEA.nc", help="write the sweep to netCDF")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -79,7 +82,8 @@ def run(args) -> int:
     # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
     with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
         ds = complex_eigenvalue_analysis(model, mu, normal_load=load, n_modes=args.n_modes, n_basis=args.basis,
-                                         damping=not args.no_damping, progress=bar.update)
+                                         damping=not args.no_damping, progress=bar.update,
+                                         prestress=bool(args.prestress))
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
     result = cea_to_json(ds)

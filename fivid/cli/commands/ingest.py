@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from fivid.cli import quiet
+
 __all__ = ["register", "run"]
 
 _DESCRIPTION = """\
@@ -69,7 +71,7 @@ def run(args) -> int:
         record = {"input": str(path), "output": str(target), "run_id": str(ds.attrs["run_id"]),
                   "samples": int(ds.sizes["time"]), "sample_rate_hz": float(ds.attrs["sample_rate"])}
         records.append(record)
-        if not args.json:
+        if not (args.json or quiet(args)):  # -q: only rejections and the final count
             bar.write(f"{path} -> {target} (run {record['run_id']}: {record['samples']} samples at "
                       f"{record['sample_rate_hz']:.6g} Hz)", file=sys.stdout)
 

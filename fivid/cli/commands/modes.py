@@ -1,4 +1,4 @@
-"""``fivid modes MODEL.yaml [-n N] [--load Q | --contact] [--json] [-o MODES.nc]``: natural frequencies and mode
+"""``fivid modes MODEL.yaml [-n N] [--load Q | --contact] [--prestress] [--json] [-o MODES.nc]``: natural frequencies and mode
 shapes of a model."""
 
 from __future__ import annotations
@@ -36,6 +36,10 @@ def register(subparsers) -> None:
     p.add_argument("--contact", action="store_true",
                    help="couple the bodies at the contact: with --load, under that normal load; without, under the "
                         "model's pressure loads (e.g. a ring squeezed on a shaft)")
+    p.add_argument("--prestress", action="store_true",
+                   help="vibrations about the prestressed state: add the initial-stress (geometric) stiffness of the "
+                        "static state (the contact preload with --load/--contact, else the pressure loads); "
+                        "tension stiffens, compression softens (fivid.fe.prestress)")
     p.add_argument("--damping-curve", metavar="PNG",
                    help="plot the modal damping ratio vs frequency of the model's damping scheme (classic or "
                         "band-limited Rayleigh, docs/model-config.md) with the modes marked, to this PNG file")
@@ -61,7 +65,8 @@ def run(args) -> int:
         raise ConfigError("--contact needs --load Q (e.g. --load '5 N'): the contact is linearised about the "
                           "nodes closed under that normal load (or pressure loads in the model that press it)")
     include = load is not None or bool(args.contact)
-    ds = modal_analysis(model, args.n_modes, mass=args.mass, include_contact=include, normal_load=load)
+    ds = modal_analysis(model, args.n_modes, mass=args.mass, include_contact=include, normal_load=load,
+                        prestress=bool(args.prestress))
     if args.output:
         write_modes(ds, args.output, overwrite=args.overwrite)
     summary = modes_to_json(ds)

@@ -39,7 +39,7 @@ def register(subparsers) -> None:
     parser.add_argument("--confidence", type=float, default=0.95, help="level of the χ² bounds (default 0.95)")
     parser.add_argument("--steady", action="store_true",
                         help="analyse only the steady part: a simulated run from its transient_end, a measured run's "
-                             "steady-sliding window (needs velocity or position)")
+                             "steady-sliding window (from velocity or position, else from the forces)")
     parser.add_argument("-o", "--output", required=True, metavar="PSD.nc", help="output netCDF file")
     parser.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     parser.add_argument("--json", action="store_true",

@@ -55,7 +55,8 @@ def _run(args) -> int:
     echo = planned.append if args.json and args.dry_run else (
         lambda line: print(line, file=sys.stderr if args.json else sys.stdout))
     status, summary = run_pipeline(plan, workers=args.workers, scheduler=args.scheduler, dry_run=args.dry_run,
-                                   force=args.force, progress=False if args.no_progress else None, echo=echo)
+                                   force=args.force, progress=False if args.no_progress else None, echo=echo,
+                                   notify=lambda line: print(line, file=sys.stderr, flush=True))
     if args.json:
         print(dumps_json({"dry_run": True, "plan": planned} if args.dry_run else summary))
     if not args.dry_run:
@@ -67,4 +68,7 @@ def _run(args) -> int:
             if not check["pass"]:
                 print(f"  below threshold: {check['condition']}: {check['score']} = {check['value']} "
                       f"(need {check['threshold']})", file=sys.stderr)
+        report = plan.config.output / "report.html"
+        if report.is_file() and "report" in plan.stages:
+            print(f"open the report: {report}", file=sys.stderr)
     return status

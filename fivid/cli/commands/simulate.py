@@ -224,7 +224,7 @@ def _dry_run(args, model, size, run_kw) -> int:
         per_sample = timing["loop_seconds"] + timing["setup_seconds"]
         timing["estimated_seconds"] = timing["setup_seconds"] + per_sample * args.samples / max(1, args.workers)
     if args.json:
-        print(dumps_json({"model": model.describe(), "output_samples": size.output_samples,
+        print(dumps_json({"dry_run": True, "model": model.describe(), "output_samples": size.output_samples,
                           "memory_bytes": size.bytes, "memory_parts_bytes": size.parts,
                           "solver_path": path.get("solver_path"), "solver_choice_reason": path.get("solver_choice_reason"),
                           "reduced_error_estimate_db": path.get("reduced_error_estimate_db"),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fivid.study.config import AXES
+
 __all__ = ["register"]
 
 _DESCRIPTION = """\
@@ -55,11 +57,36 @@ def _run(args) -> int:
             c = summary["critical_mu"]
             print("  CEA: stable over the mu range" if c is None else
                   f"  CEA: critical mu {c['value']:.4g} at {c['frequency']:.4g} Hz")
+        for line in _transition_lines(summary):
+            print(line)
         for p in summary["points"]:
-            cond = ", ".join(f"{k} {v:g}" for k, v in p.items() if k in ("normal_load", "sliding_velocity",
-                                                                        "roughness_ra", "mu", "mu_static", "seed", "mesh",
-                                                                        "time_step"))
+            cond = ", ".join(_with_units(k, v) for k, v in p.items() if k in AXES)
             print(f"  {cond}: {p.get('regime', p['status'])}")
     for f in summary["failed"]:
         print(f"  point {f['point']} failed: {f['error']}", file=sys.stderr)
     return 1 if summary["failed"] else 0
+
+
+def _with_units(name: str, value) -> str:
+    """``normal_load 5 N``: a swept quantity with its units (fivid.study.config.AXES; none for a pure number)."""
+    units = AXES[name][0]
+    return f"{name} {value:g}" + ("" if units == "1" else f" {units}")
+
+
+def _transition_lines(summary: dict) -> list[str]:
+    """The weak/strong transition load of a load sweep (summary ``transition_load``, ``transition_loads``)."""
+    def one(t) -> str:
+        if t.get("value") is None:
+            return t.get("note", "no transition in the swept loads")
+        lo, hi = t["bracket"]
+        return (f"at normal_load {t['value']:.3g} N (between the swept {lo:g} and {hi:g} N; coupling indicator "
+                f"kappa = {t['threshold']:g})")
+
+    t = summary.get("transition_load")
+    if not t:
+        return []
+    lines = [f"  weak/strong contact transition: {one(t)}"]
+    for group in summary.get("transition_loads", []):
+        cond = ", ".join(_with_units(k, v) for k, v in group.items() if k in AXES)
+        lines.append(f"    {cond}: {one(group)}")
+    return lines

@@ -1,4 +1,5 @@
-"""Friction coefficient per contact node and time, from a constant or a friction-law object (DESIGN §3).
+"""The kinetic friction coefficient per contact node and time, from a constant or a friction-law object (DESIGN §3):
+the table the solver's kernel :func:`fivid.friction._curve_kernels.friction_now` interpolates.
 
 ``mu_k(t) = mu0 + mu_p,k(t)``, clipped at 0 by the kernel. The law object has the interface of
 :mod:`fivid.friction` (``mu0``, ``injection``, ``sample(duration, sample_rate, velocity, roughness, seed,
@@ -22,10 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.friction.curve import slave_coefficients
+from fivid.friction.laws import FRICTION_LAW_MEMBERS, INJECTION_MODES, FrictionLaw
 
-__all__ = ["FrictionTable", "friction_table", "INJECTION_MODES"]
-
-INJECTION_MODES = ("uniform", "per_node", "convected")
+__all__ = ["FrictionTable", "friction_table"]
 
 
 @dataclass(frozen=True)
@@ -75,16 +76,12 @@ def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, *, law=No
             values = np.full((1, ns), float(mu))
             desc = f"Coulomb, constant mu = {float(mu):g} (all contact pairs)"
         else:
-            from fivid.fe.static import slave_friction  # one per-node mu builder (preload and solver)
-
-            values = slave_friction(model)[None, :]
+            values = slave_coefficients(model)[None, :]  # one per-node mu builder (preload and solver)
             if values.shape != (1, ns):
                 raise ValueError(f"slave_pair ({ns} nodes) does not match the model's slave nodes ({values.size})")
             desc = "Coulomb, mu of each contact pair from the model: " + ", ".join(
                 f"{c.name} {c.mu:g}" for c in model.contacts)
         return FrictionTable(values, 1.0, desc, "", "constant")
-    from fivid.friction.laws import FRICTION_LAW_MEMBERS, FrictionLaw
-
     if not isinstance(law, FrictionLaw):
         missing = [m for m in FRICTION_LAW_MEMBERS if not hasattr(law, m)]
         raise ConfigError(f"the friction law object ({type(law).__name__}) lacks {', '.join(map(repr, missing))}; "

@@ -1,0 +1,71 @@
+"""The parameter record of a contact pair for the kernels: one row of :data:`NPAR` floats (layer L0).
+
+Every column has a name here and nowhere else: the row is written by :func:`fivid.contact.kernel_row` (the normal
+law, the friction curve :meth:`fivid.friction.FrictionCurve.columns` and the rigid master
+:meth:`fivid.contact.RigidSurface.columns`, each at its columns) and read by the kernels
+(:mod:`fivid.contact._kernels`, :mod:`fivid.solver._contact_kernels`) through these module-level integer
+constants, which numba folds in as compile-time constants. No other module indexes a row by number. (Data only;
+the ``_kernels`` suffix puts it in layer L0, where kernels may import it.)
+
+==================== ====================================================================================
+column               meaning
+==================== ====================================================================================
+``LAW``              normal law: :data:`LAW_RIGID` (Lagrange multipliers, no penetration), :data:`LAW_LINEAR`
+                     ``p = c d``, :data:`LAW_POWER` ``p = c d**n``, :data:`LAW_TABLE` (tabulated ``p(d)``)
+``LAW_COEFFICIENT``  ``c`` [Pa m-1] (linear), [Pa m-n] (power) or the table's penetration step [m]
+``LAW_EXPONENT``     ``n`` [-] (power)
+``MU_STATIC_EXCESS`` ``mu_s - mu_k``: static excess of the friction coefficient [-]
+``STRIBECK_VELOCITY`` ``v_s`` [m s-1] (0: no Stribeck curve, a step from ``mu_s`` to ``mu_k``)
+``VISCOUS``          viscous friction coefficient ``c_v`` [s m-1]:
+                     ``mu(v) = mu_k + (mu_s - mu_k) exp(-|v|/v_s) + c_v |v|``
+``MASTER``           :data:`MASTER_EDGE` a deformable body's edge (node-to-segment), :data:`MASTER_LINE` rigid
+                     line, :data:`MASTER_CIRCLE` rigid circle
+``SURFACE_X, _Y``    line: a point on it [m]; circle: its centre [m]
+``SURFACE_A, _B``    line: unit normal pointing to the slave side; circle: radius [m] and side (+1: slave
+                     outside, -1 inside)
+``SURFACE_SX, _SY``  line: surface velocity [m s-1] (along the line); circle: angular velocity [rad s-1]
+                     (counter-clockwise positive) and unused
+``SURFACE_START``,   surface motion start time and ramp time [s] (smooth ramp ``r(s) = s - sin(2 pi s)/(2 pi)``)
+``SURFACE_RAMP``
+==================== ====================================================================================
+
+The friction curve's three columns are contiguous (:data:`FRICTION_FIRST` .. :data:`FRICTION_FIRST` + 2), as
+are the rigid surface's nine (:data:`MASTER` .. :data:`SURFACE_RAMP`).
+"""
+
+__all__ = ["NPAR", "LAW", "LAW_COEFFICIENT", "LAW_EXPONENT", "MU_STATIC_EXCESS", "STRIBECK_VELOCITY", "VISCOUS",
+           "FRICTION_FIRST", "MASTER", "SURFACE_X", "SURFACE_Y", "SURFACE_A", "SURFACE_B", "SURFACE_SX", "SURFACE_SY",
+           "SURFACE_START", "SURFACE_RAMP", "LAW_RIGID", "LAW_LINEAR", "LAW_POWER", "LAW_TABLE", "MASTER_EDGE",
+           "MASTER_LINE", "MASTER_CIRCLE"]
+
+# normal law
+LAW = 0
+LAW_COEFFICIENT = 1
+LAW_EXPONENT = 2
+# friction curve over the kinetic coefficient (fivid.friction.FrictionCurve.columns, in this order)
+MU_STATIC_EXCESS = 3
+STRIBECK_VELOCITY = 4
+VISCOUS = 5
+FRICTION_FIRST = MU_STATIC_EXCESS
+# master (fivid.contact.RigidSurface.columns, in this order)
+MASTER = 6
+SURFACE_X = 7
+SURFACE_Y = 8
+SURFACE_A = 9
+SURFACE_B = 10
+SURFACE_SX = 11
+SURFACE_SY = 12
+SURFACE_START = 13
+SURFACE_RAMP = 14
+#: columns of a row
+NPAR = 15
+
+# codes of the LAW column
+LAW_RIGID = 0
+LAW_LINEAR = 1
+LAW_POWER = 2
+LAW_TABLE = 3
+# codes of the MASTER column
+MASTER_EDGE = 0
+MASTER_LINE = 1
+MASTER_CIRCLE = 2

@@ -1,0 +1,123 @@
+"""What a rough-pair run tells about roughness noise (seed 003), over its steady part:
+
+* ``vibration_level`` Lv [dB] = 20 log10(V_RMS / 1e-9 m s-1), V_RMS the RMS over time and back-face nodes of the
+  normal velocity (each node's mean removed) -- seed 003's definition;
+* shocks (:func:`detect_shocks`): closing events of the contact, with rate [s-1] and mean impulse [N s];
+* ``dissipated_power`` [W]: slope of ``friction_dissipation`` (least squares) over the steady part;
+* the friction coefficient the force transducer reads (:func:`friction_coefficient_statistics`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fivid.signal.levels import VELOCITY_REFERENCE
+from fivid.signal.steady import steady_part
+
+__all__ = ["LV_REFERENCE", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level", "detect_shocks",
+           "dissipated_power", "roughness_metrics", "friction_coefficient_statistics", "steady_record"]
+
+#: seed 003's velocity reference of the vibration level [m s-1] (ISO 1683's, :data:`fivid.signal.levels.VELOCITY_REFERENCE`)
+LV_REFERENCE = VELOCITY_REFERENCE
+
+
+def steady_record(ds, start=None):
+    """The run from ``start`` [s], by default its steady part (:func:`fivid.signal.steady_part`)."""
+    return steady_part(ds) if start is None else ds.sel(time=slice(float(start), None))
+
+
+def vibration_level(ds, *, start=None, reference: float = LV_REFERENCE) -> tuple[float, float]:
+    """(Lv [dB], V_RMS [m s-1]): RMS over the steady time and every sensor of ``sensor_velocity``, each sensor's
+    mean removed; ``Lv = 20 log10(V_RMS / reference)`` (seed 003: reference 1e-9 m s-1, back-face nodes)."""
+    v = np.asarray(steady_record(ds, start)["sensor_velocity"].values, float)
+    v = v.reshape(v.shape[0], -1)
+    v = v - v.mean(axis=0)
+    vrms = float(np.sqrt(np.mean(v * v)))
+    return (20.0 * np.log10(vrms / reference) if vrms > 0 else -np.inf), vrms
+
+
+#: shock detector defaults: closed-node rise and baseline window (docs/roughness.md)
+SHOCK_MIN_CLOSING = 0.1
+SHOCK_BASELINE = 0.5e-3
+
+
+def detect_shocks(time, contact_normal_force, open_fraction, n_slave: int, *, min_closing: float = SHOCK_MIN_CLOSING,
+                  baseline_time: float = SHOCK_BASELINE) -> dict:
+    """Closing events of a node-to-segment contact (shocks between asperities) from its per-sample records.
+
+    A shock is a run of consecutive samples over which the number of closed slave nodes,
+    ``n_closed = (1 - open_fraction) n_slave``, rises by at least ``min_closing`` nodes in total (the records
+    are averages over each output period, so one node closing mid-period shows as two partial rises). Its
+    impulse is the excess of the contact normal force over its running median (window ``baseline_time`` [s])
+    summed over the run and the sample after it, times the sample period [N s].
+
+    Returns
+    -------
+    dict
+        ``count``, ``rate`` [s-1] (count / record duration), ``mean_impulse`` [N s] (NaN without shocks),
+        ``start_times`` [s] and ``impulses`` [N s] (arrays), and the thresholds used.
+    """
+    from scipy.ndimage import median_filter  # noqa: PLC0415 (scipy.ndimage: imported where used)
+
+    t = np.asarray(time, float)
+    fc = np.asarray(contact_normal_force, float)
+    closed = (1.0 - np.asarray(open_fraction, float)) * int(n_slave)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    w = max(3, int(round(baseline_time / dt)) | 1) if dt > 0 else 3
+    excess = fc - median_filter(fc, size=w, mode="nearest")
+    d = np.diff(closed)
+    starts, impulses = [], []
+    i = 0
+    while i < d.size:
+        if d[i] <= 0:
+            i += 1
+            continue
+        j = i
+        while j + 1 < d.size and d[j + 1] > 0:
+            j += 1
+        if closed[j + 1] - closed[i] >= min_closing:
+            starts.append(t[i + 1])
+            impulses.append(float(np.sum(np.clip(excess[i + 1:j + 3], 0.0, None)) * dt))
+        i = j + 1
+    duration = t[-1] - t[0] + dt if t.size else 0.0
+    imp = np.array(impulses)
+    return {"count": len(starts), "rate": len(starts) / duration if duration > 0 else np.nan,
+            "mean_impulse": float(imp.mean()) if imp.size else np.nan, "start_times": np.array(starts),
+            "impulses": imp, "min_closing": float(min_closing), "baseline_time": float(baseline_time)}
+
+
+def dissipated_power(ds, *, start=None) -> float:
+    """Mean friction power [W]: least-squares slope of ``friction_dissipation`` over the steady part."""
+    part = steady_record(ds, start)
+    t, e = part["time"].values, part["friction_dissipation"].values
+    return float(np.polyfit(t - t[0], e, 1)[0]) if t.size > 1 else np.nan
+
+
+def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
+    """Lv, V_RMS, shocks, dissipated power and mean forces of a rough-pair run (steady part)."""
+    part = steady_record(ds, start)
+    lv, vrms = vibration_level(ds, start=start)
+    sh = detect_shocks(part["time"].values, part["contact_normal_force"].values, part["open_fraction"].values,
+                       n_slave, **shock_options)
+    return {"vibration_level": lv, "velocity_rms": vrms, "shock_rate": sh["rate"], "shock_impulse": sh["mean_impulse"],
+            "shock_count": sh["count"], "dissipated_power": dissipated_power(ds, start=start),
+            "mean_normal_force": float(np.mean(part["contact_normal_force"].values)),
+            "mean_friction_force": float(np.mean(part["friction_force"].values)),
+            "open_fraction": float(np.mean(part["open_fraction"].values)), "shocks": sh,
+            **friction_coefficient_statistics(ds, start=start)}
+
+
+def friction_coefficient_statistics(ds, *, start=None) -> dict:
+    """mu(t) = |friction_force(t)| / mean normal force over the steady part: the transducer's force over the
+    dead load as the interface carries it (the mean of ``contact_normal_force``; momentary losses of contact,
+    frequent on rough surfaces at a few cm/s, would make a pointwise Ft/Fn diverge). ``friction_coefficient``:
+    its mean; ``friction_coefficient_rms``: RMS of mu - mean (the perturbation's amplitude over all frequencies
+    up to the output Nyquist). The same mu(t) as :func:`identification_run` hands to ``fivid identify``. NaN
+    without a transducer (a zero friction_force)."""
+    part = steady_record(ds, start)
+    ft = np.abs(np.asarray(part["friction_force"].values, float))
+    fn = float(np.mean(np.asarray(part["contact_normal_force"].values, float))) if part.sizes["time"] else 0.0
+    if not np.any(ft) or not fn > 0:
+        return {"friction_coefficient": np.nan, "friction_coefficient_rms": np.nan}
+    mu = ft / fn
+    return {"friction_coefficient": float(np.mean(mu)), "friction_coefficient_rms": float(np.std(mu))}
