@@ -233,7 +233,7 @@ def _dry_run(args, model, size, run_kw) -> int:
     else:
         print(f"{model.describe()}: {size.describe()}")
         print(f"solver path: {path.get('solver_path')} ({path.get('solver_choice_reason')}); "
-              f"{timing['steps']:,} steps of {prep.settings.time_step:.3g} s")
+              f"{timing['steps']:,} solver steps of {prep.settings.time_step:.3g} s on that path")
         print(f"estimated run time: about {timing['estimated_seconds']:.3g} s on this machine now (set-up "
               f"{timing['setup_seconds']:.3g} s + time loop {timing['loop_seconds']:.3g} s, from a timed probe of "
               f"{timing['probe_intervals'][1]} of {timing['n_intervals']} intervals)")
