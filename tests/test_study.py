@@ -53,6 +53,13 @@ def test_cea_finds_the_closed_form_threshold_and_transients_follow_it(tmp_path):
     assert above["growth_rate"] == pytest.approx(above["cea_growth_rate"], rel=0.02)
     assert above["onset_time"] > 0
     assert below["growth_rate"] == pytest.approx(below["cea_growth_rate"], rel=0.1)  # two modes beat: coarser
+    # every per-point quantity carries its CF unit beside the plain key (issue 32 item 5; the keys are the contract)
+    units = summary["units"]
+    assert {k: units[k] for k in ("mu", "growth_rate", "frequency", "onset_time", "cea_growth_rate",
+                                  "cea_frequency")} == {"mu": "1", "growth_rate": "s-1", "frequency": "Hz",
+                                                        "onset_time": "s", "cea_growth_rate": "s-1",
+                                                        "cea_frequency": "Hz"}
+    assert set(units) >= {k for p in summary["points"] for k, v in p.items() if isinstance(v, float)}
 
 
 def test_regimes_across_the_threshold_and_stick_slip():

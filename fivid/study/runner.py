@@ -241,7 +241,7 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
            "fivid_version": __version__, "quick": study.quick, "n_points": len(table), "n_done": len(done),
            "failed": [{"point": i, **{k: float(v) for k, v in table[i].items()}, "error": e}
                       for i, e in sorted(failed.items())],
-           "points": points}
+           "points": points, "units": _point_units(study, table, ds)}
     if cea is not None:
         crit = np.asarray(cea["critical_mu"], dtype=float)
         if np.isfinite(crit).any():
@@ -267,6 +267,17 @@ def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict
         out["timing"]["workers"] = workers
         out["timing"]["parallel_efficiency"] = round(float(np.sum(seconds) / (wall * workers)), 3)
     return out
+
+
+def _point_units(study, table, ds) -> dict:
+    """CF units of every per-point key of the summary (condition and result keys; ``"1"`` dimensionless), from the
+    study dataset's attrs: the summary's keys stay plain names (its contract), their units stand beside them."""
+    names = {k: k for cond in table[:1] for k in cond} | {key: name for name, key in study.kind.point_keys}
+    units = {key: str(ds[name].attrs["units"]) for key, name in names.items()
+             if name in ds.variables and "units" in ds[name].attrs}
+    if "cea_frequency" in ds.variables:  # the CEA interpolated at each point's mu (_cea_at)
+        units |= {"cea_growth_rate": "s-1", "cea_frequency": "Hz"}
+    return units
 
 
 def _cea_at(cea, mu: float) -> dict:
