@@ -36,6 +36,12 @@ set-up time apart as ``reduced_setup_s``) and ``reduced_band_lsd_db`` (accelerat
 band top), ``reduced_plain_*`` for ``reduced=True``, and ``full_vs_full_band_lsd_db`` (the full model at 0.97 x its
 step: the paired comparison's floor), on the default rig (0.05 s of sliding), or on the coarse rig with
 ``--quick`` (0.03 s).
+
+The reduced path by default (issue 30, :func:`_auto_path`): ``auto_speedup_warm`` and ``auto_speedup_cold``, the
+end-to-end wall time of ``fivid simulate`` with its defaults (the automatic choice; warm and empty basis cache)
+over ``fivid simulate --full``, ``auto_band_lsd_db`` (their PSDs), ``reduced_setup_s`` (the basis build of the
+cold run; this key replaces the reduced comparison's set-up time above), on the default rig for 0.1 s (coarse rig,
+0.03 s with ``--quick``).
 """
 
 from __future__ import annotations
@@ -169,6 +175,9 @@ def main(argv=None) -> int:
                     help="fast reduced path: fixed-interface modes and selective mass scaling at FACTOR x the band top "
                          "(sample_rate / 2; default 18 on the default rig: 460.8 kHz, 6 with --quick: 153.6 kHz)")
     args, load = parse_guarded(ap, argv)
+    import tempfile  # reduced set-up times are builds: an empty basis cache for this run (fivid.solver.basis_cache)
+
+    os.environ["FIVID_CACHE_DIR"] = tempfile.mkdtemp(prefix="fivid-bench-bases-")
 
     from fivid.fe import load_model
     from fivid.solver.driver import prepare_run
@@ -201,6 +210,7 @@ def main(argv=None) -> int:
     out["reduced_model"] = rpath
     factor = args.mass_scaling if args.mass_scaling is not None else 6.0 if args.quick else 18.0
     out.update(_reduced_comparison(rmodel, kw, 0.03 if args.quick else 0.05, rounds, factor))
+    out.update(_auto_path(rpath, "0.03 s" if args.quick else "0.1 s"))  # the reduced path by default (issue 30)
     out["load_average_1min_end"] = round(os.getloadavg()[0], 2)
     print(json.dumps(out))
     return 0
@@ -379,6 +389,51 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
         "full_mean_friction_n": _steady_mean(runs["full"], "friction_force"),
     }
     return out
+
+
+def _auto_path(model_path, duration):
+    """End-to-end wall time of ``fivid simulate MODEL --mu 0.3 --velocity '10 mm/s' --load '5 N' --duration D``
+    with the defaults (the automatic path choice, issue 30) in a fresh process each: cold (empty basis cache: the
+    set-up is paid), warm (the same cache again) and ``--full``, after one untimed short run of each path (numba's
+    compilation cache filled; its basis in another cache folder). ``auto_speedup_warm``/``_cold`` = full / auto;
+    ``auto_band_lsd_db``: the warm auto run's acceleration PSD against the full one's (200 Hz - 10 kHz, Welch Hann
+    256 / 50 %, steady part); ``reduced_setup_s``: the cold run's basis build time (its ``reduced_setup_time``)."""
+    import subprocess
+    import sys
+    import tempfile
+
+    import xarray as xr
+
+    from fivid.signal.compare import band_distance, steady_psds
+
+    cmd = [sys.executable, "-m", "fivid", "simulate", str(ROOT / model_path), "--mu", "0.3", "--velocity", "10 mm/s",
+           "--load", "5 N"]
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+
+        def run(name, cache, *extra, duration=duration):
+            env = {**os.environ, "FIVID_CACHE_DIR": str(tmp / cache)}
+            t0 = time.perf_counter()
+            subprocess.run(cmd + ["--duration", duration, "-o", str(tmp / f"{name}.nc"), *extra], env=env, check=True,
+                           stdout=subprocess.DEVNULL)
+            return time.perf_counter() - t0
+
+        run("warmup-auto", "warmup", duration="1 ms")
+        run("warmup-full", "warmup", "--full", duration="1 ms")
+        t_cold = run("cold", "bases")
+        t_warm = run("warm", "bases")
+        t_full = run("full", "bases", "--full")
+        runs = [xr.load_dataset(tmp / f"{n}.nc") for n in ("full", "warm", "cold")]
+    f, psd, _ = steady_psds(runs, nperseg=256)
+    lsd, level, _ = band_distance(f, psd[0], psd[1], (200.0, 10e3))
+    a, c = runs[1].attrs, runs[2].attrs
+    return {"auto_model": model_path, "auto_duration": duration, "auto_solver_path": a["solver_path"],
+            "auto_speedup_warm": t_full / t_warm, "auto_speedup_cold": t_full / t_cold, "auto_band_lsd_db": lsd,
+            "auto_band_level_diff_db": level, "auto_error_estimate_db": float(a["reduced_error_estimate_db"]),
+            "auto_wall_warm_s": t_warm, "auto_wall_cold_s": t_cold, "auto_wall_full_s": t_full,
+            "auto_basis_sources": [c.get("reduced_basis_source"), a.get("reduced_basis_source")],
+            "reduced_setup_s": float(c.get("reduced_setup_time", float("nan"))),
+            "auto_load_average_1min": os.getloadavg()[0]}
 
 
 def _steady_mean(ds, name):

@@ -9,6 +9,13 @@ ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _basis_cache(tmp_path_factory):
+    """One reduced-basis cache per test session (``$FIVID_CACHE_DIR``, inherited by CLI subprocesses and dask
+    workers): the tests share the bases they build and never write to the user's cache folder."""
+    os.environ["FIVID_CACHE_DIR"] = str(tmp_path_factory.mktemp("fivid-bases"))
+
+
 @pytest.fixture
 def root() -> Path:
     """The repository root."""

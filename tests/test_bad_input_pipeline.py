@@ -119,7 +119,8 @@ def test_band_above_the_nyquist_frequency_of_the_input_files(tmp_path, capsys, k
     text = text.replace(band, band.split(",")[0] + ", 30 kHz]")
     text = text.replace("sample_rate: 51.2 kHz", "sample_rate: 102.4 kHz")
     text = text.replace("../../sample_data/twin", str(ROOT / "sample_data/twin"))
-    text = text.replace("../models/triboair_coarse.yaml", str(COARSE))
+    text = text.replace("model: ../models/triboair.yaml", f"model: {COARSE}")  # refused before any simulation
+    text = text.replace("../models/triboair.yaml", str(ROOT / "configs/models/triboair.yaml"))
     config = tmp_path / "run.yaml"
     config.write_text(text)
     err = _fails(capsys, ["run", str(RECIPE), "-c", str(config), "-o", str(tmp_path / "o"), "--no-progress"])

@@ -111,12 +111,17 @@ def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path, 
     assert err[-1] == f"open the report: {out / 'report.html'}" and "  score/" in "\n".join(err)
     assert not [ln for ln in err if "Warning" in ln or "8787" in ln], err
 
-    # the coarse model scored against the fine twin: its mesh and estimated discretisation error are recorded
+    # the fine model, the one that generated the twin, on the automatically chosen reduced path: the estimated
+    # model error against the data is the reduction's (issue 30: <= 1 dB), stated with the direct check
     disc = summary["discretisation"]
     assert disc == json.loads((out / "discretisation.json").read_text())
-    assert disc["model"]["name"] == "triboair_coarse" and disc["model"]["element_size"] == pytest.approx(2e-3)
+    assert disc["model"]["name"] == "triboair" and disc["model"]["element_size"] == pytest.approx(0.5e-3)
     assert disc["covered"] and disc["band_level_error_db"] is not None and disc["band"] == summary_band(root)
-    print("discretisation error in the band:", disc["band_level_error_db"], "dB; peaks", disc["peaks"])
+    assert disc["reduction"]["paths"] == {"reduced": 12} and "generated the data" in disc["estimate_reference"]
+    assert disc["estimate_db"] == pytest.approx(disc["reduction"]["estimate_db"]) and disc["estimate_db"] <= 1.0
+    assert disc["consistent"] is True and disc["direct_check"]["largest_abs_level_diff_db"] < 2.0
+    assert "Model error in the scoring band" in (out / "report.html").read_text()
+    print("model error estimate:", disc["estimate_db"], "dB; mesh vs continuum", disc["mesh_against_continuum_db"])
 
     # the ground truth inside the identified intervals
     truth, generate = _truth(root)
@@ -158,7 +163,9 @@ def test_readme_command_on_the_twin_recovers_the_law_and_passes(root, tmp_path, 
 
     strict = yaml.safe_load((root / "configs/runs/sample.yaml").read_text())
     strict["inputs"]["folder"] = str(root / "sample_data/twin")
-    strict["model"] = str(root / "configs/models/triboair_coarse.yaml")
+    strict["model"] = str(root / "configs/models/triboair.yaml")
+    strict["discretisation"] = {"convergence": str(root / "configs/runs/convergence.json"),
+                                "data_model": str(root / "configs/models/triboair.yaml")}
     strict["thresholds"]["lsd_db"] = {"max": 0.5}  # below the Welch scatter of ~2 dB: must fail
     (tmp_path / "strict.yaml").write_text(yaml.safe_dump(strict))
     assert main(["run", str(root / "pipelines/calibration.yaml"), "--config", str(tmp_path / "strict.yaml"),

@@ -127,14 +127,17 @@ def test_cli_simulate_reduced_records_the_truncation_and_the_command(tmp_path, c
             "--reduced", "-o", str(tmp_path / "r.nc"), "--json"]
     assert main(args) == 0
     summary = json.loads(capsys.readouterr().out)
-    assert summary["reduced_modes"] >= 1 and summary["reduced_cutoff"] == pytest.approx(76800.0)
+    # bare --reduced: the automatic path's settings forced, modes and mass scaling at 18 x the band top 25.6 kHz
+    assert summary["reduced_modes"] >= 1 and summary["reduced_cutoff"] == pytest.approx(460800.0)
+    assert summary["reduced_mass_scaling"] == pytest.approx(460800.0)
+    assert summary["solver_path"] == "reduced" and summary["solver_choice"] == "requested"
     with xr.open_dataset(tmp_path / "r.nc") as ds:
         assert ds.attrs["reduced"] == 1
-        assert " --reduced -o " in ds.attrs["history"].splitlines()[-1]
+        assert " --reduced --reduced-tolerance 0.5 -o " in ds.attrs["history"].splitlines()[-1]
     assert main(args[:-4] + ["--reduced", "8", "-o", str(tmp_path / "r8.nc")]) == 0
     with xr.open_dataset(tmp_path / "r8.nc") as ds:
         assert int(ds.attrs["reduced_modes"]) == 8
-        assert "--reduced 8 -o" in ds.attrs["history"].splitlines()[-1]
+        assert "--reduced 8 --reduced-tolerance 0.5 -o" in ds.attrs["history"].splitlines()[-1]
 
 
 def test_selective_mass_scaling_keeps_the_modes_below_its_target_exactly():

@@ -132,7 +132,8 @@ def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration",
     -------
     dict
         ``frequency`` [Hz], ``psd`` [u2 Hz-1], ``units`` (of the signal), ``amplitude`` (the law's A at the
-        condition [-]), the Welch ``settings`` and the simulation's ``transient_end`` [s].
+        condition [-]), the Welch ``settings``, the simulation's ``transient_end`` [s] and ``solver`` (its
+        solver-path attrs: ``solver_path``, ``reduced_error_estimate_db``...).
     """
     from fivid.score.runs import _signal  # the variable/sensor selection of the scores
     from fivid.signal.welch import welch_psd
@@ -149,4 +150,5 @@ def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration",
     return {"frequency": psd["frequency"].values, "psd": np.asarray(psd.values, dtype=float),
             "units": da.attrs["units"], "amplitude": float(np.asarray(amp).reshape(-1)[0]),
             "settings": {k: psd.attrs[k] for k in keys if k in psd.attrs},
-            "transient_end": float(ds.attrs["transient_end"])}
+            "transient_end": float(ds.attrs["transient_end"]),
+            "solver": {k: v for k, v in ds.attrs.items() if k.startswith(("solver_", "reduced_error"))}}

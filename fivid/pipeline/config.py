@@ -110,6 +110,9 @@ class RunConfig:
     sample_rate: float
     seeds: tuple[int, ...]
     thresholds: tuple[Threshold, ...]
+    solver: str = "auto"
+    reduced_tolerance: float = 0.5
+    data_model: Path | None = None
 
 
 @dataclass(frozen=True)
@@ -268,6 +271,19 @@ class _Simulate(ConfigModel):
     samples: Annotated[int, AfterValidator(_samples), WithJsonSchema({"anyOf": [
         {"const": 0}, {"type": "integer", "minimum": 2, "maximum": 10000}]})] = Field(
         0, description="Monte-Carlo samples of the law's uncertainty per condition (0: off; docs/uncertainty.md)")
+    solver: Literal["auto", "full", "reduced"] = Field(
+        "auto", description="solver path: auto (reduced when its estimated error in the scoring band is within "
+                            "reduced_tolerance), full or reduced (docs/solver.md)")
+    reduced_tolerance: Annotated[float, Field(ge=0.0)] = Field(
+        0.5, description="largest estimated in-band log-spectral distance [dB] of the reduced path for solver: auto")
+
+
+class _Discretisation(ConfigModel):
+    convergence: str | None = Field("convergence.json", description="convergence table, relative to this file "
+                                                                     "(null: none; docs/pipeline.md)")
+    data_model: str | None = Field(None, description="the model config that generated the input data (synthetic twin "
+                                                     "data), relative to this file: the discretisation error is then "
+                                                     "estimated against it (docs/pipeline.md)")
 
 
 class _Modal(ConfigModel):
@@ -310,6 +326,7 @@ class RunConfigModel(ConfigModel):
     modal: _Modal = _Modal()
     simulate: _Simulate = _Simulate()
     thresholds: _Thresholds = _Thresholds()
+    discretisation: _Discretisation = _Discretisation()
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -374,6 +391,9 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
     model = _resolve(base, cfg.model)
     if not model.is_file():
         problems.add("model", f"model file {str(model)!r} does not exist")
+    data_model = _resolve(base, cfg.discretisation.data_model) if cfg.discretisation.data_model else None
+    if data_model is not None and not data_model.is_file():
+        problems.add("discretisation.data_model", f"model file {str(data_model)!r} does not exist")
 
     out = Path(output) if output is not None else _resolve(base, cfg.output or "out")
     if out.exists() and not out.is_dir():
@@ -393,7 +413,8 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
         path=Path(path), sha256=source.sha256, raw=raw, input_folder=folder, input_pattern=pattern, input_files=files,
         rig_profile=profile, model=model, output=out, band=tuple(a.band), nperseg=_nperseg(cfg), settle=a.settle,
         identify=identify, n_modes=cfg.modal.n_modes, duration=sim.duration, sample_rate=sim.sample_rate,
-        seeds=tuple(sim.seeds), thresholds=tuple(thresholds),
+        seeds=tuple(sim.seeds), thresholds=tuple(thresholds), solver=sim.solver,
+        reduced_tolerance=float(sim.reduced_tolerance), data_model=data_model,
     )
 
 

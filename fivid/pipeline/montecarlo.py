@@ -28,7 +28,7 @@ def _sample_task(model, law, params, spectrum_kw):
 
 def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float, sample_rate: float,
                     sliding_velocity=None, normal_load=None, roughness_ra=None, time_step=None, reduced=None,
-                    reduced_mass_scaling=None, variable: str = "acceleration", sensor=None, nperseg: int = 8192,
+                    reduced_mass_scaling=None, reduced_tolerance=0.5, error_band=None, variable: str = "acceleration", sensor=None, nperseg: int = 8192,
                     settle: float = 0.0, band=None,
                     workers: int = 2, scheduler: str | None = None, progress=None, attrs: dict | None = None):
     """Simulate ``samples`` draws of ``law`` at one condition and return their PSD envelope (a Dataset).
@@ -41,8 +41,12 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
         Number of Monte-Carlo samples (>= 2).
     seed : int
         Seed of the whole Monte-Carlo (coefficient draws and every sample's synthesis seed).
-    duration, sample_rate, sliding_velocity, normal_load, roughness_ra, time_step, reduced, reduced_mass_scaling
+    duration, sample_rate, sliding_velocity, normal_load, roughness_ra, time_step
         As :func:`fivid.solver.simulate` [s, Hz, m s-1, N, m, s].
+    reduced, reduced_mass_scaling, reduced_tolerance, error_band
+        The solver path, as :func:`fivid.solver.simulate` (``"auto"``: reduced when its estimated in-band error
+        is within the tolerance [dB] over ``error_band`` [Hz]). The samples share one model, so with a reduced path
+        the basis is built once (the first worker, under the cache's lock) and read by the others.
     variable, sensor
         The signal whose PSD is taken (as ``fivid score``).
     nperseg : int
@@ -77,7 +81,7 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
     draws = monte_carlo_laws(law, samples, seed)
     base = dict(duration=float(duration), sample_rate=float(sample_rate), sliding_velocity=sliding_velocity,
                 normal_load=normal_load, roughness_ra=roughness_ra, time_step=time_step, reduced=reduced,
-                reduced_mass_scaling=reduced_mass_scaling)
+                reduced_mass_scaling=reduced_mass_scaling, reduced_tolerance=reduced_tolerance, error_band=error_band)
     spectrum_kw = dict(variable=variable, sensor=sensor, nperseg=int(nperseg), settle=float(settle))
     items = {f"mc{i:04d}": (model, draws["laws"][i], {**base, "seed": int(draws["seeds"][i])}, spectrum_kw)
              for i in range(int(samples))}
@@ -124,6 +128,9 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
         **{k: v for k, v in settings.items() if k != "equivalent_degrees_of_freedom"},
         "sample_equivalent_degrees_of_freedom": float(settings.get("equivalent_degrees_of_freedom", np.nan)),
     }
+    paths = sorted({r.get("solver", {}).get("solver_path", "full") for r in ordered})
+    meta.update({k: v for k, v in ordered[0].get("solver", {}).items()})  # the same model and settings for all
+    meta["solver_path"] = "+".join(paths)
     for name, value in (("sliding_velocity", sliding_velocity), ("normal_load", normal_load),
                         ("roughness_ra", roughness_ra)):
         if value is not None:

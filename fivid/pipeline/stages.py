@@ -28,7 +28,7 @@ from pathlib import Path
 from fivid.errors import FividError
 from fivid.pipeline.cache import Task, file_sha256
 
-__all__ = ["STAGES", "condition_name", "evaluate_thresholds"]
+__all__ = ["STAGES", "condition_name", "evaluate_thresholds", "solver_path"]
 
 log = logging.getLogger("fivid")
 
@@ -202,6 +202,16 @@ def envelope_samples(config) -> int:
     return value
 
 
+def solver_path(config) -> dict:
+    """The solver-path arguments of :func:`fivid.solver.simulate` from ``simulate.solver`` (auto, full, reduced) and
+    ``simulate.reduced_tolerance`` [dB] of the run configuration, the estimate's band being the scoring band (part
+    of the simulate tasks' parameters, hence of their cache keys)."""
+    solver = getattr(config, "solver", "auto")  # a hand-built config (tests) may lack them: the defaults
+    return {"reduced": {"full": None}.get(solver, solver),
+            "reduced_tolerance": float(getattr(config, "reduced_tolerance", 0.5)),
+            "error_band": [float(b) for b in config.band] if hasattr(config, "band") else None}
+
+
 class Simulate:
     """One simulation per test condition and Monte-Carlo seed, spread over dask workers; with
     ``simulate.samples`` N > 0 also one Monte-Carlo envelope per condition (N draws of the law's uncertainty,
@@ -218,7 +228,7 @@ class Simulate:
             for seed in cfg.seeds:
                 params = {"sliding_velocity": c["sliding_velocity"], "normal_load": c["normal_load"],
                           "roughness_ra": c["roughness_ra"], "seed": seed, "duration": cfg.duration,
-                          "sample_rate": cfg.sample_rate, "run_id": f"{cond}-seed{seed}"}
+                          "sample_rate": cfg.sample_rate, "run_id": f"{cond}-seed{seed}", **solver_path(cfg)}
                 tasks.append(Task("simulate", f"{cond}-seed{seed}", params, {"model": model_sha, "law": law_sha},
                                   {"sim": str(ctx.out / "sims" / f"{cond}-seed{seed}.nc")}))
             samples = envelope_samples(cfg)
@@ -226,7 +236,7 @@ class Simulate:
                 params = {"sliding_velocity": c["sliding_velocity"], "normal_load": c["normal_load"],
                           "roughness_ra": c["roughness_ra"], "samples": samples, "seed": cfg.seeds[0],
                           "duration": cfg.duration, "sample_rate": cfg.sample_rate, "nperseg": cfg.nperseg,
-                          "settle": cfg.settle}
+                          "settle": cfg.settle, **solver_path(cfg)}
                 tasks.append(Task("simulate", f"{cond}-envelope", params, {"model": model_sha, "law": law_sha},
                                   {"envelope": str(ctx.out / "sims" / f"{cond}-envelope.nc")}))
         return tasks
@@ -267,7 +277,8 @@ def _envelope(ctx, task) -> None:
     env = run_monte_carlo(load_model(ctx.config.model), load_law(law_path), samples=p["samples"], seed=p["seed"],
                           duration=p["duration"], sample_rate=p["sample_rate"], sliding_velocity=p["sliding_velocity"],
                           normal_load=p["normal_load"], roughness_ra=p["roughness_ra"], nperseg=p["nperseg"],
-                          settle=p["settle"], workers=ctx.workers, scheduler=ctx.scheduler, progress=ctx.progress,
+                          settle=p["settle"], reduced=p["reduced"], reduced_tolerance=p["reduced_tolerance"],
+                          error_band=p["error_band"], workers=ctx.workers, scheduler=ctx.scheduler, progress=ctx.progress,
                           attrs={"law_file": str(law_path), "law_file_sha256": file_sha256(law_path),
                                  "model": str(ctx.config.model), "history": new_history(
                                      f"fivid pipeline: Monte-Carlo envelope {task.name}, {p['samples']} samples")})
@@ -330,7 +341,8 @@ class Report:
         inputs["convergence_table"] = file_sha256(table) if table is not None and table.is_file() else None
         params = {"thresholds": [t.describe() for t in ctx.config.thresholds], "band": list(ctx.config.band),
                   "nperseg": ctx.config.nperseg, "config_sha256": ctx.config.sha256,
-                  "convergence_table": str(table) if table is not None else None}
+                  "convergence_table": str(table) if table is not None else None,
+                  "data_model": None if ctx.config.data_model is None else file_sha256(ctx.config.data_model)}
         return [Task("report", "report", params, inputs,
                      {"html": str(ctx.out / "report.html"), "discretisation": str(ctx.out / "discretisation.json")})]
 
@@ -346,6 +358,7 @@ class Report:
             cfg = ctx.config
             est = discretisation_estimate(cfg.model, cfg.band, convergence_table(cfg),
                                           bin_width=cfg.sample_rate / cfg.nperseg)
+            est.update(model_error_estimate(est, cfg, ctx.data.get("sims", {}), checks))
             write_json(task.outputs["discretisation"], est)
             ctx.data["discretisation"] = est
             render_report(task.outputs["html"], ctx_to_report_inputs(ctx, checks))
@@ -354,6 +367,60 @@ class Report:
     def collect(self, ctx, tasks) -> None:
         ctx.data["report_path"] = tasks[0].outputs["html"]
         ctx.data["discretisation"] = json.loads(Path(tasks[0].outputs["discretisation"]).read_text(encoding="utf-8"))
+
+
+def _reduction_record(sim_paths) -> dict:
+    """The solver paths of the simulations and the largest estimated in-band error of the reduced ones [dB]."""
+    import math
+
+    import xarray as xr
+
+    paths, estimates, tol = {}, [], None
+    for path in sim_paths:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            a = ds.attrs
+            paths[a.get("solver_path", "full")] = paths.get(a.get("solver_path", "full"), 0) + 1
+            if a.get("solver_path") == "reduced" and math.isfinite(float(a.get("reduced_error_estimate_db", math.nan))):
+                estimates.append(float(a["reduced_error_estimate_db"]))
+            tol = a.get("reduced_error_tolerance_db", tol)
+    return {"paths": paths, "estimate_db": max(estimates) if estimates else 0.0,
+            "tolerance_db": None if tol is None else float(tol)}
+
+
+def model_error_estimate(est: dict, cfg, sims: dict, checks: list) -> dict:
+    """What the report states about the simulated model's own error in the scoring band (issue 30 item 3):
+
+    - ``reduction``: the simulations' solver paths and the largest estimated error of the reduced ones
+      (:mod:`fivid.solver.reduced_error`);
+    - ``estimate_db``, ``estimate_reference``: the total estimate against the reference that matters for these
+      data -- with ``discretisation.data_model`` the same model file as the simulated one (synthetic twin data),
+      the mesh adds nothing against the data and only the reduction remains; otherwise the convergence table's
+      band-level error (against the extrapolated continuum) plus the reduction's;
+    - ``direct_check``: the largest ``|level_diff_db|`` of the scores (simulated against measured, the direct
+      comparison) and the level threshold, and ``consistent``: whether the estimate is below that threshold (a
+      model error the size of the threshold would decide the verdict, not the model's physics).
+    """
+    from fivid.pipeline.cache import file_sha256
+
+    red = _reduction_record([p for paths in sims.values() for p in paths])
+    mesh = est.get("band_level_error_db") if est.get("covered") else None
+    same = cfg.data_model is not None and file_sha256(cfg.data_model) == file_sha256(cfg.model)
+    if same:
+        total, reference = red["estimate_db"], (f"the model that generated the data ({cfg.data_model.name}, the same "
+                                                "file as the simulated one): mesh error nil, the reduction's remains")
+    elif mesh is not None:
+        total, reference = float(mesh) + red["estimate_db"], ("the convergence table's band level against the "
+                                                              "extrapolated continuum, plus the reduction's")
+    else:
+        total, reference = None, "not estimated (no convergence table covers the model)"
+    levels = [c for c in checks if c["score"] == "level_diff_db" and c["value"] is not None]
+    direct = {"largest_abs_level_diff_db": max((abs(float(c["value"])) for c in levels), default=None),
+              "level_threshold": levels[0]["threshold"] if levels else None}
+    limit = next((float(t.value) for t in cfg.thresholds if t.score == "level_diff_db"), None)
+    return {"reduction": red, "estimate_db": total, "estimate_reference": reference,
+            "mesh_against_continuum_db": None if mesh is None else float(mesh), "direct_check": direct,
+            "level_threshold_db": limit,
+            "consistent": None if total is None or limit is None else bool(total < limit)}
 
 
 def convergence_table(cfg) -> Path | None:

@@ -406,6 +406,7 @@ def _discretisation(page: Page, est) -> None:
     page.paragraph(f"Simulated with model {m['name']} ({m['path']}): largest element side "
                    f"{m['element_size'] * 1e3:.3g} mm, {m['dofs']} dofs, {m['damping']} damping.")
     lo, hi = est["band"]
+    _model_error(page, est, lo, hi)
     if not est.get("covered"):
         page.paragraph(f"Discretisation error in the scoring band {lo:g}–{hi:g} Hz: not estimated "
                        f"({est.get('reason', 'no convergence table')}).")
@@ -430,6 +431,38 @@ def _discretisation(page: Page, est) -> None:
              fmt(o["order"], ".2f") if o["order"] is not None else None, o["reference"]]
             for o in est["third_octaves"]]
     page.raw(table(["one-third octave [Hz]", "level error of this mesh [dB]", "observed order", "against"], rows))
+
+
+def _model_error(page: Page, est, lo, hi) -> None:
+    """The model's estimated error against the data's reference next to the direct check (the scores' level
+    differences) and whether the two agree with the verdict (:func:`fivid.pipeline.stages.model_error_estimate`)."""
+    if "estimate_db" not in est:
+        return
+    red = est["reduction"]
+    paths = ", ".join(f"{n} {p}" for p, n in sorted(red["paths"].items())) or "none"
+    direct = est["direct_check"]
+    check = ("no level-difference score" if direct["largest_abs_level_diff_db"] is None else
+             f"largest |level difference| simulated vs measured {direct['largest_abs_level_diff_db']:.2f} dB "
+             f"(threshold {direct['level_threshold']})")
+    total = est["estimate_db"]
+    if total is None:
+        verdict = "the model's own error is not estimated, so the verdict cannot tell it from the physics"
+    elif est.get("consistent"):
+        verdict = (f"the estimate is below the {est['level_threshold_db']:g} dB level threshold: the verdict reflects "
+                   "the model's physics, not its discretisation")
+    elif est.get("level_threshold_db") is not None:
+        verdict = (f"the estimate reaches the {est['level_threshold_db']:g} dB level threshold: the verdict may be "
+                   "the discretisation's, not the physics'")
+    else:
+        verdict = "no level threshold to compare it with"
+    cont = ("" if est.get("mesh_against_continuum_db") is None else
+            f" (the mesh against the extrapolated continuum: {est['mesh_against_continuum_db']:.2f} dB, which matters "
+            "for real rig data)")
+    page.paragraph(
+        f"Model error in the scoring band {lo:g}–{hi:g} Hz: estimated "
+        f"{'n/a' if total is None else f'{total:.2g} dB'} against {est['estimate_reference']}{cont}; solver paths: "
+        f"{paths}, largest estimated reduction error {red['estimate_db']:.2g} dB (docs/solver.md). Direct check: "
+        f"{check}. So {verdict}.")
 
 
 def _setting(value):

@@ -15,9 +15,16 @@ import numpy as np
 from fivid.errors import ConfigError, FividError
 from fivid.solver.inputs import check_energy_balance, check_simulation_inputs
 
-__all__ = ["SimulationDiverged", "IntegrationSettings", "PreparedRun", "simulate", "prepare_run"]
+__all__ = ["SimulationDiverged", "IntegrationSettings", "PreparedRun", "simulate", "prepare_run", "AUTO_SCALING_FACTOR",
+           "DEFAULT_REDUCED_TOLERANCE"]
 
 log = logging.getLogger("fivid")
+
+#: the reduced path's cut-off and mass-scaling target with ``reduced="auto"``/``"reduced"``, in units of the band
+#: top ``sample_rate / 2``: 18 x 25.6 kHz = 460.8 kHz (docs/solver.md, "Reduced-order path")
+AUTO_SCALING_FACTOR = 18.0
+#: largest estimated in-band error [dB] for which ``reduced="auto"`` takes the reduced path
+DEFAULT_REDUCED_TOLERANCE = 0.5
 
 
 class SimulationDiverged(FividError):
@@ -62,6 +69,7 @@ class PreparedRun:
     preload: object
     wrap: dict
     reduced: object = None
+    choice: dict | None = None
 
     def run(self, *, progress=None):
         """Integrate and wrap the RunDataset (see :func:`simulate`)."""
@@ -77,6 +85,7 @@ class PreparedRun:
         ds = run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
         if self.reduced is not None:
             ds.attrs.update(self.reduced.attrs())
+        ds.attrs.update(choice_attrs(self.choice))
         check_energy_balance(ds)  # a run whose balance does not close is no result (fivid.solver.inputs)
         return ds
 
@@ -84,7 +93,8 @@ class PreparedRun:
 def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None,
              duration, sample_rate, seed=0, progress=None, time_step=None, safety=0.9, settle_time=1e-3,
              preload_time=None, base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100,
-             gs_tolerance=1e-10, record_state=False, reduced=None, reduced_mass_scaling=None):
+             gs_tolerance=1e-10, record_state=False, reduced=None, reduced_mass_scaling=None,
+             reduced_tolerance=DEFAULT_REDUCED_TOLERANCE, error_band=None, basis_cache=True, cache_dir=None):
     """Simulate the rig: preload, settle, base-velocity ramp, steady sliding; return a RunDataset.
 
     Parameters
@@ -128,16 +138,30 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         fraction of the shortest master segment.
     record_state : bool
         Also return the final displacement and velocity (global dofs) in ``attrs`` -- for tests.
-    reduced : None, True, int or float
-        Run a Craig-Bampton reduced system (:mod:`fivid.solver.reduced`): ``True`` keeps the fixed-interface modes
-        up to 3 x ``sample_rate / 2``, an int that many modes. The run records the truncation (``reduced_*``
-        attrs: modes, cut-off, boundary size, first truncated frequency, static-correction residual).
+    reduced : None, "auto", "reduced", True or int
+        The solver path. None (or False): the full model. ``"auto"``: the Craig-Bampton reduced system
+        (:mod:`fivid.solver.reduced`; fixed-interface modes and mass scaling at :data:`AUTO_SCALING_FACTOR` x
+        ``sample_rate / 2``, basis from the cache) when its estimated in-band error
+        (:mod:`fivid.solver.reduced_error`) is at most ``reduced_tolerance``, else the full model (also when the
+        model cannot be reduced: dashpots, pressure loads, constrained contact nodes). ``"reduced"``: those reduced
+        settings, whatever the estimate. ``True``: fixed-interface modes up to 3 x ``sample_rate / 2`` (or up to
+        ``reduced_mass_scaling``), an int that many modes. Every run records the path and why (``solver_path``,
+        ``solver_choice``, ``reduced_error_estimate_db``...) and a reduced one its truncation (``reduced_*`` attrs).
     reduced_mass_scaling : float, optional
         With ``reduced``: keep the fixed-interface modes up to this frequency [Hz] and mass-scale every mode of the
         reduced system above it down to it (:func:`fivid.solver.reduced.scale_high_modes`: modes below unchanged,
         static compliance exact), which lengthens the stable step. 18 x the band top (460.8 kHz for 51.2 kHz
         records) gave 11.5x at 0.44 dB in-band on the default rig (docs/solver.md); recorded as
         ``reduced_mass_scaling`` and ``reduced_added_mass_fraction``.
+    reduced_tolerance : float
+        Largest estimated in-band log-spectral distance [dB] for which ``reduced="auto"`` runs reduced (default 0.5).
+    error_band : (float, float), optional
+        Band [Hz] of that estimate (the scoring band; default :data:`fivid.solver.reduced_error.DEFAULT_ERROR_BAND`
+        clipped to ``sample_rate / 2``).
+    basis_cache : bool
+        Read/store the reduced basis in the on-disk cache (:mod:`fivid.solver.basis_cache`).
+    cache_dir : path-like, optional
+        The cache folder (default ``$FIVID_CACHE_DIR`` or the user cache folder).
 
     Returns
     -------
@@ -157,14 +181,17 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         duration=duration, sample_rate=sample_rate, seed=seed, time_step=time_step, safety=safety,
         settle_time=settle_time, preload_time=preload_time, base_ramp_time=base_ramp_time, oversample=oversample,
         run_id=run_id, gs_max_iterations=gs_max_iterations, gs_tolerance=gs_tolerance, record_state=record_state,
-        reduced=reduced, reduced_mass_scaling=reduced_mass_scaling)
+        reduced=reduced, reduced_mass_scaling=reduced_mass_scaling, reduced_tolerance=reduced_tolerance,
+        error_band=error_band, basis_cache=basis_cache, cache_dir=cache_dir)
     return prepared.run(progress=progress)
 
 
 def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None, duration,
                 sample_rate, seed=0, time_step=None, safety=0.9, settle_time=1e-3, preload_time=None,
                 base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100, gs_tolerance=1e-10,
-                record_state=False, reduced=None, reduced_mass_scaling=None) -> PreparedRun:
+                record_state=False, reduced=None, reduced_mass_scaling=None,
+                reduced_tolerance=DEFAULT_REDUCED_TOLERANCE, error_band=None, basis_cache=True,
+                cache_dir=None) -> PreparedRun:
     """Validate the settings and build everything :func:`simulate` integrates (same parameters)."""
     from fivid.fe.model import Model, load_model
     from fivid.solver.stencil import block_stencils
@@ -207,28 +234,16 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
 
     ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1])
     base = model.motion("base")
-    rs = None
-    if reduced is not None and reduced is not False:
-        from fivid.solver.reduced import reduced_system
+    v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
+    rs, choice = _choose_path(model, ka, reduced, reduced_mass_scaling, reduced_tolerance, error_band,
+                              sliding_distance=v_max * total, sample_rate=sample_rate, basis_cache=basis_cache,
+                              cache_dir=cache_dir)
+    if rs is not None:
         from fivid.solver.timestep import stable_step_of
 
-        n_modes = None if reduced is True else int(reduced)
-        if n_modes is not None and n_modes < 1:
-            raise ConfigError(f"reduced must be True or a number of modes >= 1, got {reduced!r}")
-        scaling = None
-        if reduced_mass_scaling is not None:
-            scaling = _positive("reduced_mass_scaling", reduced_mass_scaling)
-            if n_modes is not None:
-                raise ConfigError("give reduced=True with reduced_mass_scaling (its frequency sets the modes kept), "
-                                  f"not a number of modes ({reduced!r})")
-        v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
-        rs = reduced_system(model, ka, sliding_distance=v_max * total, band_top=sample_rate / 2.0, n_modes=n_modes,
-                            cutoff=scaling, mass_scaling=scaling)
         stab = stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
                               float(model.damping_cutoff))
     else:
-        if reduced_mass_scaling is not None:
-            raise ConfigError("reduced_mass_scaling needs reduced=True (it scales the reduced system's modes)")
         stab = stable_step(model)
     dt_crit = stab.critical_time_step
     if time_step is not None:
@@ -261,7 +276,94 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
                            float(gs_tolerance))
     return PreparedRun(model, st, ka, fric, settings, schedule, preload, dict(
         law=law, mu=mu, seed=seed, sliding_velocity=abs(v_signed), normal_load=normal_load,
-        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state), rs)
+        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state), rs, choice)
+
+
+def _reduced_options(reduced, reduced_mass_scaling, sample_rate):
+    """``(n_modes, cutoff, mass scaling)`` of a requested reduced path; ConfigError on a bad combination."""
+    if reduced in ("auto", "reduced"):
+        if reduced_mass_scaling is not None:
+            scaling = _positive("reduced_mass_scaling", reduced_mass_scaling)
+            return None, scaling, scaling
+        target = AUTO_SCALING_FACTOR * sample_rate / 2.0
+        return None, target, target
+    if isinstance(reduced, str) or (not isinstance(reduced, (bool, int, np.integer))):
+        raise ConfigError(f"reduced must be None, 'auto', 'reduced', True or a number of modes >= 1, got {reduced!r}")
+    n_modes = None if reduced is True else int(reduced)
+    if n_modes is not None and n_modes < 1:
+        raise ConfigError(f"reduced must be True or a number of modes >= 1, got {reduced!r}")
+    scaling = None
+    if reduced_mass_scaling is not None:
+        scaling = _positive("reduced_mass_scaling", reduced_mass_scaling)
+        if n_modes is not None:
+            raise ConfigError("give reduced=True with reduced_mass_scaling (its frequency sets the modes kept), "
+                              f"not a number of modes ({reduced!r})")
+    return n_modes, scaling, scaling
+
+
+def _choose_path(model, ka, reduced, reduced_mass_scaling, tolerance, error_band, *, sliding_distance, sample_rate,
+                 basis_cache, cache_dir):
+    """The reduced system to run (None: the full model) and the record of the choice (:func:`choice_attrs`)."""
+    from fivid.solver.reduced import reduced_system
+    from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
+
+    if reduced is None or reduced is False:
+        if reduced_mass_scaling is not None:
+            raise ConfigError("reduced_mass_scaling needs reduced=True (it scales the reduced system's modes)")
+        return None, {"path": "full", "choice": "requested", "reason": "full model requested", "estimate": None}
+    tolerance = _positive("reduced_tolerance", tolerance, allow_zero=True)
+    band = tuple(float(b) for b in (error_band if error_band is not None else
+                                    (DEFAULT_ERROR_BAND[0], min(DEFAULT_ERROR_BAND[1], sample_rate / 2.0))))
+    if len(band) != 2 or not (0.0 <= band[0] < band[1]):
+        raise ConfigError(f"error_band must be (low, high) [Hz] with 0 <= low < high, got {error_band!r}")
+    n_modes, cutoff, scaling = _reduced_options(reduced, reduced_mass_scaling, sample_rate)
+    auto = reduced == "auto"
+    compliant = [c.name for c in model.contacts if getattr(c.law, "is_penalty", False)]
+    if auto and compliant:
+        # the estimate ties the contact rigidly; a compliant normal law's contact springs act on the mass-scaled
+        # local modes, which it does not see (measured 6.6 dB in-band on triboair_rough.yaml, docs/solver.md)
+        return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
+                      "reason": f"contact pair(s) {', '.join(compliant)} have a compliant normal law, outside what "
+                                "the reduced path's error estimate covers (rigid contact)"}
+    try:
+        rs = reduced_system(model, ka, sliding_distance=sliding_distance, band_top=sample_rate / 2.0,
+                            n_modes=n_modes, cutoff=cutoff, mass_scaling=scaling, cache=basis_cache,
+                            cache_dir=cache_dir)
+    except ConfigError as exc:
+        if not auto:
+            raise
+        return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
+                      "reason": f"the model cannot be reduced: {exc}"}
+    est = band_error_estimate(rs, band, alpha=float(model.rayleigh_alpha), beta=float(model.rayleigh_beta),
+                              damping_cutoff=float(model.damping_cutoff))
+    record = {"choice": "auto" if auto else "requested", "estimate": est, "tolerance": tolerance, "band": band}
+    if auto and est["lsd_db"] > tolerance:
+        return None, {**record, "path": "full", "reason": f"estimated in-band error {est['lsd_db']:.3g} dB > "
+                                                          f"tolerance {tolerance:g} dB"}
+    reason = (f"estimated in-band error {est['lsd_db']:.3g} dB <= tolerance {tolerance:g} dB" if auto
+              else "reduced path requested")
+    return rs, {**record, "path": "reduced", "reason": reason}
+
+
+def choice_attrs(choice) -> dict:
+    """The output attrs recording which solver path ran and why (``solver_path``, ``solver_choice``,
+    ``solver_choice_reason``, ``reduced_error_estimate_db`` (NaN: not estimated), its contact state, band and
+    tolerance)."""
+    if not choice:
+        return {}
+    est = choice.get("estimate")
+    out = {"solver_path": choice["path"], "solver_choice": choice["choice"], "solver_choice_reason": choice["reason"],
+           "reduced_error_estimate_db": float(est["lsd_db"]) if est else math.nan}
+    if est:
+        out["reduced_error_estimate_state"] = est["state"]
+        out["reduced_error_estimate_states"] = "; ".join(
+            f"{k}: {v['lsd_db']:.3g} dB (truncation {v['truncation_db']:.3g}, mass scaling {v['mass_scaling_db']:.3g}, "
+            f"{v['modes']} modes)" for k, v in est["states"].items())
+    if "band" in choice:
+        out["reduced_error_band"] = [float(b) for b in choice["band"]]
+        out["reduced_error_band_units"] = "Hz"
+        out["reduced_error_tolerance_db"] = float(choice["tolerance"])
+    return out
 
 
 def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):

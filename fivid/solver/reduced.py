@@ -36,6 +36,7 @@ the dominant error of the fast configurations.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,6 +72,14 @@ class ReducedSystem:
         Arrays of :func:`fivid.solver._reduced_kernels.run_reduced_steps`.
     mass_scaling : MassScaling or None
         The selective mass scaling applied to ``M`` (:func:`scale_high_modes`).
+    unscaled_mass : ndarray (n, n) or None
+        ``M`` before the mass scaling [kg].
+    truncation_flexibility : ndarray (2 nb, 2 nb) or None
+        ``G = Psi^T M_II R_m`` [kg s2]: the boundary flexibility of the fixed-interface modes left out, ``sum_{j > k} L_j L_j^T / omega_j^2`` (:mod:`fivid.solver.reduced_error`).
+    omega_top : float
+        Highest angular frequency of the free reduced system [rad s-1], computed with the basis.
+    basis_key, basis_source, setup_seconds
+        The basis's cache key (sha256), ``"cache"`` or ``"built"``, and its build time [s] (0 from the cache).
     """
 
     nodes: np.ndarray
@@ -87,6 +96,12 @@ class ReducedSystem:
     sliding_range: float
     kernel: dict
     mass_scaling: "MassScaling | None" = None
+    unscaled_mass: "np.ndarray | None" = None
+    truncation_flexibility: "np.ndarray | None" = None
+    omega_top: float = math.nan
+    basis_key: str = ""
+    basis_source: str = ""
+    setup_seconds: float = 0.0
 
     @property
     def size(self) -> int:
@@ -105,6 +120,8 @@ class ReducedSystem:
         """Highest angular frequency of the free reduced system [rad s-1]."""
         import scipy.linalg
 
+        if math.isfinite(self.omega_top):
+            return self.omega_top
         nf = self.n_free
         lam = scipy.linalg.eigh(self.K[:nf, :nf], self.M[:nf, :nf], eigvals_only=True, subset_by_index=[nf - 1, nf - 1])
         return float(np.sqrt(max(float(lam[0]), 0.0)))
@@ -124,6 +141,9 @@ class ReducedSystem:
             "reduced_first_truncated_frequency": float(self.first_truncated),
             "reduced_static_residual": float(self.static_residual),
             "reduced_sliding_range": float(self.sliding_range),
+            "reduced_basis_key": self.basis_key,
+            "reduced_basis_source": self.basis_source,
+            "reduced_setup_time": float(self.setup_seconds),
             **self._scaling_attrs(),
         }
 
@@ -170,8 +190,10 @@ def _master_range(model, pair, slave_x, comp, reach):
 
 
 def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_modes: int | None = None,
-                   cutoff: float | None = None, mass_scaling=None) -> ReducedSystem:
-    """Craig-Bampton reduction of ``model`` for a run (see the module docstring).
+                   cutoff: float | None = None, mass_scaling=None, cache: bool = True,
+                   cache_dir=None) -> ReducedSystem:
+    """Craig-Bampton reduction of ``model`` for a run (see the module docstring), its basis read from or stored in
+    the basis cache (:mod:`fivid.solver.basis_cache`).
 
     Parameters
     ----------
@@ -188,12 +210,13 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
         Mode cut-off [Hz] (default ``3 band_top``).
     mass_scaling : float, optional
         Selective mass scaling target [Hz] (:func:`scale_high_modes`); ``None`` or ``0``: none.
+    cache : bool
+        Read/store the basis in the cache (False: always build, store nothing).
+    cache_dir : path-like, optional
+        Cache folder (default :func:`fivid.solver.basis_cache.cache_dir`).
     """
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
     from fivid.fe.assembly import lumped_mass, stiffness_matrix
-    from fivid.fe.modal import lowest_modes
+    from fivid.solver.basis_cache import basis_key, cached_basis
 
     if any(s.damping > 0.0 for s in model.springs):
         raise ConfigError("the reduced path does not integrate dashpots (springs with damping); run the full model")
@@ -208,84 +231,181 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
         sl = ka.slave_global[ka.slave_pair == p]
         masters.append(_master_range(model, pair, model.coords[sl, comp], comp, sliding_distance))
     nodes = np.unique(np.concatenate([ka.slave_global, *masters, [s.node for s in model.sensors]]).astype(np.int64))
-    nb = nodes.size
     bdofs = np.concatenate([2 * nodes, 2 * nodes + 1])
     constrained = np.intersect1d(bdofs, ka.con_global)
     if constrained.size:
         raise ConfigError(f"the reduced path keeps contact and sensor nodes free, but dof(s) {constrained[:5].tolist()} "
                           "of them are constrained (clamp or motion); run the full model")
-    ng = len(g_dofs)
-    interior = np.setdiff1d(np.arange(model.n_dofs), np.concatenate([bdofs, ka.con_global]))
+    f_cut = float(cutoff) if cutoff is not None else 3.0 * float(band_top)
+    target = float(mass_scaling) if mass_scaling is not None and float(mass_scaling) > 0.0 else 0.0
     K = stiffness_matrix(model, include_springs=True).tocsr()
     m = lumped_mass(model)
-    Kii = K[interior][:, interior].tocsc()
-    Kib = K[interior][:, bdofs].toarray()
-    Kig = np.column_stack([np.asarray(K[interior][:, d].sum(axis=1)).ravel() for d in g_dofs]) if ng else \
-        np.zeros((interior.size, 0))
-    try:
-        lu = spla.splu(Kii)
-    except RuntimeError:
-        raise ConfigError("the interior of the reduced model is not held (a body without clamp or driven edge); run "
-                          "the full model") from None
-    psi = -lu.solve(np.column_stack([Kib, Kig]))
-    # ---- fixed-interface modes up to the cut-off (or n_modes), one beyond to know the first one left out
-    Mii = sp.diags(m[interior]).tocsr()
-    f_cut = float(cutoff) if cutoff is not None else 3.0 * float(band_top)
-    k = (int(n_modes) + 1) if n_modes is not None else 40
-    while True:
-        k = min(k, interior.size - 1)
-        lam, phi = lowest_modes(Kii, Mii, k)
-        freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
-        if n_modes is not None or freq[-1] > f_cut or k >= interior.size - 1:
-            break
-        # next batch from the mode count of a 2-D continuum, N(f) ~ f^2 (Weyl), 15 % over: usually the last one
-        # (doubling from 40 to the 176 modes below 460.8 kHz on the default rig computed 600 eigenpairs)
-        k = max(2 * k, int(math.ceil(1.15 * k * (f_cut / max(float(freq[-1]), 1e-300)) ** 2)) + 2)
-    keep = int(min(n_modes, k - 1)) if n_modes is not None else int(np.sum(freq <= f_cut))
-    phi = phi[:, :keep]
-    first_truncated = float(freq[keep]) if keep < freq.size else math.inf
-    nm = keep
-    nf = 2 * nb + nm
+    key = basis_key(K, m, nodes, g_dofs, ka.con_global, None if n_modes is None else int(n_modes), f_cut, target,
+                    float(model.rayleigh_alpha), float(model.rayleigh_beta), float(model.damping_cutoff))
+
+    def build():
+        return _build_basis(K, m, bdofs, ka.con_global, g_dofs, n_modes, f_cut, target)
+
+    summary = {"model": model.describe(), "source": str(getattr(model, "source", "")), "boundary_nodes": int(nodes.size),
+               "n_modes": n_modes, "cutoff_hz": f_cut, "mass_scaling_hz": target}
+    if cache:
+        b, source, seconds = cached_basis(key, build, folder=cache_dir, summary=summary)
+    else:
+        t0 = time.perf_counter()
+        b, source, seconds = build(), "built (not cached)", 0.0
+        seconds = time.perf_counter() - t0
+    nb = nodes.size
+    nf, ng = int(b["n_free"]), len(g_dofs)
     n = nf + ng
-    T = np.zeros((model.n_dofs, n))
-    T[bdofs, np.arange(2 * nb)] = 1.0
-    T[interior, :2 * nb] = psi[:, :2 * nb]
-    T[interior, 2 * nb:nf] = phi
-    for j, d in enumerate(g_dofs):
-        T[d, nf + j] = 1.0
-    T[interior, nf:] = psi[:, 2 * nb:]
-    Mr = T.T @ (m[:, None] * T)
-    Mr = 0.5 * (Mr + Mr.T)
-    Kr = T.T @ (K @ T)
-    Kr = 0.5 * (Kr + Kr.T)
+    Mr, Kb, M0 = b["M"], b["K"], b["M0"]
     cidx = np.concatenate([np.arange(2 * nb), np.arange(nf, n)]).astype(np.int64)
-    coupling = float(np.abs(Kr[2 * nb:nf][:, cidx]).max() / np.abs(Kr[np.ix_(cidx, cidx)]).max()) if nm else 0.0
-    modes = np.arange(2 * nb, nf)
-    kdiag = np.diag(Kr)[modes].copy()
-    Kb = np.zeros_like(Kr)
-    Kb[np.ix_(cidx, cidx)] = Kr[np.ix_(cidx, cidx)]
-    Kb[modes, modes] = kdiag
-    # ---- static-correction residual: the interior's quasi-static response to boundary accelerations
-    R = lu.solve(m[interior][:, None] * psi)
-    Rm = R - phi @ (phi.T @ (m[interior][:, None] * R))
-    mnorm = lambda a: np.sqrt(np.einsum("ij,ij->j", a, m[interior][:, None] * a))
-    residual = float(np.max(mnorm(Rm) / np.maximum(mnorm(R), 1e-300))) if R.size else 0.0
-    scaling = scale_high_modes(Kb[:nf, :nf], Mr[:nf, :nf], mass_scaling)
-    Mr[:nf, :nf] = scaling.mass
     minv_ff = np.linalg.inv(Mr[:nf, :nf])
     minv_ff = 0.5 * (minv_ff + minv_ff.T)
     kernel = _contact_arrays(model, ka, nodes, masters)
     kernel.update(
-        nb=nb, nf=nf, kc=np.ascontiguousarray(Kr[np.ix_(cidx, cidx)]), cidx=cidx, kdiag=np.ascontiguousarray(kdiag),
+        nb=nb, nf=nf, kc=np.ascontiguousarray(Kb[np.ix_(cidx, cidx)]), cidx=cidx,
+        kdiag=np.ascontiguousarray(np.diag(Kb)[2 * nb:nf]),
         minv_ff=np.ascontiguousarray(minv_ff), b_fg=np.ascontiguousarray(minv_ff @ Mr[:nf, nf:]),
         m_g=np.ascontiguousarray(Mr[nf:]), m=np.ascontiguousarray(Mr), grp_par=np.ascontiguousarray(g_par),
         g_react=np.ascontiguousarray(g_react), wmat=np.ascontiguousarray(minv_ff[:2 * nb, :2 * nb]),
         minv_c=np.zeros(2 * nb),
     )
-    return ReducedSystem(nodes=nodes, T=T, M=Mr, K=Kb, n_free=nf, n_groups=ng, mode_frequencies=freq[:keep],
-                         cutoff=f_cut if n_modes is None else float(freq[keep - 1]) if keep else 0.0,
-                         first_truncated=first_truncated, static_residual=residual, stiffness_coupling=coupling,
-                         sliding_range=float(sliding_distance), kernel=kernel, mass_scaling=scaling)
+    sc = b["scaling"]
+    scaling = MassScaling(Mr[:nf, :nf], float(sc[0]), int(sc[1]), float(sc[2]), float(sc[3]))
+    freq = b["mode_frequencies"]
+    return ReducedSystem(nodes=nodes, T=b["T"], M=Mr, K=Kb, n_free=nf, n_groups=ng, mode_frequencies=freq,
+                         cutoff=float(b["cutoff"]), first_truncated=float(b["first_truncated"]),
+                         static_residual=float(b["static_residual"]), stiffness_coupling=float(b["stiffness_coupling"]),
+                         sliding_range=float(sliding_distance), kernel=kernel, mass_scaling=scaling,
+                         unscaled_mass=M0, truncation_flexibility=b["flexibility"],
+                         omega_top=float(b["omega_max"]), basis_key=key, basis_source=source, setup_seconds=seconds)
+
+
+def _count_below(Kii, Mii, omega2):
+    """Number of eigenvalues of ``(Kii, Mii)`` below ``omega2`` [s-2] (Sylvester's law of inertia: the negative
+    pivots of a symmetric-mode LU of ``Kii - omega2 Mii``), or None when the factorisation fails."""
+    import scipy.sparse.linalg as spla
+
+    try:
+        lu = spla.splu((Kii - omega2 * Mii).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options=dict(SymmetricMode=True))
+    except RuntimeError:  # exactly singular: omega2 is an eigenvalue
+        return None
+    return int(np.sum(lu.U.diagonal() < 0.0))
+
+
+def _fixed_interface_modes(Kii, Mii, lu, n_modes, f_cut):
+    """The fixed-interface modes ``(frequencies [Hz], vectors)``: ``n_modes`` (+1), or those up to ``f_cut`` (+1,
+    the first one left out). Shift-invert Lanczos (ARPACK) about 0 on the interior's factorisation ``lu`` (the one
+    of the constraint modes: no second factorisation), its size set in advance by an inertia count."""
+    import scipy.sparse.linalg as spla
+    from threadpoolctl import threadpool_limits
+
+    n = Kii.shape[0]
+    if n_modes is not None:
+        k = int(n_modes) + 1
+    else:
+        count = _count_below(Kii, Mii, (2.0 * np.pi * f_cut) ** 2)
+        k = (count + 1) if count is not None else 40
+    op = spla.LinearOperator(Kii.shape, matvec=lu.solve, matmat=lu.solve, dtype=float)
+    while True:
+        k = min(k, n - 1)
+        # ARPACK's vector work and the solves are faster on one BLAS thread on this machine class (fe/modal.py)
+        with threadpool_limits(limits=1, user_api="blas"):
+            # a fixed start vector: the same model gives the same basis in every process (ARPACK's default is random)
+            lam, phi = spla.eigsh(Kii, k=k, M=Mii, sigma=0.0, OPinv=op, which="LM", ncv=min(n, int(1.3 * k) + 20),
+                                  v0=np.ones(n))
+        order = np.argsort(lam)
+        lam, phi = lam[order], phi[:, order]
+        phi = phi / np.sqrt(np.einsum("ij,ij->j", phi, Mii @ phi))
+        big = np.argmax(np.abs(phi), axis=0)  # sign: largest entry positive (as fivid.fe.modal.lowest_modes)
+        phi = phi * np.sign(phi[big, np.arange(phi.shape[1])])
+        freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+        if n_modes is not None or freq[-1] > f_cut or k >= n - 1:
+            return freq, phi
+        # the inertia count failed or was short: next batch from the mode count of a 2-D continuum, N(f) ~ f^2
+        k = max(2 * k, int(math.ceil(1.15 * k * (f_cut / max(float(freq[-1]), 1e-300)) ** 2)) + 2)
+
+
+def _build_basis(K, m, bdofs, con_global, g_dofs, n_modes, f_cut, target) -> dict:
+    """The expensive, run-independent part of :func:`reduced_system`: the arrays stored in the basis cache.
+
+    Measured on the default rig (13 524 dofs, 94 boundary dofs, 176 modes below 460.8 kHz, 2-core machine at load
+    2): the shift-invert Lanczos iteration dominates (5-7 s: ARPACK's orthogonalisation and ~800 triangular solves);
+    the factorisations (0.06 s the interior's, 0.2 s the inertia count's), the constraint modes, the dense products
+    and the mass scaling take about 1 s together.
+    """
+    import scipy.linalg
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    from threadpoolctl import threadpool_limits
+
+    n_dofs = m.size
+    nb2 = bdofs.size
+    ng = len(g_dofs)
+    interior = np.setdiff1d(np.arange(n_dofs), np.concatenate([bdofs, con_global]))
+    Kii = K[interior][:, interior].tocsc()
+    Kib = K[interior][:, bdofs].toarray()
+    Kig = np.column_stack([np.asarray(K[interior][:, d].sum(axis=1)).ravel() for d in g_dofs]) if ng else \
+        np.zeros((interior.size, 0))
+    try:
+        lu = spla.splu(Kii, permc_spec="MMD_AT_PLUS_A")
+    except RuntimeError:
+        raise ConfigError("the interior of the reduced model is not held (a body without clamp or driven edge); run "
+                          "the full model") from None
+    psi = -lu.solve(np.column_stack([Kib, Kig]))
+    Mii = sp.diags(m[interior]).tocsr()
+    freq, phi = _fixed_interface_modes(Kii, Mii, lu, n_modes, f_cut)
+    keep = int(min(n_modes, freq.size - 1)) if n_modes is not None else int(np.sum(freq <= f_cut))
+    phi = phi[:, :keep]
+    first_truncated = float(freq[keep]) if keep < freq.size else math.inf
+    nm = keep
+    nf = nb2 + nm
+    n = nf + ng
+    T = np.zeros((n_dofs, n))
+    T[bdofs, np.arange(nb2)] = 1.0
+    T[interior, :nb2] = psi[:, :nb2]
+    T[interior, nb2:nf] = phi
+    for j, d in enumerate(g_dofs):
+        T[d, nf + j] = 1.0
+    T[interior, nf:] = psi[:, nb2:]
+    Mr = T.T @ (m[:, None] * T)
+    Mr = 0.5 * (Mr + Mr.T)
+    Kr = T.T @ (K @ T)
+    Kr = 0.5 * (Kr + Kr.T)
+    cidx = np.concatenate([np.arange(nb2), np.arange(nf, n)]).astype(np.int64)
+    coupling = float(np.abs(Kr[nb2:nf][:, cidx]).max() / np.abs(Kr[np.ix_(cidx, cidx)]).max()) if nm else 0.0
+    modes = np.arange(nb2, nf)
+    Kb = np.zeros_like(Kr)
+    Kb[np.ix_(cidx, cidx)] = Kr[np.ix_(cidx, cidx)]
+    Kb[modes, modes] = np.diag(Kr)[modes]
+    # ---- static-correction residual: the interior's quasi-static response to boundary accelerations,
+    # R = K_II^-1 M_II Psi, less what the kept modes carry; its boundary flexibility G = Psi^T M_II R_m is the
+    # truncated modes' static contribution sum_{j > k} L_j L_j^T / omega_j^2 (fivid.solver.reduced_error)
+    mi = m[interior][:, None]
+    R = lu.solve(mi * psi)
+    Rm = R - phi @ (phi.T @ (mi * R))
+    mnorm = lambda a: np.sqrt(np.einsum("ij,ij->j", a, mi * a))
+    residual = float(np.max(mnorm(Rm) / np.maximum(mnorm(R), 1e-300))) if R.size else 0.0
+    flex = psi[:, :nb2].T @ (mi * Rm[:, :nb2])
+    flex = 0.5 * (flex + flex.T)
+    M0 = Mr.copy()
+    with threadpool_limits(limits=1, user_api="blas"):
+        scaling = scale_high_modes(Kb[:nf, :nf], Mr[:nf, :nf], target or None)
+        Mr[:nf, :nf] = scaling.mass
+        if scaling.target > 0.0 and nf:  # every mode above the target now sits at it: no eigensolve needed
+            omega_max = 2.0 * math.pi * (scaling.target if scaling.n_scaled else scaling.top_frequency)
+        elif nf:
+            lam = scipy.linalg.eigh(Kb[:nf, :nf], Mr[:nf, :nf], eigvals_only=True, subset_by_index=[nf - 1, nf - 1])
+            omega_max = float(np.sqrt(max(float(lam[0]), 0.0)))
+        else:
+            omega_max = 0.0
+    return dict(T=T, M=Mr, M0=M0, K=Kb, n_free=np.int64(nf), mode_frequencies=freq[:keep],
+                cutoff=np.float64(f_cut if n_modes is None else float(freq[keep - 1]) if keep else 0.0),
+                first_truncated=np.float64(first_truncated), static_residual=np.float64(residual),
+                stiffness_coupling=np.float64(coupling), flexibility=flex, omega_max=np.float64(omega_max),
+                scaling=np.array([scaling.target, scaling.n_scaled, scaling.top_frequency,
+                                  scaling.added_mass_fraction], dtype=float))
 
 
 @dataclass

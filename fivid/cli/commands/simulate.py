@@ -52,13 +52,26 @@ def register(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the friction-law synthesis (default 0)")
     p.add_argument("--time-step", metavar="Q", type=quantity("s", positive=True),
                    help="solver step, e.g. '50 ns'; bare number in s (default 0.9 x critical; refused above critical)")
-    p.add_argument("--reduced", nargs="?", const=True, default=None, type=int, metavar="N",
-                   help="run a Craig-Bampton reduced system (physical contact and sensor nodes, fixed-interface "
-                   "modes up to 3 x sample-rate/2, or N modes); the truncation is recorded in the output")
+    path = p.add_mutually_exclusive_group()
+    path.add_argument("--reduced", nargs="?", const="reduced", default=None, type=_mode_count, metavar="N",
+                      help="force the Craig-Bampton reduced system (physical contact and sensor nodes; fixed-interface "
+                      "modes and mass scaling at 18 x sample-rate/2, basis from the cache), or with N: N modes, no "
+                      "mass scaling. Default: chosen automatically, reduced when its estimated in-band error is "
+                      "within --reduced-tolerance (docs/solver.md)")
+    path.add_argument("--full", dest="reduced", action="store_const", const="full",
+                      help="force the full model (no reduction, no estimate)")
+    p.add_argument("--reduced-tolerance", metavar="DB", type=float, default=0.5,
+                   help="largest estimated in-band log-spectral distance [dB] of the reduced path for the automatic "
+                   "choice (default 0.5)")
+    p.add_argument("--error-band", nargs=2, metavar=("LOW", "HIGH"), type=quantity("Hz", nonnegative=True),
+                   help="band of that estimate, e.g. '800 Hz' '8 kHz' (default 200 Hz to 10 kHz or sample-rate/2)")
     p.add_argument("--reduced-mass-scaling", metavar="Q", type=quantity("Hz", positive=True),
                    help="with --reduced: keep the modes up to Q and mass-scale the reduced system's modes above Q "
-                   "down to Q (longer stable step; e.g. '460.8 kHz' = 18 x the band top of 51.2 kHz records: 11.5x "
-                   "faster at 0.44 dB on the default rig, docs/solver.md); bare number in Hz")
+                   "down to Q (longer stable step; the default reduced path uses 18 x the band top, 460.8 kHz for "
+                   "51.2 kHz records, docs/solver.md); bare number in Hz")
+    p.add_argument("--cache-dir", metavar="DIR",
+                   help="reduced-basis cache folder (default $FIVID_CACHE_DIR, else the user cache folder; "
+                        "'fivid cache info')")
     p.add_argument("--run-id", metavar="ID", help="run identifier recorded in the output")
     p.add_argument("--strict", action="store_true",
                    help="refuse a condition outside the law's identified domain (exit 2) instead of warning")
@@ -81,7 +94,9 @@ def register(subparsers) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
     p.add_argument("--json", action="store_true", help="print a JSON summary on stdout")
     p.add_argument("--dry-run", action="store_true",
-                   help="check the settings, print the solver steps and the memory estimate; simulate nothing")
+                   help="check the settings, choose the solver path, print the solver steps, the memory estimate and "
+                        "the estimated run time (from a short timed probe of the time loop; builds the reduced basis "
+                        "if it is not cached); write nothing else")
     p.set_defaults(func=run)
 
 
@@ -113,31 +128,14 @@ def run(args) -> int:
     if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.pipeline.resources)
         check_monte_carlo_size(size, samples=args.samples, nperseg=args.nperseg, n_dofs=2 * model.n_nodes,
                                workers=args.workers)
+    run_kw = dict(law=law, mu=args.mu, sliding_velocity=si(args.velocity), normal_load=si(args.load),
+                  roughness_ra=si(args.roughness), duration=duration, sample_rate=sample_rate, seed=args.seed,
+                  time_step=time_step, run_id=args.run_id, **_path_options(args))
     if args.dry_run:
-        if args.json:  # --json promises JSON on stdout, a dry run too (issue 32 item 6)
-            print(dumps_json({"dry_run": True, "model": model.describe(), "output_samples": size.output_samples,
-                              "solver_steps": size.steps, "time_step_s": size.time_step,
-                              "memory_bytes": size.bytes, "memory_parts_bytes": dict(size.parts)}))
-        else:
-            print(f"{model.describe()}: {size.describe()}")
-        return 0
+        return _dry_run(args, model, size, run_kw)
     if args.samples is not None:
         return _run_samples(args, model, law, law_file)
-    ds = simulate(
-        model,
-        law=law,
-        mu=args.mu,
-        sliding_velocity=si(args.velocity),
-        normal_load=si(args.load),
-        roughness_ra=si(args.roughness),
-        duration=duration,
-        sample_rate=sample_rate,
-        seed=args.seed,
-        time_step=time_step,
-        run_id=args.run_id,
-        reduced=args.reduced,
-        reduced_mass_scaling=si(args.reduced_mass_scaling),
-    )
+    ds = simulate(model, **run_kw)
     from fivid.schema import append_history
 
     append_history(ds, _command_line(args))
@@ -158,7 +156,10 @@ def run(args) -> int:
     }
     if getattr(args, "law_domain", None) is not None:
         summary["law_domain"] = args.law_domain
-    summary.update({k: ds.attrs[k] for k in ("reduced_size", "reduced_modes", "reduced_cutoff",
+    summary.update({k: ds.attrs[k] for k in ("solver_path", "solver_choice", "solver_choice_reason",
+                                             "reduced_error_estimate_db", "reduced_error_tolerance_db",
+                                             "reduced_error_band", "reduced_basis_source", "reduced_setup_time",
+                                             "reduced_size", "reduced_modes", "reduced_cutoff",
                                              "reduced_first_truncated_frequency", "reduced_static_residual",
                                              "reduced_mass_scaling", "reduced_added_mass_fraction")
                     if k in ds.attrs})
@@ -166,9 +167,79 @@ def run(args) -> int:
         print(dumps_json(summary))
     else:
         print(f"{model.describe()}; dt {summary['time_step_s']:.4g} s (critical {summary['critical_time_step_s']:.4g} s)")
+        print(f"solver path: {summary.get('solver_path', 'full')} ({summary.get('solver_choice_reason', '')})")
         print(f"steady sliding from {summary['transient_end_s']:.4g} s: mean normal force "
               f"{summary['mean_normal_force_n']:.4g} N, friction force {summary['mean_friction_force_n']:.4g} N")
         print(f"written {args.output} ({summary['samples']} samples)", file=sys.stderr)
+    return 0
+
+
+def _mode_count(text):
+    """``--reduced N``: a number of modes >= 1 (argparse also passes the bare flag's constant through here)."""
+    if text == "reduced":
+        return text
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a number of modes >= 1, got {text!r}")
+    return n
+
+
+def _path_options(args) -> dict:
+    """The solver-path arguments of :func:`fivid.solver.simulate` from ``--full``/``--reduced [N]`` (default auto),
+    ``--reduced-tolerance``, ``--error-band``, ``--reduced-mass-scaling`` and ``--cache-dir``."""
+    from fivid.errors import ConfigError
+
+    reduced = {None: "auto", "full": None}.get(args.reduced, args.reduced)
+    scaling = None if args.reduced_mass_scaling is None else float(args.reduced_mass_scaling)
+    if scaling is not None and reduced != "reduced" and not isinstance(reduced, int):
+        raise ConfigError("--reduced-mass-scaling needs --reduced (it sets the forced reduced path's scaling)",
+                          key="--reduced-mass-scaling")
+    if scaling is not None and isinstance(reduced, int) and not isinstance(reduced, bool):
+        raise ConfigError(f"give --reduced without N with --reduced-mass-scaling (its frequency sets the modes kept), "
+                          f"not {reduced} modes", key="--reduced-mass-scaling")
+    if not (args.reduced_tolerance >= 0.0):
+        raise ConfigError(f"--reduced-tolerance must be a number of dB >= 0, got {args.reduced_tolerance!r}",
+                          key="--reduced-tolerance")
+    band = None if args.error_band is None else tuple(float(b) for b in args.error_band)
+    if band is not None and not band[0] < band[1]:
+        raise ConfigError(f"--error-band LOW HIGH needs LOW < HIGH, got {band[0]:g} Hz and {band[1]:g} Hz",
+                          key="--error-band")
+    return dict(reduced=reduced, reduced_mass_scaling=scaling, reduced_tolerance=float(args.reduced_tolerance),
+                error_band=band, cache_dir=args.cache_dir)
+
+
+def _dry_run(args, model, size, run_kw) -> int:
+    """``--dry-run``: the memory estimate, the solver path and the run time estimated from a short timed probe."""
+    import time
+
+    from fivid.solver.driver import choice_attrs, prepare_run
+    from fivid.solver.runtime import estimate_run_time
+    from fivid.storage import dumps_json
+
+    t0 = time.perf_counter()
+    prep = prepare_run(model, **run_kw)
+    timing = estimate_run_time(prep, setup_seconds=time.perf_counter() - t0)
+    path = choice_attrs(prep.choice)
+    if args.samples is not None:  # every sample runs the same steps; the workers share the cached basis
+        per_sample = timing["loop_seconds"] + timing["setup_seconds"]
+        timing["estimated_seconds"] = timing["setup_seconds"] + per_sample * args.samples / max(1, args.workers)
+    if args.json:
+        print(dumps_json({"dry_run": True, "model": model.describe(), "output_samples": size.output_samples,
+                          "memory_bytes": size.bytes, "memory_parts_bytes": size.parts,
+                          "solver_path": path.get("solver_path"), "solver_choice_reason": path.get("solver_choice_reason"),
+                          "reduced_error_estimate_db": path.get("reduced_error_estimate_db"),
+                          "time_step_s": prep.settings.time_step, "solver_steps": timing["steps"],
+                          "estimated_run_time_s": timing["estimated_seconds"], "run_time_estimate": timing}))
+    else:
+        print(f"{model.describe()}: {size.describe()}")
+        print(f"solver path: {path.get('solver_path')} ({path.get('solver_choice_reason')}); "
+              f"{timing['steps']:,} solver steps of {prep.settings.time_step:.3g} s on that path")
+        print(f"estimated run time: about {timing['estimated_seconds']:.3g} s on this machine now (set-up "
+              f"{timing['setup_seconds']:.3g} s + time loop {timing['loop_seconds']:.3g} s, from a timed probe of "
+              f"{timing['probe_intervals'][1]} of {timing['n_intervals']} intervals)")
     return 0
 
 
@@ -205,8 +276,8 @@ def _run_samples(args, model, law, law_file) -> int:
     env = run_monte_carlo(
         model, law, samples=args.samples, seed=args.seed, duration=si(args.duration), sample_rate=si(args.sample_rate),
         sliding_velocity=si(args.velocity), normal_load=si(args.load), roughness_ra=si(args.roughness),
-        time_step=si(args.time_step), reduced=args.reduced,
-        reduced_mass_scaling=si(args.reduced_mass_scaling), variable=args.variable, sensor=args.sensor,
+        time_step=si(args.time_step), **{k: v for k, v in _path_options(args).items() if k != "cache_dir"},
+        variable=args.variable, sensor=args.sensor,
         nperseg=args.nperseg, workers=args.workers, scheduler=args.scheduler, progress=args.progress,
         attrs={**law_file, "law_domain_check": _domain_text(args.law_domain), "model": str(args.model),
                "model_description": model.describe(),
@@ -262,8 +333,8 @@ def _load_model(path):
 # option -> attribute of the parsed arguments, in the order of the help (for the history line)
 _OPTIONS = (("--law", "law"), ("--mu", "mu"), ("--velocity", "velocity"), ("--load", "load"),
             ("--roughness", "roughness"), ("--duration", "duration"), ("--sample-rate", "sample_rate"),
-            ("--seed", "seed"), ("--time-step", "time_step"), ("--reduced", "reduced"),
-            ("--reduced-mass-scaling", "reduced_mass_scaling"), ("--run-id", "run_id"),
+            ("--seed", "seed"), ("--time-step", "time_step"), ("--reduced", "reduced"), ("--reduced-tolerance", "reduced_tolerance"),
+            ("--error-band", "error_band"), ("--reduced-mass-scaling", "reduced_mass_scaling"), ("--run-id", "run_id"),
             ("--samples", "samples"), ("-o", "output"))
 
 
@@ -276,9 +347,11 @@ def _command_line(args) -> str:
 
     words = ["fivid", "simulate", str(args.model)]
     for option, dest in _OPTIONS:
-        value = getattr(args, dest)
-        if value is True:  # a flag with an optional value given bare (--reduced)
-            words.append(option)
+        value = getattr(args, dest, None)
+        if dest == "reduced":  # the solver path: auto (nothing), --full, --reduced or --reduced N
+            words += {None: [], "full": ["--full"], "reduced": ["--reduced"]}.get(value, ["--reduced", str(value)])
+        elif isinstance(value, (list, tuple)):
+            words += [option, *(str(getattr(v, "text", v)) for v in value)]
         elif value is not None:
             words += [option, str(getattr(value, "text", value))]  # a quantity as it was written
     if getattr(args, "samples", None) is not None:

@@ -1,0 +1,106 @@
+"""The README's main job on the fine and on the coarse model, in one run (issue 30).
+
+    python benchmarks/bench_pipeline.py [--quick]
+
+Runs ``fivid run pipelines/calibration.yaml --config configs/runs/sample.yaml`` (the README's main job: the
+synthetic twin, simulated on the default 0.5 mm rig with the automatic solver path) and the same run
+configuration with ``model`` set to the coarse 2 mm rig (``configs/models/triboair_coarse.yaml``), each in a
+fresh process with an empty reduced-basis cache (a first run pays the basis), one after the other. Prints one
+JSON line: ``fine_wall_s``, ``coarse_wall_s`` and ``fine_vs_coarse_wall_ratio`` (wall clock of each job),
+``fine_cpu_s``/``coarse_cpu_s`` (user + system time of the job and every process it waited for: the dask
+workers), ``discretisation_error_db`` (the report's estimated model error for the fine run,
+``discretisation.json`` key ``estimate_db``) and ``coarse_discretisation_error_db``, the verdicts, the solver
+paths and ``load_average_1min`` at the start. ``--quick``: 0.15 s of simulated sliding and one seed (a smoke
+run of the same code; its wall times are not the main job's).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _config(tmp: Path, model: str, quick: bool) -> Path:
+    """configs/runs/sample.yaml with absolute paths, ``model`` swapped in (and shortened with ``quick``)."""
+    import yaml
+
+    raw = yaml.safe_load((ROOT / "configs/runs/sample.yaml").read_text(encoding="utf-8"))
+    runs = ROOT / "configs/runs"
+    raw["inputs"]["folder"] = str((runs / raw["inputs"]["folder"]).resolve())
+    raw["model"] = str((ROOT / "configs/models" / model).resolve())
+    disc = raw.setdefault("discretisation", {})
+    for key in ("convergence", "data_model"):
+        if disc.get(key):
+            disc[key] = str((runs / disc[key]).resolve())
+    if quick:
+        raw["simulate"]["duration"] = "0.15 s"
+        raw["simulate"]["seeds"] = 1
+    path = tmp / f"run-{Path(model).stem}.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False), encoding="utf-8")
+    return path
+
+
+def _job(config: Path, out: Path, cache: Path) -> dict:
+    """Wall and CPU time of one pipeline run in a fresh process, and what its report says."""
+    env = {**os.environ, "FIVID_CACHE_DIR": str(cache)}
+    cmd = [sys.executable, "-m", "fivid", "run", str(ROOT / "pipelines/calibration.yaml"), "--config", str(config),
+           "-o", str(out), "--no-progress"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode not in (0, 3):  # 3: scores below thresholds, still a finished run
+        raise SystemExit(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
+    disc = json.loads((out / "discretisation.json").read_text(encoding="utf-8"))
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    return {"wall_s": wall, "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
+            "estimate_db": disc.get("estimate_db"), "verdict": summary.get("verdict"),
+            "solver_paths": disc.get("reduction", {}).get("paths"), "exit": proc.returncode,
+            "simulate_stage_s": next((s["seconds"] for s in summary.get("stages", []) if s["name"] == "simulate"),
+                                     None)}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="0.15 s of sliding, one seed (smoke run)")
+    args = ap.parse_args(argv)
+    load = os.getloadavg()[0]
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        fine = _job(_config(tmp, "triboair.yaml", args.quick), tmp / "fine", tmp / "cache-fine")
+        coarse = _job(_config(tmp, "triboair_coarse.yaml", args.quick), tmp / "coarse", tmp / "cache-coarse")
+    out = {
+        "benchmark": "pipeline",
+        "quick": bool(args.quick),
+        "command": "fivid run pipelines/calibration.yaml --config configs/runs/sample.yaml",
+        "fine_wall_s": fine["wall_s"],
+        "coarse_wall_s": coarse["wall_s"],
+        "fine_vs_coarse_wall_ratio": fine["wall_s"] / coarse["wall_s"],
+        "fine_cpu_s": fine["cpu_s"],
+        "coarse_cpu_s": coarse["cpu_s"],
+        "fine_simulate_stage_s": fine["simulate_stage_s"],
+        "coarse_simulate_stage_s": coarse["simulate_stage_s"],
+        "discretisation_error_db": fine["estimate_db"],
+        "coarse_discretisation_error_db": coarse["estimate_db"],
+        "fine_verdict": fine["verdict"],
+        "coarse_verdict": coarse["verdict"],
+        "fine_solver_paths": fine["solver_paths"],
+        "coarse_solver_paths": coarse["solver_paths"],
+        "load_average_1min": load,
+    }
+    print(json.dumps(out))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
