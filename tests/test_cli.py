@@ -54,3 +54,14 @@ def test_a_missing_optional_package_gets_an_install_hint(monkeypatch, capsys):
     assert cli.main([]) == 1
     err = capsys.readouterr().err
     assert "'distributed'" in err and "fivid[sweep]" in err and "Traceback" not in err
+
+
+def test_reader_closing_the_pipe_is_no_traceback():
+    """`fivid schema model | head -c 10`: the reader closes stdout before fivid writes; fivid exits 141
+    (128 + SIGPIPE, as a shell reports a tool ended by SIGPIPE) without a traceback or 'unexpected failure'."""
+    p = subprocess.Popen([sys.executable, "-m", "fivid", "schema", "model"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    p.stdout.close()  # before the child has written anything
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=120) == 141, err
+    assert "Traceback" not in err and "unexpected failure" not in err

@@ -125,3 +125,20 @@ def test_constant_law_warning_thresholds():
     assert "cross-validation error" in constant_law_warning(fit, [1.0, 1.1])
     other = FormFit(form="power_law", n_runs=4)
     assert constant_law_warning(other, [1.0, 5.0]) == ""
+
+
+def test_pipeline_shows_identify_warnings(tmp_path, caplog):
+    """`fivid run`: identify's warnings (e.g. the constant-law one) reach the console/log, not only law.json."""
+    import json
+    import logging
+    from types import SimpleNamespace
+
+    from fivid.pipeline.stages import Identify
+
+    (tmp_path / "law.json").write_text(json.dumps({"warnings": ["constant law chosen although ... spread 3.0x"]}))
+    task = SimpleNamespace(outputs={"json": str(tmp_path / "law.json"), "law": str(tmp_path / "law.nc")})
+    ctx = SimpleNamespace(data={})
+    with caplog.at_level(logging.WARNING, logger="fivid"):
+        Identify().collect(ctx, [task])
+    assert "identify: constant law chosen although ... spread 3.0x" in caplog.text
+    assert ctx.data["law_summary"]["warnings"]

@@ -17,6 +17,7 @@ import argparse
 import contextlib
 import importlib
 import logging
+import os
 import pkgutil
 import sys
 
@@ -174,6 +175,10 @@ def _missing_optional(exc: BaseException) -> str | None:
     return None
 
 
+#: exit status when the reader of stdout closed the pipe (128 + SIGPIPE, as a shell reports a tool SIGPIPE ended)
+EXIT_BROKEN_PIPE = 141
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``fivid`` command; returns the exit status."""
     parser = build_parser()
@@ -200,6 +205,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fivid {args.command}: error: out of memory ({exc or 'MemoryError'}); make the problem smaller "
               "(mesh divisions, duration, sample rate, number of runs)", file=sys.stderr)
         return exit_status(exc)
+    except BrokenPipeError:  # the reader closed our output early (`fivid ... | head`): not a failure of the command
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # so the interpreter's final flush does not raise again
+        return EXIT_BROKEN_PIPE
     except Exception as exc:
         missing = _missing_optional(exc)
         if missing is not None:

@@ -152,6 +152,8 @@ class Identify:
         text = Path(tasks[0].outputs["json"]).read_text(encoding="utf-8")
         ctx.data["law_summary"] = json.loads(text)
         ctx.data["law_path"] = tasks[0].outputs["law"]
+        for message in ctx.data["law_summary"].get("warnings", []):  # also in summary.json's law.warnings
+            log.warning("identify: %s", message)
 
 
 class Modal:
