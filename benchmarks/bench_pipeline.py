@@ -27,6 +27,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
 
 def _config(tmp: Path, model: str, quick: bool) -> Path:
@@ -73,8 +75,7 @@ def _job(config: Path, out: Path, cache: Path) -> dict:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="0.15 s of sliding, one seed (smoke run)")
-    args = ap.parse_args(argv)
-    load = os.getloadavg()[0]
+    args, load = parse_guarded(ap, argv)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         fine = _job(_config(tmp, "triboair.yaml", args.quick), tmp / "fine", tmp / "cache-fine")

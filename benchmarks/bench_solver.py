@@ -425,7 +425,7 @@ def _auto_path(model_path, duration):
         t_full = run("full", "bases", "--full")
         runs = [xr.load_dataset(tmp / f"{n}.nc") for n in ("full", "warm", "cold")]
     f, psd, _ = steady_psds(runs, nperseg=256)
-    lsd, level, _ = band_distance(f, psd[0], psd[1], (200.0, 10e3))
+    lsd, level = band_distance(f, psd[0], psd[1], (200.0, 10e3))
     a, c = runs[1].attrs, runs[2].attrs
     return {"auto_model": model_path, "auto_duration": duration, "auto_solver_path": a["solver_path"],
             "auto_speedup_warm": t_full / t_warm, "auto_speedup_cold": t_full / t_cold, "auto_band_lsd_db": lsd,
