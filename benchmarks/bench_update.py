@@ -1,6 +1,6 @@
 """Benchmark: model updating of the default rig and EMA of a measured-size FRF set. Prints one JSON line.
 
-* update: 3 parameters of configs/models/triboair_coarse.yaml (the pipeline's rig: steel modulus, the upper
+* update: 3 parameters of configs/models/triboair.yaml (the default rig, 0.5 mm: steel modulus, the upper
   beam's length, the contact's normal stiffness), coupled at the contact under 5 N, against its own 6 lowest modes
   computed with the parameters perturbed by +4 %, -3 %, +20 % (synthetic targets, 0.1 % tolerance): iterations,
   model evaluations, wall time, largest parameter error (target: < 60 s on 2 cores);
@@ -34,7 +34,7 @@ from fivid.updating import load_targets, update_model  # noqa: E402
 from fivid.updating.paths import replace_values  # noqa: E402
 from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
 
-MODEL = ROOT / "configs" / "models" / "triboair_coarse.yaml"
+MODEL = ROOT / "configs" / "models" / "triboair.yaml"
 PARAMS = [("materials.steel.E", "210 GPa", "218.4 GPa", "150 GPa", "300 GPa"),
           ("bodies.upper.corners[1][0]", "150 mm", "148.2 mm", "140 mm", "160 mm"),
           ("contacts[0].normal_stiffness", "2.1e14 N/m^3", "2.52e14 N/m^3", "1e13 N/m^3", "1e16 N/m^3")]
