@@ -14,6 +14,7 @@ import xarray as xr
 
 from fivid.cli import main
 from fivid.errors import ConfigError
+from fivid.signal.levels import third_octave_bands
 from fivid.study import HoffmannSystem, load_study, open_study, run_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -334,11 +335,16 @@ def test_convergence_study_quick(tmp_path):
         assert f1 < f2 < f3 and m["order"] is not None and m["error"] > 0
     for s in summary["convergence"]["time_step"]:
         assert s["lsd_db"] < 1.0
-    # one-third octaves of 100 Hz - 10 kHz (the study's PSD band, thirds of at least 2 bins of 50 Hz: from
-    # the 281-354 Hz third on) and the whole band; the first mode's peak is tracked
-    # (the whole band's edges are PSD bin frequencies: equal to float resolution of the frequency grid)
-    assert len(mesh[0]["band_level_db"]) == 16
-    assert mesh[0]["band_level_db"][-1]["band"] == pytest.approx([100.0, 9950.0], rel=1e-12)
+    # the scores' one band grid (issue 29 item 1): the IEC base-10 thirds lying inside the study's PSD band
+    # 100 Hz - 9.95 kHz that are at least one 50 Hz bin wide (the 250 Hz to 8 kHz bands), then the whole band;
+    # the first mode's peak is tracked (the whole band's edges are PSD bin frequencies: equal to float resolution)
+    iec = third_octave_bands(100.0, 9950.0)
+    wide = iec["upper"] - iec["lower"] >= 50.0
+    bands = mesh[0]["band_level_db"]
+    assert len(bands) == wide.sum() + 1 == 17
+    np.testing.assert_allclose([b["band"] for b in bands[:-1]], np.c_[iec["lower"][wide], iec["upper"][wide]],
+                               rtol=1e-12)
+    assert bands[-1]["band"] == pytest.approx([100.0, 9950.0], rel=1e-12)
     modes = [m["values"][0] for m in mesh[0]["mode_frequency"]]
     assert any(abs(p["values"][0] - modes[0]) < 0.05 * modes[0] for p in mesh[0]["psd_peak_frequency"])
     steps = summary["convergence"]["time_step_order"]  # one per mesh with three steps
