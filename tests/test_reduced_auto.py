@@ -10,17 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from reduced_setup import COARSE, RUN, coarse  # noqa: F401  (shared set-up; coarse is a fixture)
+
 ROOT = Path(__file__).resolve().parents[1]
-COARSE = ROOT / "configs/models/triboair_coarse.yaml"
-RUN = dict(mu=0.3, sliding_velocity=0.01, normal_load=5.0, sample_rate=51200.0, preload_time=2e-4, settle_time=0.0,
-           base_ramp_time=1e-4)
 
-
-@pytest.fixture(scope="module")
-def coarse():
-    from fivid.fe import load_model
-
-    return load_model(COARSE)
 
 
 def test_two_concurrent_simulations_build_the_basis_once(tmp_path):
