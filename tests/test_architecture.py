@@ -229,3 +229,63 @@ def test_spectra_have_one_home():
         for lineno, what in _scipy_welch_uses(path.read_text(encoding="utf-8")):
             bad.append(f"{path.relative_to(PKG.parent)}:{lineno}: {what} (use fivid.signal)")
     assert not bad, "spectral estimators outside fivid/signal/:\n" + "\n".join(bad)
+
+
+#: the most parameters a public function takes (issue 29 item 4): more travel as frozen dataclasses (the groups of
+#: fivid.solver.simulate, EnvelopeSpectrum, ...); the numba kernels (``_*kernels.py``) take arrays and scalars only
+MAX_PARAMETERS = 10
+
+
+def _parameter_counts(source: str) -> list[tuple[int, str, int]]:
+    """``(line, name, parameters)`` of every public function of a module's ``source``: a module-level function or a
+    method of a module-level class, neither named with a leading underscore (a public class's ``__init__`` counts:
+    it is the constructor's signature). Parameters are all of them (positional-only, positional, ``*args``,
+    keyword-only, ``**kwargs``) but a method's ``self``/``cls``."""
+    functions = (ast.FunctionDef, ast.AsyncFunctionDef)
+    found = []
+    for node in ast.parse(source).body:
+        if isinstance(node, functions):
+            members = [(node, node.name, False)]
+        elif isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+            members = [(f, f"{node.name}.{f.name}", True) for f in node.body if isinstance(f, functions)]
+        else:
+            continue
+        for f, name, method in members:
+            if f.name.startswith("_") and f.name != "__init__":
+                continue
+            a = f.args
+            names = [p.arg for p in a.posonlyargs + a.args + a.kwonlyargs]
+            names += [p.arg for p in (a.vararg, a.kwarg) if p is not None]
+            static = any(isinstance(d, ast.Name) and d.id == "staticmethod" for d in f.decorator_list)
+            if method and not static and names and names[0] in ("self", "cls"):
+                names = names[1:]
+            found.append((f.lineno, name, len(names)))
+    return found
+
+
+@pytest.mark.parametrize("source, counts", [
+    ("def f(a, b=1, *c, d, e=2, **f): pass\n", [6]),
+    ("def f(a, /, b, *, c): pass\nasync def g(x): pass\n", [3, 1]),
+    ("class A:\n    def __init__(self, a, b): pass\n    def m(self, x): pass\n    @classmethod\n"
+     "    def k(cls, y): pass\n    @staticmethod\n    def s(self, z): pass\n", [2, 1, 1, 2]),
+    ("def _private(" + ", ".join(f"a{i}" for i in range(20)) + "): pass\nclass _P:\n    def m(self, a): pass\n"
+     "class A:\n    def _m(self, a): pass\ndef outer():\n    def inner(a, b): pass\n", [0]),
+])
+def test_the_parameter_counter_counts_what_a_caller_passes(source, counts):
+    """The checker below is an oracle only if it counts every kind of parameter and skips exactly the private."""
+    assert [n for _, _, n in _parameter_counts(source)] == counts
+
+
+def test_public_functions_take_at_most_ten_parameters():
+    """No public function outside the numba kernel modules takes more than :data:`MAX_PARAMETERS` parameters:
+    related inputs travel together as frozen dataclasses (``simulate(model, condition, friction, *, schedule,
+    integration, output)``), not as long keyword lists passed from layer to layer."""
+    bad = []
+    for path, parts in _modules():
+        if parts[-1].startswith("_") and parts[-1].endswith("kernels"):
+            continue
+        for lineno, name, n in _parameter_counts(path.read_text(encoding="utf-8")):
+            if n > MAX_PARAMETERS:
+                bad.append(f"{path.relative_to(PKG.parent)}:{lineno}: {name} takes {n} parameters")
+    assert not bad, f"public functions with more than {MAX_PARAMETERS} parameters (group them in dataclasses):\n" + \
+        "\n".join(bad)

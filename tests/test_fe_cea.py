@@ -8,7 +8,13 @@ import scipy.sparse as sp
 
 from fivid.errors import FividError
 from fivid.fe import load_model
-from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis, complex_eigenvalue_sweep, project_on_modes
+from fivid.fe.cea import (
+    Linearisation,
+    cea_to_json,
+    complex_eigenvalue_analysis,
+    complex_eigenvalue_sweep,
+    project_on_modes,
+)
 from fivid.fe.contact import ContactLinearisation, linearise_contact
 from fivid.fe.modal import modal_analysis
 from fivid.verify import evaluate_case, select_cases
@@ -89,7 +95,8 @@ def test_contact_linearisation_of_the_rig_geometry():
 
 def test_rig_cea_at_zero_friction_equals_the_coupled_modal_analysis():
     model = load_model(COARSE)
-    ds = complex_eigenvalue_analysis(model, [0.0, 0.5], normal_load=LOAD, n_modes=10, damping=False)
+    ds = complex_eigenvalue_analysis(model, [0.0, 0.5], normal_load=LOAD, n_modes=10,
+                                     linearisation=Linearisation(damping=False))
     modes = modal_analysis(model, 10, include_contact=True, normal_load=LOAD)
     # the basis modes are eigenvectors of the mu = 0 system: only the dense solver's rounding separates them
     np.testing.assert_allclose(ds["frequency"].values[0], modes["frequency"].values, rtol=1e-9)
@@ -108,7 +115,8 @@ def test_rig_cea_at_zero_friction_equals_the_coupled_modal_analysis():
 def test_rig_mode_coupling_pairs_coalesce_at_their_critical_mu():
     model = load_model(COARSE)
     mu = np.linspace(0.0, 1.5, 31)
-    ds = complex_eigenvalue_analysis(model, mu, normal_load=LOAD, n_modes=20, damping=False)
+    ds = complex_eigenvalue_analysis(model, mu, normal_load=LOAD, n_modes=20,
+                                     linearisation=Linearisation(damping=False))
     crit = ds["critical_mu"].values
     unstable = np.flatnonzero(np.isfinite(crit))
     assert unstable.size >= 1  # the conservative rig flutters for some mu below 1.5 (mode coupling exists)

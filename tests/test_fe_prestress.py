@@ -200,11 +200,12 @@ def test_prestressed_cea_at_zero_friction_equals_the_prestressed_modal_analysis(
     from pathlib import Path
 
     from fivid.cli import main
-    from fivid.fe.cea import complex_eigenvalue_analysis
+    from fivid.fe.cea import Linearisation, complex_eigenvalue_analysis
 
     coarse = Path(__file__).resolve().parents[1] / "configs" / "models" / "triboair_coarse.yaml"
     model = load_model(coarse)
-    cea = complex_eigenvalue_analysis(model, [0.0, 0.5], normal_load=5.0, n_modes=6, damping=False, prestress=True)
+    cea = complex_eigenvalue_analysis(model, [0.0, 0.5], normal_load=5.0, n_modes=6,
+                                      linearisation=Linearisation(damping=False, prestress=True))
     modes = modal_analysis(model, 6, include_contact=True, normal_load=5.0, prestress=True)
     bare = modal_analysis(model, 6, include_contact=True, normal_load=5.0)
     np.testing.assert_allclose(cea["frequency"].values[0], modes["frequency"].values, rtol=1e-9)

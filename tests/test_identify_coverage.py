@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from synthetic_friction_runs import ANALYSIS_BAND, MU0, band_amplitude, band_fraction, run_grid, true_law
 
-from fivid.identify import identify_friction_law
+from fivid.identify import AmplitudeSettings, RunAnalysisSettings, identify_friction_law
 
 N_SEEDS = 50
 
@@ -28,7 +28,9 @@ def test_intervals_cover_the_truth_at_the_nominal_rate():
     n_runs = 0
     for seed in range(N_SEEDS):
         runs = run_grid(law, seed=100 + seed, velocities=(0.002, 0.005, 0.01, 0.02), duration=2.4)
-        res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048, categorical=True)
+        res = identify_friction_law(runs, band=ANALYSIS_BAND,
+                                    analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048),
+                                    amplitude=AmplitudeSettings(categorical=True))
         assert res.chosen.form != "constant"
         hits["mu0"] += res.mu0_ci[0] <= MU0 <= res.mu0_ci[1]
         for r in res.runs:
@@ -60,7 +62,8 @@ def test_power_law_intervals_cover_the_truth():
     for seed in range(n_seeds):
         runs = run_grid(law, seed=500 + seed, velocities=(0.002, 0.005, 0.02), roughnesses=(0.4e-6, 1.6e-6),
                         loads=(2.0, 8.0), duration=2.4)
-        res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+        res = identify_friction_law(runs, band=ANALYSIS_BAND,
+                                    analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
         pl = next(f for f in res.form_fits if f.form == "power_law")  # the load enters: the runs differ in load
         t = np.array([truth[n] for n in pl.model.names])
         hits += (pl.conf_int[:, 0] <= t) & (t <= pl.conf_int[:, 1])

@@ -15,7 +15,7 @@ import pytest
 from scipy import stats
 from synthetic_friction_runs import band_amplitude, edge_law, synthetic_run
 
-from fivid.identify import identify_friction_law
+from fivid.identify import AmplitudeSettings, RunAnalysisSettings, identify_friction_law
 from fivid.identify.runs import DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, mains_lines_resolved
 from fivid.signal.welch import default_nperseg
 
@@ -47,7 +47,7 @@ def _edge_runs(hum, offsets):
 ], ids=["weak-hum-tare", "strong-hum"])
 def test_default_identification_recovers_a(hum, offsets, tare):
     law, runs = _edge_runs(hum, offsets)
-    res = identify_friction_law(runs, tare=tare)  # the band, nperseg and mains removal at their defaults
+    res = identify_friction_law(runs, analysis=RunAnalysisSettings(tare=tare))  # the band, nperseg and mains removal at their defaults
     band = (DEFAULT_BAND_LOW, DEFAULT_BAND_HIGH)
     assert res.band == band and res.settings["welch"]["frequency_resolution"] <= 50.0 / 4
     used = res.used_runs
@@ -89,7 +89,7 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
 
     truth, generate = _twin_truth(Path(root))
     runs = [read_rig_csv(p) for p in sorted(glob.glob(str(Path(root) / "sample_data" / "twin" / "*.csv")))]
-    res = identify_friction_law(runs, categorical=True)
+    res = identify_friction_law(runs, amplitude=AmplitudeSettings(categorical=True))
     # the generating form (one line per roughness level) is asked for and its intervals checked: the
     # question here is the bias of A at the defaults. At 6 runs AICc does not support it (n - k - 1 = 0:
     # no AICc) nor any 3-coefficient law (correction +40): the chosen form is the constant, whose
@@ -112,7 +112,8 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
     # and suggests a tare inside the 20 ms unloaded pre-trigger
     hint = [m for m in res.messages if m.startswith("no tare given")]
     assert len(hint) == 1 and "tare=(0, 0.0151) s" in hint[0] and "up to 0.0036" in hint[0], res.messages
-    assert not any(m.startswith("no tare") for m in identify_friction_law(runs, tare=(0.0, 0.015)).messages)
+    assert not any(m.startswith("no tare") for m in identify_friction_law(runs,
+                                                                          analysis=RunAnalysisSettings(tare=(0.0, 0.015))).messages)
 
     # the engineer's command, `fivid identify *.nc -o law.nc`, gives the same law and records its settings
     import xarray as xr
@@ -142,7 +143,7 @@ def test_tare_must_be_an_unloaded_interval_of_the_record(tare, match):
 
     _, runs = _edge_runs((0.0, 0.0), (0.0, 0.0))
     with pytest.raises(FividError, match=match) as err:
-        identify_friction_law(runs[:2], tare=tare)
+        identify_friction_law(runs[:2], analysis=RunAnalysisSettings(tare=tare))
     assert "run 'E0'" in str(err.value)
 
 

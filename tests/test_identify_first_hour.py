@@ -12,7 +12,7 @@ from synthetic_friction_runs import ANALYSIS_BAND, MU0, band_amplitude, run_grid
 
 from fivid.cli import main
 from fivid.errors import DataQualityError
-from fivid.identify import identify_friction_law
+from fivid.identify import RunAnalysisSettings, identify_friction_law
 from fivid.identify.amplitude_fit import CV_ERROR_WARN, FormFit, constant_law_warning
 from fivid.signal import steady_force_window, steady_sliding_window
 
@@ -50,7 +50,7 @@ def test_force_window_lies_in_the_steady_part_and_matches_the_encoder(encoderles
 
 def test_identify_without_encoder_recovers_the_law(law, encoderless):
     runs = [_without_encoder(ds) for ds in encoderless]
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG))
     assert all(r.used and r.window_source.startswith("forces") for r in res.runs)
     for r in res.runs:
         truth = band_amplitude(law, r.sliding_velocity, r.roughness_ra, r.normal_load)
@@ -62,7 +62,8 @@ def test_identify_without_encoder_recovers_the_law(law, encoderless):
 
 def test_window_given_by_hand(law, encoderless):
     runs = [_without_encoder(ds) for ds in encoderless]
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, window=(1.0, 3.0))
+    res = identify_friction_law(runs, band=ANALYSIS_BAND,
+                                analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG, window=(1.0, 3.0)))
     for r in res.runs:
         assert r.window_source.startswith("given")
         assert r.t_start == pytest.approx(1.0, abs=1 / 25600) and r.t_stop == pytest.approx(3.0, abs=1 / 25600)
@@ -78,7 +79,8 @@ def test_no_window_from_forces_says_both_ways(encoderless):
     with pytest.raises(DataQualityError) as err:
         steady_force_window(ds)
     assert "--window T0 T1" in err.value.message and "'velocity' or 'position'" in err.value.message
-    res = identify_friction_law([ds, _without_encoder(encoderless[1])], band=ANALYSIS_BAND, nperseg=NPERSEG)
+    res = identify_friction_law([ds, _without_encoder(encoderless[1])], band=ANALYSIS_BAND,
+                                analysis=RunAnalysisSettings(nperseg=NPERSEG))
     assert "--window T0 T1" in res.runs[0].reason
 
 
@@ -102,7 +104,7 @@ def test_four_runs_constant_law_is_explained_and_flagged(law):
     """2 velocities x 2 roughnesses: the 3-coefficient forms have no AICc (k = 4 needs n >= 6), so the constant
     is the only form compared; the true amplitudes spread (0.002 + 0.25 V at 2 and 20 mm/s, 0.003 + 0.5 V)."""
     runs = run_grid(law, seed=5, velocities=(0.002, 0.02))
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG))
     assert res.law.amplitude_model.form == "constant"
     rows = {row["form"]: row for row in res.selection_table()}
     for form in ("power_law", "linear_velocity_power_law", "log_linear"):

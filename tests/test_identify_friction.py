@@ -13,7 +13,7 @@ from synthetic_friction_runs import ANALYSIS_BAND, MU0, band_amplitude, band_fra
 
 from fivid.errors import DataQualityError, FividError, SchemaError
 from fivid.friction import load_law
-from fivid.identify import identify_friction_law
+from fivid.identify import AmplitudeSettings, RunAnalysisSettings, ShapeSettings, identify_friction_law
 
 TARE = (0.0, 0.5)
 NPERSEG = 2048
@@ -33,7 +33,8 @@ def t95(df):
 def linear_case():
     law = true_law("linear_velocity")
     runs = run_grid(law, seed=3, velocities=(0.002, 0.005, 0.01, 0.02))
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, categorical=True)
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG),
+                                amplitude=AmplitudeSettings(categorical=True))
     return law, runs, res
 
 
@@ -70,7 +71,7 @@ def test_linear_law_chosen_and_coefficients_recovered(linear_case):
 def test_power_law_with_load_recovered():
     law = true_law("power_law_load")
     runs = run_grid(law, seed=5, velocities=(0.002, 0.005, 0.02), roughnesses=(0.4e-6, 1.6e-6), loads=(2.0, 8.0))
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG))
     forms = {f.form: f for f in res.form_fits}
     pl = forms["power_law"]  # the runs differ in load: the load enters the law
     assert pl.fitted and pl.model.terms == ("roughness_ra", "sliding_velocity", "normal_load")
@@ -106,8 +107,9 @@ def test_offsets_and_hum_matter():
     law = true_law()
     runs = [synthetic_run(law, velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=s, run_id=f"H{s}",
                           hum=(4e-2, 1.5e-2, 6e-3)) for s in range(2)]
-    good = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
-    raw = identify_friction_law(runs, band=ANALYSIS_BAND, nperseg=NPERSEG, mains_frequency=None)
+    good = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG))
+    raw = identify_friction_law(runs, band=ANALYSIS_BAND,
+                                analysis=RunAnalysisSettings(nperseg=NPERSEG, mains_frequency=None))
     truth = band_amplitude(law, 0.01, 0.4e-6, 5.0)
     for g, r in zip(good.runs, raw.runs):
         assert g.mains_bins_removed > 0
@@ -146,7 +148,7 @@ def test_law_file_round_trip_and_json(linear_case, tmp_path):
 def test_single_run_gives_per_run_results_and_says_no_law():
     law = true_law()
     run = synthetic_run(law, velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=1)
-    res = identify_friction_law([run], band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    res = identify_friction_law([run], band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG))
     assert not res.law_across_runs
     assert "no amplitude law across runs can be fitted" in res.why
     assert res.law.amplitude_model.form == "constant"
@@ -158,7 +160,8 @@ def test_all_runs_at_one_velocity():
     law = true_law()
     runs = [synthetic_run(law, velocity=0.01, roughness=ra, normal_load=5.0, seed=i, run_id=f"V{i}")
             for i, ra in enumerate((0.4e-6, 0.4e-6, 1.6e-6, 1.6e-6))]
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, categorical=True)
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG),
+                                amplitude=AmplitudeSettings(categorical=True))
     forms = {f.form: f for f in res.form_fits}
     assert not forms["linear_velocity"].fitted
     assert "all runs at one sliding velocity" in forms["linear_velocity_power_law"].reason
@@ -176,7 +179,8 @@ def test_unusable_runs_are_excluded_with_reasons():
     neg.attrs["normal_load"] = -5.0
     still = synthetic_run(law, velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=9, run_id="R")
     still["velocity"] = still["velocity"] * np.linspace(0, 2, still.sizes["time"])  # accelerating: no plateau
-    res = identify_friction_law(good + [zero, neg, still], band=ANALYSIS_BAND, nperseg=NPERSEG)
+    res = identify_friction_law(good + [zero, neg, still], band=ANALYSIS_BAND,
+                                analysis=RunAnalysisSettings(nperseg=NPERSEG))
     reasons = {r.run_id: r.reason for r in res.runs if not r.used}
     assert set(reasons) == {"Z", "N", "R"}
     assert reasons["Z"].startswith("normal force near zero")
@@ -185,11 +189,11 @@ def test_unusable_runs_are_excluded_with_reasons():
     assert sum(r.used for r in res.runs) == 2
     # a 2 s run has a steady window of ~1.15 s: shorter than two Welch segments of 16384 samples (0.64 s)
     short = synthetic_run(law, velocity=0.01, roughness=0.4e-6, normal_load=5.0, seed=10, run_id="S", duration=2.0)
-    res = identify_friction_law(good + [short], band=ANALYSIS_BAND, nperseg=16384)
+    res = identify_friction_law(good + [short], band=ANALYSIS_BAND, analysis=RunAnalysisSettings(nperseg=16384))
     assert [r.run_id for r in res.runs if not r.used] == ["S"]
     assert res.runs[-1].reason.startswith("steady window too short")
     with pytest.raises(DataQualityError, match="no usable run among 2"):
-        identify_friction_law([zero, neg], band=ANALYSIS_BAND, nperseg=NPERSEG)
+        identify_friction_law([zero, neg], band=ANALYSIS_BAND, analysis=RunAnalysisSettings(nperseg=NPERSEG))
 
 
 def test_bad_band_and_units():
@@ -210,13 +214,14 @@ def test_convected_spectra_collapse_at_the_reference_velocity():
     law = true_law(injection="convected")  # corner 1.5 kHz, order 2 at V_ref = 10 mm/s
     runs = [synthetic_run(law, velocity=v, roughness=0.4e-6, normal_load=5.0, seed=i, run_id=f"V{i}")
             for i, v in enumerate((0.005, 0.01, 0.02))]
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, injection="convected")
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG),
+                                injection="convected")
     assert res.law.reference_velocity == pytest.approx(0.01, rel=1e-12)  # geometric mean of the velocities
     p = res.shape.rolloff_params
     assert abs(p["corner_frequency"] - 1500.0) < Z * np.sqrt(2) * p["corner_frequency_stderr"]
     assert abs(p["order"] - 2.0) < Z * np.sqrt(2) * p["order_stderr"]
     # treated as uniform injection, the three corners (750, 1500, 3000 Hz) smear into a shallower shape
-    smeared = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG).shape.rolloff_params
+    smeared = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG)).shape.rolloff_params
     assert smeared["order"] < 2.0 - 10 * smeared["order_stderr"]
 
 
@@ -241,8 +246,9 @@ def test_force_chain_transfer_function_is_divided_out():
             for i, v in enumerate((0.005, 0.02))]
     f = np.linspace(0.0, 12800.0, 2049)
     tf = xr.DataArray(np.sqrt(h2(f)), dims="frequency", coords={"frequency": f})
-    res = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, transfer_function=tf)
-    raw = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG)
+    res = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG),
+                                transfer_function=tf)
+    raw = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG))
     for r, q in zip(res.runs, raw.runs):
         truth = band_amplitude(law, r.sliding_velocity, r.roughness_ra, r.normal_load)
         assert abs(r.mu_rms - truth) < Z * r.mu_rms_stderr, (r.mu_rms, truth, r.mu_rms_stderr)
@@ -251,8 +257,8 @@ def test_force_chain_transfer_function_is_divided_out():
 
 def test_rolloff_shape_and_ols_options(linear_case):
     law, runs, res = linear_case
-    alt = identify_friction_law(runs, band=ANALYSIS_BAND, tare=TARE, nperseg=NPERSEG, shape_method="rolloff",
-                                weighting="none")
+    alt = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG),
+                                shape=ShapeSettings(method="rolloff"), amplitude=AmplitudeSettings(weighting="none"))
     np.testing.assert_allclose(alt.law.shape, alt.shape.rolloff, rtol=1e-12)
     assert alt.settings["weighting"] == "none" and alt.settings["shape_method"] == "rolloff"
     # the law's PSD is the fitted roll-off itself (150 and 1500 Hz are Welch bins: no interpolation)
@@ -264,4 +270,4 @@ def test_rolloff_shape_and_ols_options(linear_case):
     # and the fitted corner is the true one: stderr ≈ 0.4 %, x sqrt(2) bin correlation, 99.9 % -> 2 %
     assert fc == pytest.approx(1500.0, rel=0.02)
     with pytest.raises(FividError, match="shape_method"):
-        identify_friction_law(runs[:2], band=ANALYSIS_BAND, shape_method="spline")
+        identify_friction_law(runs[:2], band=ANALYSIS_BAND, shape=ShapeSettings(method="spline"))

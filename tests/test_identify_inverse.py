@@ -63,10 +63,11 @@ def test_identified_law_file_drives_the_fe_solver(tmp_path):
 
     from fivid.fe import load_model
     from fivid.friction import load_law
-    from fivid.identify import identify_friction_law
+    from fivid.identify import RunAnalysisSettings, identify_friction_law
     from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
-    res = identify_friction_law(run_grid(true_law(), seed=2), band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    res = identify_friction_law(run_grid(true_law(), seed=2), band=ANALYSIS_BAND,
+                                analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
     law = load_law(res.write(tmp_path / "law.nc"))
     model = load_model(Path(__file__).resolve().parents[1] / "configs" / "models" / "triboair_coarse.yaml")
     sim = simulate(model, OperatingCondition(0.01, 5.0, 0.4e-6), FrictionInput(law=law, seed=1),

@@ -9,7 +9,7 @@ import pytest
 from synthetic_friction_runs import ANALYSIS_BAND, TWIN_MU0, band_amplitude, run_grid, synthetic_run, twin_law
 
 from fivid.friction import predict_amplitude
-from fivid.identify import identify_friction_law
+from fivid.identify import RunAnalysisSettings, identify_friction_law
 from fivid.identify.glitches import glitch_mask
 
 GRID = dict(velocities=(0.0025, 0.005, 0.01, 0.02), roughnesses=(0.5e-6, 2e-6), duration=2.4)
@@ -20,7 +20,7 @@ Z = 3.29  # two-sided 99.9 % normal quantile
 def measured_style():
     law = twin_law()
     dirty = run_grid(law, seed=19, drift=0.004, glitches=6, mains=50.0, **GRID)
-    res = identify_friction_law(dirty, band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    res = identify_friction_law(dirty, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
     return law, res
 
 
@@ -58,9 +58,11 @@ def test_glitches_do_not_change_the_amplitude():
     samples are 0.05 % of the record); without the replacement one spike alone makes A several times larger."""
     law = twin_law()
     kw = dict(velocity=0.005, roughness=0.5e-6, normal_load=5.0, seed=21, duration=2.4)
-    clean = identify_friction_law([synthetic_run(law, **kw)], band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    clean = identify_friction_law([synthetic_run(law, **kw)], band=ANALYSIS_BAND,
+                                  analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
     dirty_ds = synthetic_run(law, glitches=9, **kw)
-    dirty = identify_friction_law([dirty_ds], band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    dirty = identify_friction_law([dirty_ds], band=ANALYSIS_BAND,
+                                  analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
     a0, a1 = clean.runs[0], dirty.runs[0]
     assert abs(a1.mu_rms - a0.mu_rms) < Z * a0.mu_rms_stderr, (a0.mu_rms, a1.mu_rms, a0.mu_rms_stderr)
     # every injected spike is found (|spike| >= 2 N against a ~mN residual scale)

@@ -17,7 +17,7 @@ import pytest
 import xarray as xr
 
 from fivid.errors import DataQualityError
-from fivid.identify import identify_friction_law
+from fivid.identify import RunAnalysisSettings, identify_friction_law
 from fivid.identify.runs import batch_means_interval, mains_line_bins
 from fivid.schema import apply_cf_attrs, new_history
 from fivid.signal import welch_psd
@@ -62,7 +62,7 @@ def runs(request):
 
 def test_sinusoidal_motion_is_not_steady_sliding(runs):
     with pytest.raises(DataQualityError, match="no usable run among 3") as info:
-        identify_friction_law(runs, band=(10.0, 200.0), mains_frequency=60.0)
+        identify_friction_law(runs, band=(10.0, 200.0), analysis=RunAnalysisSettings(mains_frequency=60.0))
     assert str(info.value).count("not in steady sliding") == 3
 
 

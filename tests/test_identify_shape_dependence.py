@@ -12,7 +12,7 @@ import pytest
 from synthetic_friction_runs import ANALYSIS_BAND, band_fraction, run_grid, twin_law
 
 from fivid.friction import load_law
-from fivid.identify import identify_friction_law
+from fivid.identify import RunAnalysisSettings, identify_friction_law
 from fivid.identify.shape import shape_dependence
 
 GRID = dict(velocities=(0.0025, 0.005, 0.01, 0.02), roughnesses=(0.5e-6, 2e-6), duration=2.4)
@@ -22,7 +22,8 @@ GRID = dict(velocities=(0.0025, 0.005, 0.01, 0.02), roughnesses=(0.5e-6, 2e-6), 
 def convected():
     law = twin_law("convected")
     runs = run_grid(law, seed=17, **GRID)
-    return law, identify_friction_law(runs, band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    return law, identify_friction_law(runs, band=ANALYSIS_BAND,
+                                      analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
 
 
 def test_velocity_dependent_shape_is_found_and_stored(convected, tmp_path):
@@ -49,7 +50,8 @@ def test_velocity_dependent_shape_is_found_and_stored(convected, tmp_path):
 
 def test_constant_shape_is_not_split(convected):
     law = twin_law()
-    res = identify_friction_law(run_grid(law, seed=18, **GRID), band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
+    res = identify_friction_law(run_grid(law, seed=18, **GRID), band=ANALYSIS_BAND,
+                                analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048))
     assert res.shape_test["depends"] is False and res.shape_test["p_value"] >= 0.01
     assert res.law.condition_shapes is None
     # the same runs' statistics, tested directly, say the same

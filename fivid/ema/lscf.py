@@ -29,7 +29,7 @@ import numpy as np
 
 from fivid.errors import FividError
 
-__all__ = ["StabilisationDiagram", "EMAResult", "identify_modes"]
+__all__ = ["StabilisationDiagram", "EMAResult", "StabilityCriteria", "identify_modes"]
 
 log = logging.getLogger("fivid")
 
@@ -94,9 +94,30 @@ class EMAResult:
     settings: dict
 
 
+@dataclass(frozen=True)
+class StabilityCriteria:
+    """When a pole of the stabilisation diagram is a stable physical mode.
+
+    Attributes
+    ----------
+    frequency_tolerance, damping_tolerance : float
+        Relative change [-] of a pole's frequency and damping ratio from one model order to the next (default
+        0.005 and 0.1).
+    max_damping : float
+        Poles with a larger damping ratio [-] are not physical modes here (default 0.2).
+    min_fraction : float
+        Without a number of modes: fraction [-] of the model orders a mode must be stable at (default 0.3).
+    """
+
+    frequency_tolerance: float = 0.005
+    damping_tolerance: float = 0.1
+    max_damping: float = 0.2
+    min_fraction: float = 0.3
+
+
 def identify_modes(frequency, frf, *, band=None, n_modes: int | None = None, max_order: int = 40,
-                   form: str = "receptance", driving_point: int | None = None, frequency_tolerance: float = 0.005,
-                   damping_tolerance: float = 0.1, max_damping: float = 0.2, min_fraction: float = 0.3) -> EMAResult:
+                   form: str = "receptance", driving_point: int | None = None,
+                   stability: StabilityCriteria = StabilityCriteria()) -> EMAResult:
     """Identify modes from FRFs of one reference (SIMO) by LSCF + LSFD (see the module docstring).
 
     Parameters
@@ -115,12 +136,9 @@ def identify_modes(frequency, frf, *, band=None, n_modes: int | None = None, max
         What the FRFs are (displacement, velocity or acceleration per force).
     driving_point : int, optional
         Index of the DOF measured at the reference (scales the shapes).
-    frequency_tolerance, damping_tolerance : float
-        Relative stability tolerances.
-    max_damping : float
-        Poles with more damping are not physical modes here.
-    min_fraction : float
-        Without ``n_modes``: fraction of the orders a mode must be stable at.
+    stability : StabilityCriteria
+        Relative stability tolerances of frequency and damping, the largest damping ratio of a physical mode and,
+        without ``n_modes``, the fraction of the orders a mode must be stable at.
 
     Returns
     -------
@@ -132,6 +150,8 @@ def identify_modes(frequency, frf, *, band=None, n_modes: int | None = None, max
         raise FividError("experimental modal analysis needs the sdypy-ema package, which is not installed: "
                          "pip install 'fivid[ema]' (or pip install sdypy-ema)") from None
 
+    frequency_tolerance, damping_tolerance = stability.frequency_tolerance, stability.damping_tolerance
+    max_damping, min_fraction = stability.max_damping, stability.min_fraction
     f = np.asarray(frequency, dtype=float)
     h = np.atleast_2d(np.asarray(frf, dtype=complex))
     if h.shape[1] != f.size:

@@ -20,13 +20,14 @@ the crossing).
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 
 import numpy as np
 
 from fivid.errors import ConfigError
 
-__all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "complex_eigenvalue_analysis",
-           "cea_to_json"]
+__all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "Linearisation",
+           "complex_eigenvalue_analysis", "cea_to_json"]
 
 log = logging.getLogger("fivid")
 
@@ -236,10 +237,31 @@ def _refine_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -
     return float(brentq(excess, a, b, xtol=rtol * max(abs(b), 1.0), rtol=4 * np.finfo(float).eps))
 
 
+@dataclass(frozen=True)
+class Linearisation:
+    """What the linearised system of a CEA includes.
+
+    Attributes
+    ----------
+    damping : bool
+        Rayleigh damping and dashpots (default True; False: the conservative system, pure mode coupling).
+    prestress : bool
+        The initial-stress stiffness ``K_sigma`` of the preload solve's static state added to ``K``
+        (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form; the Rayleigh ``beta K`` damping
+        keeps the elastic ``K``; default False).
+    augment : bool
+        The static responses to unit normal and tangential loads at the contact nodes added to the modal basis
+        (see :func:`project_on_modes`; default True).
+    """
+
+    damping: bool = True
+    prestress: bool = False
+    augment: bool = True
+
+
 def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, n_modes: int = 20,
-                                n_basis: int | None = None, damping: bool = True, augment: bool = True,
-                                velocities: dict | None = None, refine: bool = True, progress=None,
-                                prestress: bool = False):
+                                n_basis: int | None = None, linearisation: Linearisation = Linearisation(),
+                                velocities: dict | None = None, refine: bool = True, progress=None):
     """CEA of ``model`` over the friction coefficients ``mu``.
 
     Parameters
@@ -257,21 +279,15 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     n_basis : int, optional
         Size of the modal basis (default ``max(3 * n_modes, 40)``); modes near the top of the basis
         are affected by truncation, so it is larger than ``n_modes``.
-    damping : bool
-        Include Rayleigh damping and dashpots (``False``: the conservative system, pure mode coupling).
-    augment : bool
-        Add the static responses to unit normal and tangential loads at the contact nodes to the modal basis
-        (see :func:`project_on_modes`); ``n_basis`` counts the modes only.
+    linearisation : Linearisation
+        Damping, prestress (``K_sigma``) and the augmentation of the modal basis by the static contact responses
+        (``n_basis`` counts the modes only).
     velocities : dict, optional
         Body name -> rigid velocity [m s-1] overriding the base motion for the sliding direction.
     refine : bool
         Refine each critical μ by root finding (otherwise linear interpolation on the sweep).
     progress : callable, optional
         Called with 1 after each μ point (e.g. ``tqdm.update``).
-    prestress : bool
-        Linearise about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the preload
-        solve's static state to ``K`` (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form;
-        the Rayleigh ``beta K`` damping keeps the elastic ``K``).
 
     Returns
     -------
@@ -285,6 +301,7 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     from fivid.fe.contact import linearise_preloaded_contact
     from fivid.fe.modal import constrained_matrices
 
+    damping, prestress, augment = linearisation.damping, linearisation.prestress, linearisation.augment
     if not model.contacts:
         raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
     contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)

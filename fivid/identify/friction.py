@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -28,7 +28,8 @@ from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RU
                                   RunAnalysisSettings, analyse_run)
 from fivid.identify.shape import SpectralShape, identify_shape, shape_dependence
 
-__all__ = ["FrictionIdentification", "identify_friction_law", "load_runs", "SHAPE_METHODS"]
+__all__ = ["FrictionIdentification", "identify_friction_law", "ShapeSettings", "AmplitudeSettings",
+           "identification_arguments", "load_runs", "SHAPE_METHODS"]
 
 SHAPE_METHODS = ("smoothed", "rolloff")
 _log = logging.getLogger("fivid")
@@ -397,29 +398,78 @@ def _mu0_interval(used, confidence):
     return float(means.mean()), (float(means.mean() - half), float(means.mean() + half))
 
 
-def identify_friction_law(
-    runs,
-    *,
-    band=None,
-    nperseg: int | None = None,
-    tolerance: float = 0.05,
-    min_normal_force: float = 0.1,
-    tare=None,
-    window=None,
-    mains_frequency: float | None = 50.0,
-    noise_correction: bool = True,
-    glitch_repair: bool | None = None,
-    transfer_function=None,
-    shape_method: str = "smoothed",
-    smoothing_octaves: float = 1.0 / 6.0,
-    forms=None,
-    interaction: bool = False,
-    categorical: bool = False,
-    weighting: str = "estimator",
-    injection: str = "uniform",
-    confidence: float = 0.95,
-    allow_implausible: bool = False,
-) -> FrictionIdentification:
+@dataclass(frozen=True)
+class ShapeSettings:
+    """How the perturbation's spectral shape s(f) is estimated.
+
+    Attributes
+    ----------
+    method : {"smoothed", "rolloff"}
+        Which shape goes into the law (both are in the law file; default smoothed).
+    smoothing_octaves : float
+        Width of the log-frequency smoothing [octaves] (default 1/6).
+    """
+
+    method: str = "smoothed"
+    smoothing_octaves: float = 1.0 / 6.0
+
+
+@dataclass(frozen=True)
+class AmplitudeSettings:
+    """Which amplitude laws A(V, Ra, Fn) are fitted across the runs, and how.
+
+    Attributes
+    ----------
+    forms : sequence of str or None
+        Candidate amplitude forms; None: :func:`fivid.identify.amplitude_fit.candidate_forms`: the forms continuous
+        in V, Ra and Fn, plus the following two on request.
+    interaction : bool
+        Also the power law with an Ra × V interaction (default False).
+    categorical : bool
+        Also the categorical forms (one line in V per roughness level; they refuse an Ra between levels).
+    weighting : {"estimator", "none"}
+        WLS with the per-run estimator variances as relative weights (default), or OLS.
+    """
+
+    forms: tuple[str, ...] | None = None
+    interaction: bool = False
+    categorical: bool = False
+    weighting: str = "estimator"
+
+
+#: where each flat setting of the ``identify:`` section of a run configuration (and of ``fivid identify``'s options)
+#: goes among the arguments of :func:`identify_friction_law`
+_SETTING_GROUPS = {
+    **{k: ("analysis", k) for k in ("nperseg", "tolerance", "min_normal_force", "tare", "window", "mains_frequency",
+                                    "noise_correction", "glitch_repair", "confidence", "allow_implausible")},
+    "shape_method": ("shape", "method"), "smoothing_octaves": ("shape", "smoothing_octaves"),
+    **{k: ("amplitude", k) for k in ("forms", "interaction", "categorical", "weighting")},
+    **{k: (None, k) for k in ("band", "transfer_function", "injection")},
+}
+
+
+def identification_arguments(settings: dict) -> dict:
+    """The keyword arguments of :func:`identify_friction_law` from flat ``settings`` (the keys of a run
+    configuration's ``identify:`` section: ``band``, ``tare``, ``nperseg``, ``shape_method``, ``forms``,
+    ``injection`` ...; see :data:`_SETTING_GROUPS`); an unknown key is a ConfigError naming it."""
+    unknown = sorted(set(settings) - set(_SETTING_GROUPS))
+    if unknown:
+        raise ConfigError(f"unknown identification setting(s) {', '.join(unknown)}; allowed: "
+                          f"{', '.join(sorted(_SETTING_GROUPS))}", key=unknown[0])
+    groups: dict = {"analysis": {}, "shape": {}, "amplitude": {}}
+    out = {}
+    for key, value in settings.items():
+        group, name = _SETTING_GROUPS[key]
+        (out if group is None else groups[group])[name] = value
+    kinds = {"analysis": RunAnalysisSettings, "shape": ShapeSettings, "amplitude": AmplitudeSettings}
+    out.update({g: kinds[g](**kw) for g, kw in groups.items() if kw})
+    return out
+
+
+def identify_friction_law(runs, *, band=None, analysis: RunAnalysisSettings = RunAnalysisSettings(),
+                          transfer_function=None, shape: ShapeSettings = ShapeSettings(),
+                          amplitude: AmplitudeSettings = AmplitudeSettings(),
+                          injection: str = "uniform") -> FrictionIdentification:
     """Identify μ0, the perturbation spectrum and the amplitude law from measured runs.
 
     Parameters
@@ -429,50 +479,37 @@ def identify_friction_law(
     band : (float, float), optional
         Valid band [Hz]; default 20 Hz to min(2 kHz, 0.4 fs) — set it to where the force chain
         is dynamic-free (or give ``transfer_function``).
-    nperseg : int, optional
-        Welch segment length [samples]; default per run :func:`fivid.identify.runs.default_nperseg`:
-        bins of at most mains/4 (12.5 Hz at 50 Hz) so that mains-line removal takes only the lines,
-        within ≥ 7 segments, else the coarser rule of ≥ 31 segments (lines then left in, with a
-        message). The segment length of every run is in the law file (``run_nperseg``).
-    tolerance : float, default 0.05
-        Relative velocity tolerance of the steady-sliding window [-].
-    min_normal_force : float, default 0.1
-        Runs with a mean normal force below this on the window are excluded [N].
-    tare : (float, float), optional
-        Unloaded interval [s] whose mean forces are subtracted (force-sensor offsets).
-    window : (float, float), optional
-        Steady-sliding window [s] for every run; default from each run's encoder signal (``velocity`` or
-        ``position``), or from its forces when it has neither (:func:`fivid.signal.steady_force_window`).
-    mains_frequency : float or None, default 50.0
-        Mains harmonics standing out of the PSD are interpolated over [Hz], in runs whose Welch bins
-        are <= mains/4 (else left in, with a message); None disables.
-    noise_correction : bool, default True
-        With ``tare``, subtract the sensor-noise PSD measured on the unloaded interval.
-    glitch_repair : bool or None, default None
-        Replace force-channel DAQ glitches before the analysis; None: on for measured runs, off for simulated
-        ones (:class:`fivid.identify.runs.RunAnalysisSettings`).
+    analysis : RunAnalysisSettings
+        The per-run analysis, recorded in the law file (:class:`fivid.identify.runs.RunAnalysisSettings`):
+
+        - ``nperseg``: Welch segment length [samples]; None: per run :func:`fivid.identify.runs.default_nperseg`,
+          bins of at most mains/4 (12.5 Hz at 50 Hz) so that mains-line removal takes only the lines, within ≥ 7
+          segments, else the coarser rule of ≥ 31 segments (lines then left in, with a message); every run's is
+          in the law file (``run_nperseg``);
+        - ``tolerance``: relative velocity tolerance of the steady-sliding window [-] (0.05);
+        - ``min_normal_force``: runs with a mean normal force below this on the window are excluded [N] (0.1);
+        - ``tare``: unloaded interval [s] whose mean forces are subtracted (force-sensor offsets);
+        - ``window``: steady-sliding window [s] for every run; None: from each run's encoder signal
+          (``velocity`` or ``position``), or from its forces when it has neither
+          (:func:`fivid.signal.steady_force_window`);
+        - ``mains_frequency``: mains harmonics standing out of the PSD are interpolated over [Hz] (50), in runs
+          whose Welch bins are <= mains/4 (else left in, with a message); None disables;
+        - ``noise_correction``: with ``tare``, subtract the sensor-noise PSD measured on the unloaded interval;
+        - ``glitch_repair``: replace force-channel DAQ glitches first; None: on for measured runs, off for
+          simulated ones;
+        - ``confidence``: level of every interval (0.95);
+        - ``allow_implausible``: identify from runs whose mean Ft/Fn is beyond +-2 (an error otherwise: a swapped
+          column or unit, and a sign that would be lost).
     transfer_function : xarray.DataArray, optional
         Force-chain transfer function on dim ``frequency`` [Hz]; the μp PSD is divided by ``|H|^2``.
-    shape_method : {"smoothed", "rolloff"}
-        Which shape goes into the law (both are in the law file).
-    smoothing_octaves : float, default 1/6
-        Width of the log-frequency smoothing [octaves].
-    forms : sequence of str, optional
-        Candidate amplitude forms; default :func:`fivid.identify.amplitude_fit.candidate_forms`: the forms
-        continuous in V, Ra and Fn, plus the following two on request.
-    interaction : bool, default False
-        Also the power law with an Ra × V interaction.
-    categorical : bool, default False
-        Also the categorical forms (one line in V per roughness level; they refuse an Ra between levels).
-    weighting : {"estimator", "none"}
-        WLS with the per-run estimator variances as relative weights (default), or OLS.
+    shape : ShapeSettings
+        Which shape goes into the law (``method``: smoothed or roll-off) and the width of the log-frequency
+        smoothing [octaves].
+    amplitude : AmplitudeSettings
+        The candidate amplitude forms (default: those continuous in V, Ra and Fn; the interaction and categorical
+        forms on request) and the weighting of the fit (estimator variances or none).
     injection : {"uniform", "per_node", "convected"}
         Injection mode written into the law.
-    confidence : float, default 0.95
-        Level of every interval.
-    allow_implausible : bool, default False
-        Identify from runs whose mean Ft/Fn is beyond +-2 (an error otherwise: a swapped column or unit,
-        and a sign that would be lost); recorded in the law file's settings.
 
     Returns
     -------
@@ -489,6 +526,9 @@ def identify_friction_law(
     """
     from fivid.friction.laws import INJECTION_MODES
 
+    shape_method, smoothing_octaves = shape.method, shape.smoothing_octaves
+    forms, interaction, categorical = amplitude.forms, amplitude.interaction, amplitude.categorical
+    weighting, confidence, tare = amplitude.weighting, analysis.confidence, analysis.tare
     if shape_method not in SHAPE_METHODS:
         raise FividError(f"shape_method {shape_method!r} is not one of {', '.join(SHAPE_METHODS)}")
     if injection not in INJECTION_MODES:
@@ -499,11 +539,10 @@ def identify_friction_law(
     if not datasets:
         raise FividError("no runs given")
     band = _check_band(band, datasets)
-    settings = RunAnalysisSettings(nperseg=nperseg, tolerance=tolerance, min_normal_force=min_normal_force,
-                           tare=None if tare is None else tuple(float(x) for x in tare),
-                           window=None if window is None else tuple(float(x) for x in window),
-                           mains_frequency=mains_frequency, noise_correction=noise_correction, confidence=confidence,
-                           glitch_repair=glitch_repair, allow_implausible=bool(allow_implausible))
+    window = analysis.window
+    settings = replace(analysis, tare=None if tare is None else tuple(float(x) for x in tare),
+                       window=None if window is None else tuple(float(x) for x in window),
+                       allow_implausible=bool(analysis.allow_implausible))
     analyses: list[RunAnalysis] = [analyse_run(ds, settings, band=band, transfer_function=transfer_function)
                                    for ds in datasets]
     used = [r for r in analyses if r.used]
@@ -581,7 +620,7 @@ def identify_friction_law(
         "transfer_function": "none" if transfer_function is None else "given",
         "shape_method": shape_method, "smoothing_octaves": smoothing_octaves, "forms": ",".join(forms),
         "weighting": weighting, "injection": injection, "confidence": confidence,
-        "nperseg_rule": "given" if nperseg else NPERSEG_RULE,
+        "nperseg_rule": "given" if analysis.nperseg else NPERSEG_RULE,
         "welch": dict(used[0].psd_attrs),
     }
     return FrictionIdentification(

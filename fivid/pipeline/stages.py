@@ -135,7 +135,7 @@ class Identify:
                      {"law": str(ctx.out / "law.nc"), "json": str(ctx.out / "law.json")})]
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.identify import identify_friction_law
+        from fivid.identify import identification_arguments, identify_friction_law
         from fivid.io import read_run
         from fivid.storage import write_json
 
@@ -143,7 +143,7 @@ class Identify:
 
         def work():
             runs = [read_run(r["path"]) for _, r in sorted(ctx.data["runs"].items())]
-            result = identify_friction_law(runs, **ctx.config.identify)
+            result = identify_friction_law(runs, **identification_arguments(ctx.config.identify))
             result.write(task.outputs["law"], overwrite=True)
             write_json(task.outputs["json"], result.to_json())
         _timed(ctx, task, work)

@@ -8,6 +8,8 @@ probability ``confidence`` (:mod:`fivid.score.uncertainty`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from fivid.errors import ConfigError, SchemaError, UnitError
@@ -29,7 +31,7 @@ from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, check
 from fivid.signal.steady import steady_part
 from fivid.signal.welch import NPERSEG_RULE, default_nperseg, welch_psd
 
-__all__ = ["score_runs"]
+__all__ = ["score_runs", "WelchOptions", "PeakMatching"]
 
 _DB = 10.0 / np.log(10.0)
 # Default band: from 4 bins (below, the Hann leakage of the removed mean and of drifts dominates) to
@@ -81,9 +83,50 @@ def _band(band, fs: float, nperseg: int, labels_rates) -> tuple[float, float]:
     return f_lo, f_hi
 
 
-def score_runs(measured, simulated, *, variable="acceleration", band=None, nperseg=None, noverlap=None,
-               window="hann", detrend="constant", sensor=None, steady=False, confidence=0.95,
-               peak_prominence_db=None, peak_match_tolerance=0.2, max_peaks=10, backend=None):
+@dataclass(frozen=True)
+class WelchOptions:
+    """The Welch settings of the scores besides the segment length (:func:`fivid.signal.welch_psd`).
+
+    Attributes
+    ----------
+    noverlap : int or None
+        Overlap of consecutive segments [samples]; None: 50 %.
+    window : str
+        Taper (default Hann).
+    detrend : {"constant", "linear", "none"}
+        Per-segment detrending (default constant).
+    backend : {"pyfftw", "numpy"} or None
+        FFT implementation (None: pyfftw when available).
+    """
+
+    noverlap: int | None = None
+    window: str = "hann"
+    detrend: str = "constant"
+    backend: str | None = None
+
+
+@dataclass(frozen=True)
+class PeakMatching:
+    """How the peaks of the two PSDs are found and paired.
+
+    Attributes
+    ----------
+    prominence_db : float or None
+        Prominence of peaks on the log-PSD [dB]; None: ``max(3, 6 σ)`` with σ the standard deviation of one
+        estimate's log-PSD, so that noise seldom makes a peak.
+    match_tolerance : float
+        A simulated peak matches a measured one within this relative frequency distance [-] (default 0.2).
+    max_peaks : int
+        Most prominent measured peaks to match (default 10).
+    """
+
+    prominence_db: float | None = None
+    match_tolerance: float = 0.2
+    max_peaks: int = 10
+
+
+def score_runs(measured, simulated, *, variable="acceleration", band=None, nperseg=None, sensor=None, steady=False,
+               confidence=0.95, welch: WelchOptions = WelchOptions(), peak_matching: PeakMatching = PeakMatching()):
     """PSD scores of a simulated run against a measured one over a frequency band.
 
     Parameters
@@ -99,8 +142,6 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
         Welch segment length [samples] at the common rate; default
         :func:`fivid.signal.welch.default_nperseg` of the shorter record at the common rate (the same for
         both runs). The scores' attrs ``nperseg`` and ``nperseg_rule`` say which was used.
-    noverlap, window, detrend, backend
-        Welch settings (:func:`fivid.signal.welch_psd`); default 50 % overlap, Hann, constant detrend.
     sensor : str, optional
         Which sensor when ``variable`` has a ``sensor`` dimension with several.
     steady : bool, default False
@@ -108,13 +149,11 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
         steady-sliding window, a simulated run to ``time >= transient_end``).
     confidence : float, default 0.95
         Probability that scores of two estimates of the same spectrum stay under their thresholds.
-    peak_prominence_db : float, optional
-        Prominence of peaks on the log-PSD [dB]; default ``max(3, 6 σ)`` with σ the standard deviation of
-        one estimate's log-PSD, so that noise seldom makes a peak.
-    peak_match_tolerance : float, default 0.2
-        A simulated peak matches a measured one within this relative frequency distance [-].
-    max_peaks : int, default 10
-        Most prominent measured peaks to match.
+    welch : WelchOptions
+        The other Welch settings (:func:`fivid.signal.welch_psd`); default 50 % overlap, Hann, constant detrend.
+    peak_matching : PeakMatching
+        Peak prominence [dB] (default from the estimator's spread), relative frequency tolerance of a match [-] and
+        the most measured peaks matched.
 
     Returns
     -------
@@ -136,6 +175,9 @@ def score_runs(measured, simulated, *, variable="acceleration", band=None, npers
     """
     from scipy.stats import norm
 
+    noverlap, window, detrend, backend = welch.noverlap, welch.window, welch.detrend, welch.backend
+    peak_prominence_db, peak_match_tolerance = peak_matching.prominence_db, peak_matching.match_tolerance
+    max_peaks = peak_matching.max_peaks
     nperseg_given = nperseg is not None
     if nperseg_given:
         nperseg = check_nperseg(nperseg)

@@ -62,7 +62,7 @@ def run(args) -> int:
     """Handler of ``fivid cea``."""
     from fivid.errors import ConfigError
     from fivid.fe import load_model
-    from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
+    from fivid.fe.cea import Linearisation, cea_to_json, complex_eigenvalue_analysis
     from fivid.pipeline.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
@@ -83,9 +83,9 @@ def run(args) -> int:
 
     # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
     with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
-        ds = complex_eigenvalue_analysis(model, mu, normal_load=load, n_modes=args.n_modes, n_basis=args.basis,
-                                         damping=not args.no_damping, progress=bar.update,
-                                         prestress=bool(args.prestress))
+        ds = complex_eigenvalue_analysis(
+            model, mu, normal_load=load, n_modes=args.n_modes, n_basis=args.basis, progress=bar.update,
+            linearisation=Linearisation(damping=not args.no_damping, prestress=bool(args.prestress)))
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
     result = cea_to_json(ds)

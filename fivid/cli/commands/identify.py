@@ -82,7 +82,7 @@ def register(subparsers) -> None:
 def _run(args) -> int:
     import logging
 
-    from fivid.identify import identify_friction_law
+    from fivid.identify import AmplitudeSettings, RunAnalysisSettings, ShapeSettings, identify_friction_law
     from fivid.identify.friction import load_runs
     from fivid.storage import check_writable, dumps_json, write_text
 
@@ -101,18 +101,14 @@ def _run(args) -> int:
     result = identify_friction_law(
         datasets,
         band=args.band,
-        nperseg=args.nperseg,
-        tolerance=args.tolerance,
-        min_normal_force=args.min_normal_force,
-        tare=args.tare,
-        window=args.window,
-        mains_frequency=args.mains_frequency or None,
-        shape_method=args.shape,
+        analysis=RunAnalysisSettings(nperseg=args.nperseg, tolerance=args.tolerance,
+                                     min_normal_force=args.min_normal_force, tare=args.tare, window=args.window,
+                                     mains_frequency=args.mains_frequency or None,
+                                     allow_implausible=args.allow_implausible),
+        shape=ShapeSettings(method=args.shape),
+        amplitude=AmplitudeSettings(weighting=args.weighting, interaction=args.interaction,
+                                    categorical=args.categorical),
         injection=args.injection,
-        weighting=args.weighting,
-        interaction=args.interaction,
-        categorical=args.categorical,
-        allow_implausible=args.allow_implausible,
     )
     report = result.to_json()
     damping = None

@@ -7,7 +7,7 @@ import xarray as xr
 from scipy import stats
 
 from fivid.friction import AmplitudeModel, PerturbedCoulombLaw
-from fivid.identify import identify_friction_law
+from fivid.identify import RunAnalysisSettings, identify_friction_law
 from fivid.schema import apply_cf_attrs, new_history, validate_run
 from fivid.verify.case import Case, Curve, Outcome, Plot
 
@@ -69,7 +69,8 @@ def _compute(quick: bool, data) -> Outcome:
     law = known_law()
     velocities = (0.002, 0.005, 0.01, 0.02) if quick else (0.002, 0.004, 0.007, 0.01, 0.014, 0.02)
     runs = synthetic_runs(law, velocities, seed=3)
-    res = identify_friction_law(runs, band=BAND, tare=(0.0, 0.5), nperseg=2048, mains_frequency=None)
+    res = identify_friction_law(runs, band=BAND,
+                                analysis=RunAnalysisSettings(tare=(0.0, 0.5), nperseg=2048, mains_frequency=None))
     n = len(runs)
     se = (res.mu0_ci[1] - res.mu0_ci[0]) / 2 / stats.t.ppf(0.975, n - 1)  # the t interval on n - 1 dof
     v = np.array([r.sliding_velocity for r in res.runs])
