@@ -299,12 +299,14 @@ def _mapped_blocks(kw, duration, rounds, c_rect, bare):
     """Mapped blocks: a curved (annular, periodic) and a rough-edged (profiled, graded, contact) model, and the rough
     one without its contact pair, each against the bare rectangular stencil (:func:`_mapped_fraction`)."""
     from fivid.fe import load_model
+    from fivid.solver import FrictionInput, OperatingCondition
 
     out = {}
-    for key, path, extra in (("curved", "configs/models/ring_pressure.yaml", {"sliding_velocity": None}),
-                             ("rough", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03}),
-                             ("rough_no_contact", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03})):
-        mkw = dict(kw, normal_load=None, mu=None, **extra)
+    for key, path, velocity in (("curved", "configs/models/ring_pressure.yaml", None),
+                                ("rough", "configs/models/rough_pair.yaml", 0.03),
+                                ("rough_no_contact", "configs/models/rough_pair.yaml", 0.03)):
+        # the model's own load and friction coefficient
+        mkw = dict(kw, condition=OperatingCondition(sliding_velocity=velocity), friction=FrictionInput())
         model = load_model(ROOT / path)
         if key == "rough_no_contact":  # the same mapped mesh without its contact pair: the stencil's own cost
             model = dataclasses.replace(model, contacts=())
@@ -383,7 +385,8 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
         "reduced_full_wall_s": walls["full"],
         "reduced_setup_s": t_setup,
         "reduced_plain_setup_s": t_plain_setup,
-        "reduced_simulated_s": float(full.settings.n_intervals / (full.settings.oversample * kw["schedule"].sample_rate)),
+        "reduced_simulated_s": float(full.settings.n_intervals
+                                     / (full.settings.oversample * kw["schedule"].sample_rate)),
         "reduced_size": a["reduced_size"],
         "reduced_plain_size": runs["plain"].attrs["reduced_size"],
         "reduced_boundary_nodes": a["reduced_boundary_nodes"],

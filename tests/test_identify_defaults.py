@@ -47,7 +47,8 @@ def _edge_runs(hum, offsets):
 ], ids=["weak-hum-tare", "strong-hum"])
 def test_default_identification_recovers_a(hum, offsets, tare):
     law, runs = _edge_runs(hum, offsets)
-    res = identify_friction_law(runs, analysis=RunAnalysisSettings(tare=tare))  # the band, nperseg and mains removal at their defaults
+    # the band, nperseg and mains removal at their defaults
+    res = identify_friction_law(runs, analysis=RunAnalysisSettings(tare=tare))
     band = (DEFAULT_BAND_LOW, DEFAULT_BAND_HIGH)
     assert res.band == band and res.settings["welch"]["frequency_resolution"] <= 50.0 / 4
     used = res.used_runs
@@ -112,8 +113,8 @@ def test_twin_data_at_defaults_inside_the_pipeline_intervals(root, tmp_path):
     # and suggests a tare inside the 20 ms unloaded pre-trigger
     hint = [m for m in res.messages if m.startswith("no tare given")]
     assert len(hint) == 1 and "tare=(0, 0.0151) s" in hint[0] and "up to 0.0036" in hint[0], res.messages
-    assert not any(m.startswith("no tare") for m in identify_friction_law(runs,
-                                                                          analysis=RunAnalysisSettings(tare=(0.0, 0.015))).messages)
+    tared = identify_friction_law(runs, analysis=RunAnalysisSettings(tare=(0.0, 0.015)))
+    assert not any(m.startswith("no tare") for m in tared.messages)
 
     # the engineer's command, `fivid identify *.nc -o law.nc`, gives the same law and records its settings
     import xarray as xr
@@ -162,3 +163,28 @@ def test_glitch_repair_is_for_measured_runs_only():
     forced = analyse_run(sim, RunAnalysisSettings(glitch_repair=True), band=band)
     assert measured.glitches_replaced >= 1 and forced.glitches_replaced == measured.glitches_replaced
     assert simulated.glitches_replaced == 0 and simulated.mu_rms > measured.mu_rms
+
+
+def test_flat_identify_settings_map_onto_the_argument_groups():
+    """A run configuration's flat ``identify:`` keys (fivid run) reach identify_friction_law's groups, each the field
+    of the same meaning; every field a caller could set before the grouping is reachable; an unknown key is refused
+    by name (not a TypeError from a constructor)."""
+    from dataclasses import fields
+
+    from fivid.errors import ConfigError
+    from fivid.identify import ShapeSettings, identification_arguments
+    from fivid.identify.friction import _SETTING_GROUPS
+
+    args = identification_arguments({"band": [100.0, 5000.0], "tare": [0.0, 0.015], "nperseg": 4096,
+                                     "shape_method": "rolloff", "smoothing_octaves": 0.5, "forms": ["power_law"],
+                                     "weighting": "none", "injection": "per_node", "confidence": 0.9})
+    assert args == {"band": [100.0, 5000.0], "injection": "per_node",
+                    "analysis": RunAnalysisSettings(tare=[0.0, 0.015], nperseg=4096, confidence=0.9),
+                    "shape": ShapeSettings(method="rolloff", smoothing_octaves=0.5),
+                    "amplitude": AmplitudeSettings(forms=["power_law"], weighting="none")}
+    reachable = {group_field for group_field in _SETTING_GROUPS.values()}
+    for group, kind in (("analysis", RunAnalysisSettings), ("shape", ShapeSettings), ("amplitude", AmplitudeSettings)):
+        missing = {f.name for f in fields(kind)} - {name for g, name in reachable if g == group} - {"n_batches"}
+        assert not missing, (group, missing)
+    with pytest.raises(ConfigError, match="unknown identification setting.*smoothing_octave\\b"):
+        identification_arguments({"smoothing_octave": 0.5})

@@ -221,7 +221,8 @@ def test_convected_spectra_collapse_at_the_reference_velocity():
     assert abs(p["corner_frequency"] - 1500.0) < Z * np.sqrt(2) * p["corner_frequency_stderr"]
     assert abs(p["order"] - 2.0) < Z * np.sqrt(2) * p["order_stderr"]
     # treated as uniform injection, the three corners (750, 1500, 3000 Hz) smear into a shallower shape
-    smeared = identify_friction_law(runs, band=ANALYSIS_BAND, analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG)).shape.rolloff_params
+    smeared = identify_friction_law(runs, band=ANALYSIS_BAND,
+                                    analysis=RunAnalysisSettings(tare=TARE, nperseg=NPERSEG)).shape.rolloff_params
     assert smeared["order"] < 2.0 - 10 * smeared["order_stderr"]
 
 
