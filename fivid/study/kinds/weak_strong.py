@@ -8,7 +8,9 @@ point's sensor PSD:
 - the reference frequencies (once per study, :func:`fivid.study.coupling.reference_frequencies`): *uncoupled*,
   the beams on their own supports without any contact spring, and *coupled*, the interface's contact set under
   the sweep's heaviest load tied rigidly (the rigid limit of the preloaded modes);
-- the ``n_peaks`` strongest PSD peaks (``prominence_db``; :func:`fivid.signal.peaks.strongest_peaks`), each
+- the ``n_peaks`` strongest PSD peaks (``prominence_db``; :func:`fivid.signal.peaks.strongest_peaks`; below
+  ``1 - band_width`` times the top of a band-limited law's band, whose brick-wall edge makes a spurious
+  one-sided maximum where the response rises toward the next mode), each
   placed between the two sets, 0 on an uncoupled frequency, 1 on a coupled one
   (:func:`fivid.study.coupling.peak_positions`), and averaged with the peaks' power as weights:
   ``coupling_response`` in [0, 1]; ``coupling`` is "strong" from 0.5 up, else "weak";
@@ -135,7 +137,11 @@ class WeakStrong(FeSweep):
             ds[f"reference_{k}"] = (("reference_mode",), np.asarray(ref[k]),
                                     {"units": "Hz", "long_name": f"{k} reference frequencies (study-wide)"})
         f, p = ds["frequency"].values, ds["psd"].values
-        pf, pp = strongest_peaks(f, p, prominence_db=cfg["prominence_db"], max_peaks=cfg["n_peaks"])
+        # a band-limited law's brick-wall edge makes a one-sided maximum just below it (the response rising toward
+        # the next mode, then cut): not a mode of the response; its peaks are read below the edge's guard band
+        top = _law_band_top(tasks, cfg["band_width"])
+        keep = f <= top
+        pf, pp = strongest_peaks(f[keep], p[keep], prominence_db=cfg["prominence_db"], max_peaks=cfg["n_peaks"])
         pad = np.full(cfg["n_peaks"], np.nan)
         ds["peak_frequency"] = (("peak",), np.concatenate([pf, pad])[:cfg["n_peaks"]],
                                 {"units": "Hz", "long_name": "PSD peak frequency, strongest first"})
@@ -220,6 +226,18 @@ class WeakStrong(FeSweep):
         cfg["band"] = (study.points.get("psd") or {}).get("band", (100.0, 20e3))
         out["seed_checks"] = seed_checks(points, cfg, out.get("reference_frequencies"), study.source)
         return out
+
+
+def _law_band_top(tasks, guard: float) -> float:
+    """Highest frequency [Hz] whose PSD peaks the criterion reads: ``(1 - guard)`` times the top of the law's
+    band when the transient has a band-limited law, else no limit."""
+    tr = tasks.get("transient") or {}
+    if "law" not in tr:
+        return np.inf
+    from fivid.friction import load_law
+
+    band = getattr(load_law(tr["law"]), "band", None)
+    return np.inf if band is None else (1.0 - guard) * float(band[1])
 
 
 def _cea_growth_at_mu0(system, tasks, conditions) -> float:
