@@ -24,7 +24,7 @@ Thomas and Nayak's model differ from GW mostly through ``alpha``, little for ``a
 solver tabulates exactly; Persson's theory gains over it near full contact, far above these loads.
 
 Checked against direct summit identification (8-neighbour maxima, curvature from the 5-point Laplacian) on
-synthetic isotropic Gaussian surfaces (:func:`gaussian_random_surface`, :func:`surface_summits`): tests/surface.
+synthetic isotropic Gaussian surfaces (:func:`gaussian_random_surface`, :func:`surface_summits`): tests/surface/test_surface_contact_law.py.
 """
 
 from __future__ import annotations

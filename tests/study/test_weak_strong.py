@@ -10,7 +10,7 @@ import pytest
 from fivid.signal.peaks import near_frequencies, strongest_peaks
 from fivid.study.coupling import peak_positions, response_coupling
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 UNCOUPLED = [838.0, 2301.0, 5036.0, 12949.0]
 COUPLED = [1445.0, 4794.0, 10157.0, 12949.0]
 
