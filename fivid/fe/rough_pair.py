@@ -11,14 +11,25 @@ from fivid.config_layer import quantity_at
 from fivid.errors import ConfigError
 from fivid.fe.config import read_config
 
-__all__ = ["rough_pair_config", "profiled_length"]
+__all__ = ["rough_pair_config", "profiled_length", "graded_divisions"]
 
 
 def _si(ctx, value, key, units="m") -> float:
     return quantity_at(ctx, value, key, units)
 
 
-def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None):
+def graded_divisions(length: float, depth: float, step: float, ratio: float) -> list[int]:
+    """Divisions ``[columns, layers]`` of a block ``length`` x ``depth`` [m] with columns of ``step`` [m] and layers
+    growing by ``ratio`` from its profiled edge, as many as make the first (surface) layer closest to ``step``
+    (``depth (r - 1) / (r^n - 1) ~ step``; ``n = depth / step`` rounded when ``ratio`` is 1)."""
+    cols = max(1, int(round(length / step)))
+    if ratio <= 1.0:
+        return [cols, max(1, int(round(depth / step)))]
+    return [cols, max(1, int(round(np.log1p(depth * (ratio - 1.0) / step) / np.log(ratio))))]
+
+
+def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None,
+                      mesh_step: float | None = None):
     """A rough-pair model config: ``base`` (path or mapping of a rough_pair-style config) with the profiles.
 
     Parameters
@@ -35,6 +46,10 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     normal_load : float, optional
         Dead load [N] on the upper body: its ``top``-edge pressure loads are scaled to sum to it (pressure x
         length x thickness). None: as configured.
+    mesh_step : float, optional
+        Re-divide both profiled blocks (:func:`graded_divisions`): columns of ``mesh_step`` [m] along x and as many
+        layers (the config's grading ratio, default 1) as make the surface layer about ``mesh_step`` thick.
+        None: the config's divisions.
 
     Returns
     -------
@@ -55,6 +70,10 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     lc = np.array([[_si(ctx, v, f"bodies.{lo_name}.corners") for v in c] for c in lo["corners"]])
     uc = np.array([[_si(ctx, v, f"bodies.{up_name}.corners") for v in c] for c in up["corners"]])
     length = lc[1, 0] - lc[0, 0]
+    if mesh_step is not None:
+        for body, c in ((lo, lc), (up, uc)):
+            ratio = float((body.get("grading") or {}).get("ratio", 1.0))
+            body["divisions"] = graded_divisions(c[1, 0] - c[0, 0], c[2, 1] - c[1, 1], float(mesh_step), ratio)
     nx = int(lo["divisions"][0])
     xn = np.linspace(0.0, length, nx + 1)  # back-face nodes (uniform along x; grading is through the depth)
     nu = int(up["divisions"][0])
@@ -103,7 +122,7 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "direction": "y",
                         "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"]} for i in range(0, nx + 1, k)]
     data["name"] = f"{data.get('name', 'rough_pair')} (profiles: {lower.attrs.get('source', 'given')})"
-    return data, {"lift": lift, "lower_body": lo_name, "upper_body": up_name,
+    return data, {"lift": lift, "divisions": {lo_name: list(lo["divisions"]), up_name: list(up["divisions"])}, "lower_body": lo_name, "upper_body": up_name,
                   "back_face_sensors": len(data["sensors"]), "sensor_every": k, "base": origin}
 
 

@@ -1,0 +1,104 @@
+"""Seed 003 at the paper's scale: Table 1's surfaces (Gaussian profiles matched to Ra and Rsm, checked with
+fivid.surface's ISO 4287 parameters), the measured-profile path, and the 120 x 8 mm model's graded re-division
+(configs/models/rough_pair_paper.yaml)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fivid.errors import ConfigError
+from fivid.fe import load_model
+from fivid.fe.rough_pair import graded_divisions, rough_pair_config
+from fivid.surface import evaluate_profile
+from fivid.surface.profile import make_profile
+from fivid.surface.rough_pair import (
+    TABLE1,
+    iso_cutoff,
+    measured_rough_profiles,
+    profile_over_length,
+    table1_profiles,
+    table1_row,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT / "configs/models/rough_pair_paper.yaml"
+DEKTAK = Path("/work/shared/real_data/profiles/dektak-1.csv")
+
+
+@pytest.mark.parametrize("row", TABLE1, ids=lambda r: f"Ra{r['Ra'] * 1e6:g}")
+def test_table1_profiles_match_ra_and_rsm_within_5_percent(row):
+    """Both profiles of a Table 1 surface over the 120 mm block: ISO Ra and Rsm (fivid.surface.evaluate_profile,
+    line removed, ISO 4288's cut-off for Rsm) within 5 % of the table's -- the issue's tolerance, measured here
+    independently of the synthesis's own record; and different seeds give different profiles."""
+    lo, up = table1_profiles(row["Ra"], 0.12, seeds=(3, 4))
+    for p in (lo, up):
+        got = evaluate_profile(p, form="line", cutoff=iso_cutoff(row["Rsm"])).parameters
+        assert got["Ra"] == pytest.approx(row["Ra"], rel=0.05)
+        assert got["Rsm"] == pytest.approx(row["Rsm"], rel=0.05)
+        assert p["x"].values[0] == 0.0 and p["x"].values[-1] == pytest.approx(0.12, abs=1e-12)
+    assert not np.allclose(lo.values, up.values)
+
+
+def test_iso_cutoff_is_iso_4288_table_3_and_table1_rows_are_named():
+    assert [iso_cutoff(v) for v in (30e-6, 92e-6, 150e-6, 400e-6, 516e-6, 2e-3)] == [
+        0.08e-3, 0.25e-3, 0.8e-3, 0.8e-3, 2.5e-3, 8e-3]
+    assert table1_row(4.5e-6)["Rsm"] == 150e-6
+    with pytest.raises(ConfigError, match=r"Ra 3 um is not a row .*allowed: 1, 4.5, 10, 20, 26 um"):
+        table1_row(3e-6)
+
+
+def test_evaluate_profile_with_a_cutoff_rounding_up_keeps_whole_sampling_lengths():
+    """cutoff / step = 80.6 samples rounds to 81 per sampling length: 807 samples hold 9 whole ones, not the
+    10 that length / cutoff gives (it raised numpy's 'array split does not result in an equal division')."""
+    step = 0.8e-3 / 80.6
+    x = np.arange(807) * step
+    p = make_profile(x, 1e-6 * np.sin(2 * np.pi * x / 0.1e-3), attrs={}, label="synthetic sine")
+    ev = evaluate_profile(p, form="line", cutoff=0.8e-3, ends="keep")
+    assert ev.settings["Rz_sampling_lengths"] == 9
+    assert ev.parameters["Rz"] == pytest.approx(2e-6, rel=0.01)
+
+
+def test_a_short_trace_is_mirrored_over_the_body_keeping_its_heights():
+    """A trace laid over three times its length: trace, reversed, trace -- continuous at the joins, the same Ra
+    (the mirrored copies hold the same heights) to round-off."""
+    x = np.linspace(0.0, 1e-3, 201)
+    rng = np.random.default_rng(7)
+    z = 1e-6 * rng.standard_normal(x.size) + 2e-3 * x  # synthetic: white heights on a slope
+    p = make_profile(x, z, attrs={"source": "synthetic"}, label="synthetic")
+    out = profile_over_length(p, 3e-3)
+    assert out.attrs["mirrored_copies"] == 3 and out.size == 3 * 200 + 1
+    zt = z - np.polyval(np.polyfit(x, z, 1), x)
+    np.testing.assert_allclose(out.values[:201], zt, atol=1e-18)
+    np.testing.assert_allclose(out.values[200:401], zt[::-1], atol=1e-18)
+    assert np.mean(np.abs(out.values)) == pytest.approx(np.mean(np.abs(zt)), rel=1e-2)
+
+
+@pytest.mark.skipif(not DEKTAK.exists(), reason="real Dektak trace not available")
+def test_a_measured_dektak_trace_covers_a_block():
+    lo, up = measured_rough_profiles(DEKTAK, DEKTAK, 10e-3)
+    assert lo["x"].values[-1] >= 10e-3 and lo.attrs["mirrored_copies"] > 1
+    np.testing.assert_array_equal(lo.values, up.values)
+
+
+def test_graded_divisions_put_a_surface_layer_of_about_the_step():
+    """depth (r - 1) / (r^n - 1) is the first layer of n layers growing by r: within sqrt(r) of the step."""
+    for step in (11.5e-6, 64.5e-6):
+        cols, n = graded_divisions(0.12, 8e-3, step, 2.0)
+        assert cols == round(0.12 / step)
+        first = 8e-3 / (2.0**n - 1)
+        assert step / np.sqrt(2) <= first <= step * np.sqrt(2)
+
+
+def test_the_paper_model_is_re_divided_per_surface():
+    """Table 1's coarsest surface on the 120 x 8 mm pair at Rsm/8: 1860 columns and 7 layers per block; the
+    contact's slaves are the upper block's surface nodes but its two ends; the back-face sensors every 8th node."""
+    row = table1_row(26e-6)
+    h = row["Rsm"] / 8
+    lo, up = table1_profiles(row["Ra"], 0.12, step=h / 2)
+    cfg, info = rough_pair_config(PAPER, lo, up, sensor_every=8, normal_load=1.0, mesh_step=h)
+    assert info["divisions"] == {"lower": [1860, 7], "upper": [1860, 7]}
+    model = load_model(cfg)
+    assert model.coords.size == 2 * 2 * 1861 * 8
+    assert sum(c.slave_nodes.size for c in model.contacts) == 1859
+    assert info["back_face_sensors"] == 1860 // 8 + 1
