@@ -23,7 +23,6 @@ from fivid.surface.rough_pair import (
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "configs/models/rough_pair_paper.yaml"
-DEKTAK = Path("/work/shared/real_data/profiles/dektak-1.csv")
 
 
 @pytest.mark.parametrize("row", TABLE1, ids=lambda r: f"Ra{r['Ra'] * 1e6:g}")
@@ -74,9 +73,10 @@ def test_a_short_trace_is_mirrored_over_the_body_keeping_its_heights():
     assert np.mean(np.abs(out.values)) == pytest.approx(np.mean(np.abs(zt)), rel=1e-2)
 
 
-@pytest.mark.skipif(not DEKTAK.exists(), reason="real Dektak trace not available")
-def test_a_measured_dektak_trace_covers_a_block():
-    lo, up = measured_rough_profiles(DEKTAK, DEKTAK, 10e-3)
+def test_a_measured_dektak_trace_covers_a_block(real_data):
+    """The real Dektak trace (third-party, real_data/profiles/dektak-1.csv) laid over a 10 mm block."""
+    dektak = real_data / "profiles" / "dektak-1.csv"
+    lo, up = measured_rough_profiles(dektak, dektak, 10e-3)
     assert lo["x"].values[-1] >= 10e-3 and lo.attrs["mirrored_copies"] > 1
     np.testing.assert_array_equal(lo.values, up.values)
 
@@ -102,3 +102,55 @@ def test_the_paper_model_is_re_divided_per_surface():
     assert model.coords.size == 2 * 2 * 1861 * 8
     assert sum(c.slave_nodes.size for c in model.contacts) == 1859
     assert info["back_face_sensors"] == 1860 // 8 + 1
+
+
+def _synthetic_points(n=0.8, m=1.1, sigma=1.5, replicates=3, seed=0):
+    """Synthetic Lv points (generator: the plane Lv = 20 n log Ra + 20 m log V + 60 plus N(0, sigma) dB) on
+    Table 1's Ra x 3 speeds."""
+    rng = np.random.default_rng(seed)
+    pts = []
+    for r in range(replicates):
+        for row in TABLE1:
+            for v in (0.02, 0.05, 0.12):
+                lv = 20 * n * np.log10(row["Ra"]) + 20 * m * np.log10(v) + 60 + sigma * rng.standard_normal()
+                pts.append({"status": "done", "roughness_ra": row["Ra"], "sliding_velocity": v, "seed": r,
+                            "vibration_level": lv, "velocity_rms": 1e-9 * 10 ** (lv / 20)})
+    return pts
+
+
+def test_exponent_half_widths_are_statsmodels_intervals():
+    """With the fit's own residual SD, exponent_half_widths gives statsmodels' 95 % half-widths of n and m (the
+    power law of velocity_rms, roughness_noise_fits) to round-off; level_scatter's residual SD is that SD."""
+    from fivid.study.fits import exponent_half_widths, level_scatter, roughness_noise_fits
+
+    pts = _synthetic_points()
+    fit = roughness_noise_fits(pts)
+    sc = level_scatter(pts)
+    hw = exponent_half_widths([r["Ra"] for r in TABLE1], (0.02, 0.05, 0.12), 3, sc["residual_sd_db"])
+    for key in ("n", "m"):
+        lo, hi = fit[key]["ci"]
+        assert hw[key] == pytest.approx((hi - lo) / 2, rel=1e-9)
+    assert hw["dof"] == 45 - 3 and fit["design"]["replicate_dof"] == 15 * 2
+
+
+def test_replicates_for_exponents_is_the_fewest_that_reach_the_target():
+    from fivid.study.fits import exponent_half_widths, replicates_for_exponents
+
+    ras, vs = [r["Ra"] for r in TABLE1], (0.02, 0.05, 0.12)
+    for sigma in (1.0, 3.0, 6.0):
+        r = replicates_for_exponents(ras, vs, sigma)
+        hw = exponent_half_widths(ras, vs, r, sigma)
+        assert max(hw["n"], hw["m"]) <= 0.15
+        if r > 1:
+            hw = exponent_half_widths(ras, vs, r - 1, sigma)
+            assert max(hw["n"], hw["m"]) > 0.15
+
+
+def test_the_pooled_replicate_scatter_recovers_the_generator_sigma():
+    """Pooled within-cell SD over 15 cells x 4 replicates (45 dof): within 4 standard errors of the generator's
+    sigma (SE of a pooled SD ~ sigma / sqrt(2 dof))."""
+    from fivid.study.fits import level_scatter
+
+    sc = level_scatter(_synthetic_points(sigma=2.0, replicates=4, seed=5))
+    assert sc["replicate_dof"] == 45
+    assert sc["replicate_sd_db"] == pytest.approx(2.0, abs=4 * 2.0 / np.sqrt(90))

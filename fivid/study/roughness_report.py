@@ -89,8 +89,9 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
     if rz:
         rows.append(["Lv vs log10(Rz/Rsm): slope [dB/decade]", _fmt(rz["slope"]), _fmt(rz["ci"][0]), _fmt(rz["ci"][1]),
                      _fmt(rz["r2"]), rz["n"]])
-    for name, what in (("shock_rate", "shock rate"), ("shock_impulse", "impulse per shock"),
-                       ("dissipated_power", "friction power"), ("friction_coefficient_rms", "mu(t) RMS")):
+    for name, what in (("shock_rate", "shock frequency"), ("shock_impulse", "impulse per shock"),
+                       ("shock_energy", "vibratory energy per shock"), ("vibratory_power", "vibratory power"),
+                       ("friction_power", "friction power"), ("friction_coefficient_rms", "mu(t) RMS")):
         f = fits.get(name)
         for axis, sym in (("roughness_ra", "Ra"), ("sliding_velocity", "V")):
             if f and axis in f["exponents"]:
@@ -120,7 +121,11 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
                 "Shock rate (contact closing events) against Ra and V.", "shock rate")
     page.figure(_panels(ds, "shock_impulse", "mean impulse per shock [N s]", log_y=True),
                 "Mean impulse per shock against Ra and V.", "shock impulse")
-    page.figure(_panels(ds, "dissipated_power", "friction power [W]", log_y=True),
+    for name, label, what in (("shock_energy", "vibratory energy per shock [J]", "shock intensity"),
+                              ("vibratory_power", "vibratory power [W]", "vibratory power")):
+        if name in ds and np.any(np.isfinite(ds[name].values)):
+            page.figure(_panels(ds, name, label, log_y=True), f"{label} against Ra and V (seed 003 Figs. 6, 7).", what)
+    page.figure(_panels(ds, "friction_power", "friction power [W]", log_y=True),
                 "Friction power against Ra and V.", "power")
     if "friction_coefficient_rms" in ds and np.any(np.isfinite(ds["friction_coefficient_rms"].values)):
         page.figure(_panels(ds, "friction_coefficient_rms", "RMS of mu(t) (transducer)", log_y=True),
