@@ -154,3 +154,51 @@ def test_the_pooled_replicate_scatter_recovers_the_generator_sigma():
     sc = level_scatter(_synthetic_points(sigma=2.0, replicates=4, seed=5))
     assert sc["replicate_dof"] == 45
     assert sc["replicate_sd_db"] == pytest.approx(2.0, abs=4 * 2.0 / np.sqrt(90))
+
+
+QUICK = ROOT / "configs/models/rough_pair_paper_quick.yaml"
+
+
+def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations():
+    """One point of the 12 x 2 mm cut (Table 1's Ra 26 um at Rsm/4, 12.5 cm/s, 0.45 ms): the power the drive and
+    the load put in over the steady window equals friction + vibratory (damping) + impact power + the rate of
+    change of the stored energies, to the solver's energy-balance error (its change over the window); each
+    dissipation is >= 0; the shock intensity is the vibratory energy per shock (P = n_c E). (Friction power = mu Fn V
+    is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.)"""
+    from fivid.score.roughness import dissipation_rate, roughness_metrics
+    from fivid.solver import simulate
+    from fivid.study.roughness import build_point_model
+
+    model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3},
+                                       {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0})
+    ds = simulate(model, duration=0.45e-3, sample_rate=2e6, progress=False, roughness_ra=26e-6, settle_time=0.05e-3,
+                  gs_tolerance=1e-6, gs_max_iterations=30, sliding_velocity=0.125)
+    r = roughness_metrics(ds, int(sum(c.slave_nodes.size for c in model.contacts)))
+    rate = {k: dissipation_rate(ds, k) for k in ("drive_work", "load_work", "external_work", "kinetic_energy",
+                                                  "strain_energy", "contact_energy", "energy_balance_error")}
+    inflow = rate["drive_work"] + rate["load_work"] + rate["external_work"]
+    stored = rate["kinetic_energy"] + rate["strain_energy"] + rate["contact_energy"]
+    out = r["friction_power"] + r["vibratory_power"] + r["impact_power"] + stored
+    assert inflow - out == pytest.approx(rate["energy_balance_error"], abs=1e-6 * abs(inflow))
+    assert r["vibratory_power"] > 0 and r["friction_power"] > 0 and r["impact_power"] >= 0
+    assert r["shock_energy"] == pytest.approx(r["vibratory_power"] / r["shock_rate"], rel=1e-12)
+
+
+@pytest.mark.slow
+def test_the_quick_paper_study_writes_exponents_design_and_paper_quantities(tmp_path):
+    """The roughness_paper study's --quick variant (4 points of the 12 x 2 mm cut, about 40 s): n and m with
+    intervals, the per-speed Rz/Rsm fits, the design block, and per point Lv, shock frequency and intensity,
+    vibratory and friction power."""
+    import json
+
+    from fivid.cli import main
+
+    assert main(["study", str(ROOT / "configs/studies/roughness_paper.yaml"), "-o", str(tmp_path), "--quick",
+                 "--no-progress"]) == 0
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["n"]["ci"][0] < s["n"]["value"] < s["n"]["ci"][1]
+    assert {"vibration_level_vs_rz_rsm_per_speed", "shock_energy", "vibratory_power"} <= set(s["fits"])
+    assert s["design"]["sigma_db"] > 0 and s["design"]["replicates_for_half_width_0.15"] >= 1
+    for p in s["points"]:
+        assert np.isfinite(p["vibration_level"]) and p["vibratory_power"] > 0 and p["shock_energy"] > 0
+        assert p["profile_Rsm"] == pytest.approx(table1_row(p["roughness_ra"])["Rsm"], rel=0.05)
