@@ -186,7 +186,7 @@ def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations(
 
 @pytest.mark.slow
 def test_the_quick_paper_study_writes_exponents_design_and_paper_quantities(tmp_path):
-    """The roughness_paper study's --quick variant (4 points of the 12 x 2 mm cut, about 40 s): n and m with
+    """The roughness_paper study's --quick variant (6 points of the 12 x 2 mm cut, about a minute): n and m with
     intervals, the per-speed Rz/Rsm fits, the design block, and per point Lv, shock frequency and intensity,
     vibratory and friction power."""
     import json
