@@ -166,13 +166,15 @@ def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations(
     dissipation is >= 0; the shock intensity is the vibratory energy per shock (P = n_c E). (Friction power = mu Fn V
     is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.)"""
     from fivid.score.roughness import dissipation_rate, roughness_metrics
-    from fivid.solver import simulate
+    from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
     from fivid.study.roughness import build_point_model
 
     model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3},
                                        {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0})
-    ds = simulate(model, duration=0.45e-3, sample_rate=2e6, progress=False, roughness_ra=26e-6, settle_time=0.05e-3,
-                  gs_tolerance=1e-6, gs_max_iterations=30, sliding_velocity=0.125)
+    ds = simulate(model, OperatingCondition(sliding_velocity=0.125, roughness_ra=26e-6),
+                  schedule=RunSchedule(duration=0.45e-3, sample_rate=2e6, settle_time=0.05e-3),
+                  integration=IntegrationOptions(gs_tolerance=1e-6, gs_max_iterations=30),
+                  output=OutputOptions(progress=False))
     r = roughness_metrics(ds, int(sum(c.slave_nodes.size for c in model.contacts)))
     rate = {k: dissipation_rate(ds, k) for k in ("drive_work", "load_work", "external_work", "kinetic_energy",
                                                   "strain_energy", "contact_energy", "energy_balance_error")}
