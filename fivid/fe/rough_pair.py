@@ -55,7 +55,8 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     -------
     (dict, dict)
         The config mapping, and a record: ``lift`` [m] (the upper body is lifted by ``max(z_lower - z_upper)``
-        over the contact's slave nodes, so the highest asperity pair touches with zero gap), the bodies' names,
+        over the contact's slave nodes, so the highest asperity pair touches with zero gap), the profiled bodies'
+        ``divisions``, the bodies' names,
         ``back_face_sensors``, ``sensor_every`` and the base config's source.
     """
     data, ctx, origin = read_config(base)
@@ -122,7 +123,8 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "direction": "y",
                         "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"]} for i in range(0, nx + 1, k)]
     data["name"] = f"{data.get('name', 'rough_pair')} (profiles: {lower.attrs.get('source', 'given')})"
-    return data, {"lift": lift, "divisions": {lo_name: list(lo["divisions"]), up_name: list(up["divisions"])}, "lower_body": lo_name, "upper_body": up_name,
+    return data, {"lift": lift, "divisions": {lo_name: list(lo["divisions"]), up_name: list(up["divisions"])},
+                  "lower_body": lo_name, "upper_body": up_name,
                   "back_face_sensors": len(data["sensors"]), "sensor_every": k, "base": origin}
 
 

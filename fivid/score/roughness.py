@@ -22,7 +22,8 @@ from fivid.signal.levels import VELOCITY_REFERENCE
 from fivid.signal.steady import steady_part
 
 __all__ = ["LV_REFERENCE", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level", "detect_shocks",
-           "friction_power", "vibratory_power", "impact_power", "dissipation_rate", "roughness_metrics", "friction_coefficient_statistics", "steady_record"]
+           "friction_power", "vibratory_power", "impact_power", "dissipation_rate", "roughness_metrics",
+           "friction_coefficient_statistics", "steady_record"]
 
 #: seed 003's velocity reference of the vibration level [m s-1] (ISO 1683's, :data:`fivid.signal.levels.VELOCITY_REFERENCE`)
 LV_REFERENCE = VELOCITY_REFERENCE

@@ -63,7 +63,8 @@ def table1_profile(ra: float, rsm: float, length: float, *, seed: int, step: flo
     correlation length starts at Rice's ``rsm /`` :data:`RSM_PER_CORRELATION_LENGTH` and is corrected by the ratio
     target / realised Rsm (fixed point, damped after two steps; the same random phases every iteration) until the
     realised Rsm is within ``tolerance / 5``, else scanned over +-15 % about the closest (a short profile's Rsm moves
-    by whole elements), keeping the closest, which must be within ``tolerance``; the heights are then scaled so the realised Ra equals ``ra``. Ra and Rsm are measured as a
+    by whole elements), keeping the closest, which must be within ``tolerance``; the heights are then scaled so the
+    realised Ra equals ``ra``. Ra and Rsm are measured as a
     profilometer does (:func:`fivid.surface.evaluate_profile`: line removed, Gaussian filter at ISO 4288's
     cut-off :func:`iso_cutoff` for ``rsm``, the cut-off's half trimmed at each end, Rsm with ISO's 10 %-of-Rz
     height discrimination). ``step`` [m]: synthesis step, default a sixth of the starting correlation length

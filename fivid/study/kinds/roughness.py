@@ -24,7 +24,8 @@ ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impuls
                   "friction_power", "vibratory_power", "impact_power",
                   "mean_normal_force", "mean_friction_force", "open_fraction", "friction_coefficient",
                   "friction_coefficient_rms", "profile_rsm_target", "profile_Ra", "profile_Rq",
-                  "profile_Rz", "profile_Rsm", "simulation_seconds", "simulation_cpu_seconds", "mesh_step", "dof_updates_per_second", "n_dof", "time_step")
+                  "profile_Rz", "profile_Rsm", "simulation_seconds", "simulation_cpu_seconds", "mesh_step",
+                  "dof_updates_per_second", "n_dof", "time_step")
 
 
 class RoughnessSettings(ConfigModel):
@@ -51,7 +52,8 @@ class RoughnessNoise(FeSweep):
     """Roughness noise of a rough pair (:class:`fivid.study.kind.StudyKind`)."""
 
     name = "roughness"
-    description = "roughness noise of a rough sliding pair (seed 003): Lv, shocks, vibratory and friction power, their power laws"
+    description = ("roughness noise of a rough sliding pair (seed 003): Lv, shocks, vibratory and friction power, "
+                   "their power laws")
     section = ("points", "roughness")
     config = RoughnessSettings
     point_keys = tuple((k, k) for k in ROUGHNESS_KEYS)
