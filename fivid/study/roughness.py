@@ -93,7 +93,8 @@ RSM_LEVELS = (200e-6, 300e-6)
 #: replicate's Rsm level (``rsm``, read with this default until the study config accepts the key)
 ROUGHNESS_TASK = {"correlation_length": None, "rsm": RSM_LEVELS, "profile_step": 5e-6, "seeds": (3, 4),
                   "sensor_every": 4, "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.05e-3,
-                  "surfaces": "rsm_levels", "nodes_per_rsm": None, "sensor_spacing": None, "profile_files": None}
+                  "surfaces": "rsm_levels", "nodes_per_rsm": None, "sensor_spacing": None, "profile_files": None,
+                  "seat": False}
 
 
 def point_profiles_design(spec: dict, conditions: dict) -> dict:
@@ -137,7 +138,8 @@ def build_point_model(model_path, spec: dict, conditions: dict):
 
     With ``nodes_per_rsm`` both blocks are re-divided at ``Rsm / nodes_per_rsm`` (the point's surface Rsm:
     :func:`fivid.fe.rough_pair.rough_pair_config`'s ``mesh_step``); with ``sensor_spacing`` [m] the back-face
-    sensors sit on every ``round(sensor_spacing / mesh step)``-th node (``sensor_every`` otherwise)."""
+    sensors sit on every ``round(sensor_spacing / mesh step)``-th node (``sensor_every`` otherwise); with ``seat``
+    the upper block starts seated on its two supporting asperities (``rough_pair_config``'s ``seat``)."""
     spec = {**ROUGHNESS_TASK, **spec}
     length = profiled_length(model_path)
     design = point_profiles_design(spec, conditions)
@@ -150,7 +152,7 @@ def build_point_model(model_path, spec: dict, conditions: dict):
     design["mesh_step"] = mesh_step
     load = float(conditions["normal_load"]) if "normal_load" in conditions else None
     cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=every, normal_load=load,
-                                  mesh_step=mesh_step)
+                                  mesh_step=mesh_step, seat=bool(spec.get("seat")))
     return load_model(cfg), lower, info, design
 
 
@@ -269,6 +271,7 @@ def roughness_settings(study) -> dict:
                  for name, b in data["bodies"].items()},
         "surfaces": spec.get("surfaces") or "rsm_levels",
         "nodes_per_rsm": spec.get("nodes_per_rsm"), "sensor_spacing": spec.get("sensor_spacing"),
+        "seat": bool(spec.get("seat")),
         "profile_files": spec.get("profile_files"),
         "profiles": {"generator": "fivid.surface.gaussian_random_profile", "acf": "gaussian",
                      "rq_per_ra": RQ_PER_RA,

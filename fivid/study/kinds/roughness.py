@@ -44,6 +44,7 @@ class RoughnessSettings(ConfigModel):
                           "surface of the point's Ra; measured: profile_files")
     nodes_per_rsm: Annotated[int, Field(ge=2)] = Field(None, description="re-divide the blocks at Rsm / this")
     sensor_spacing: Quantity("m", positive=True, bare_is_si=True) = None
+    seat: bool = Field(None, description="start the upper block seated on its two supporting asperities")
     profile_files: Annotated[list[str], Field(min_length=2, max_length=2, description="lower, upper profile files "
                                                                                        "(surfaces: measured)")] = None
 
