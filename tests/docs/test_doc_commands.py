@@ -134,7 +134,7 @@ DECISIONS: dict[str, Decision] = {
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness --quick": slow(
         "4 rough-pair transients of 1.2 ms (under 2 min)"),
     "fivid study configs/studies/roughness_paper.yaml -o out/rough-paper --quick": slow(
-        "6 points of the 12 x 2 mm cut (about a minute; tests/test_roughness_paper.py runs it too)"),
+        "6 points of the 12 x 2 mm cut (about a minute; tests/study/test_roughness_paper.py runs it too)"),
     "fivid study configs/studies/roughness_paper_cut.yaml -o out/rough-cut": skip(
         "30 points of the 12 x 2 mm cut, about 20 CPU-minutes (docs/roughness.md gives its measured results)"),
     "fivid study configs/studies/roughness_paper.yaml -o out/rough-paper": skip(
