@@ -27,7 +27,8 @@ def register(subparsers) -> None:
     p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
                    help="normal load, e.g. '5 N' (a bare number is in N; the preload the contact is linearised "
                         "about); leave it "
-                        "out for a model pressed by its own pressure loads (e.g. configs/models/ring.yaml)")
+                        "out for a model pressed by its own pressure loads or an expanding rigid circle (e.g. "
+                        "configs/models/ring.yaml)")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")
     p.add_argument("-n", "--n-modes", type=int, default=20, metavar="N", help="modes reported (default 20)")
@@ -63,6 +64,7 @@ def run(args) -> int:
     from fivid.errors import ConfigError
     from fivid.fe import load_model
     from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
+    from fivid.fe.static import pressed_by_itself
     from fivid.pipeline.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
@@ -76,9 +78,10 @@ def run(args) -> int:
     load = None if args.load is None else float(args.load)
     check_modal_memory(args.model, args.basis or max(3 * args.n_modes, 40))  # before the mesh is built
     model = load_model(args.model)
-    if load is None and not model.loads:
+    if load is None and not pressed_by_itself(model):
         raise ConfigError("--load Q is needed (e.g. --load '5 N'): the contact is linearised about the nodes closed "
-                          "under that normal load (only a model pressed by its own pressure loads can go without)")
+                          "under that normal load (only a model pressed by its own pressure loads or an expanding "
+                          "rigid circle can go without)")
     from tqdm import tqdm
 
     # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
