@@ -47,7 +47,7 @@ FRAGMENTS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple | None]] = {
     "acceleration: / - {name:": (("configs/rigs/labdaq.yaml",), (), ("columns",)),
 }
 MODEL_KEYS = {"name", "description", "plane", "materials", "bodies", "damping", "contacts", "motions",
-              "point_masses", "springs", "sensors", "reactions", "loads"}
+              "point_masses", "springs", "sensors", "reactions", "loads", "prestress"}
 
 
 def yaml_examples() -> list[tuple[str, str]]:

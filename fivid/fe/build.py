@@ -85,7 +85,8 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
                     coords=np.concatenate([b.coords.reshape(-1, 2) for b in blocks]), fixed_dofs=fixed_dofs,
                     motions=tuple(motions), point_masses=point_masses, springs=tuple(springs), contacts=contacts,
                     sensors=sensors, reactions=tuple(reactions), loads=tuple(loads), rayleigh_alpha=alpha,
-                    rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data)
+                    rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data,
+                    prestress=bool(cfg.prestress))
     try:  # a rigid circle expanding to a target mean pressure: its radial displacement from the static preload
         return resolve_expansions(model)
     except ConfigError as exc:

@@ -229,10 +229,16 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     total = schedule.transient_end + duration
     n_out = max(1, math.ceil(total * sample_rate - 1e-9))
     n_int = n_out * oversample
-    st = block_stencils(model)
+    prestress = None
+    if model.prestress:  # vibrations about the prestressed state: K_sigma of the same static state as modes/CEA
+        from fivid.fe.prestress import preload_ramp_end, prestress_state
+
+        u0 = preload.u if preload is not None else prestress_state(model)
+        prestress = (u0, max(preload_ramp_end(model), schedule.load_ramp if preload is not None else 0.0))
+    st = block_stencils(model, prestress=None if prestress is None else prestress[0])
     from fivid.solver.setup import kernel_arrays
 
-    ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1])
+    ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1], prestress=prestress)
     base = model.motion("base")
     v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
     rs, choice = _choose_path(model, ka, reduced, reduced_mass_scaling, reduced_tolerance, error_band,
@@ -318,6 +324,12 @@ def _choose_path(model, ka, reduced, reduced_mass_scaling, tolerance, error_band
         raise ConfigError(f"error_band must be (low, high) [Hz] with 0 <= low < high, got {error_band!r}")
     n_modes, cutoff, scaling = _reduced_options(reduced, reduced_mass_scaling, sample_rate)
     auto = reduced == "auto"
+    if model.prestress:  # the reduced basis is built from the elastic K alone
+        if not auto:
+            raise ConfigError("the reduced path does not carry the prestress stiffness (model 'prestress: true'); "
+                              "run the full model (reduced=None)")
+        return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
+                      "reason": "the model is prestressed ('prestress: true'), which the reduced basis does not carry"}
     compliant = [c.name for c in model.contacts if getattr(c.law, "is_penalty", False)]
     if auto and compliant:
         # the estimate ties the contact rigidly; a compliant normal law's contact springs act on the mass-scaled

@@ -37,7 +37,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-damping", action="store_true", help="leave out Rayleigh damping and dashpots")
     p.add_argument("--prestress", action="store_true",
                    help="linearise about the prestressed state: add the initial-stress (geometric) stiffness of the "
-                        "preload's static state (fivid.fe.prestress)")
+                        "preload's static state (fivid.fe.prestress; on by default for a model with 'prestress: true')")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("-o", "--output", metavar="CEA.nc", help="write the sweep to netCDF")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -88,7 +88,7 @@ def run(args) -> int:
     with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
         ds = complex_eigenvalue_analysis(model, mu, normal_load=load, n_modes=args.n_modes, n_basis=args.basis,
                                          damping=not args.no_damping, progress=bar.update,
-                                         prestress=bool(args.prestress))
+                                         prestress=True if args.prestress else None)
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
     result = cea_to_json(ds)

@@ -39,7 +39,8 @@ def register(subparsers) -> None:
     p.add_argument("--prestress", action="store_true",
                    help="vibrations about the prestressed state: add the initial-stress (geometric) stiffness of the "
                         "static state (the contact preload with --load/--contact, else the pressure loads); "
-                        "tension stiffens, compression softens (fivid.fe.prestress)")
+                        "tension stiffens, compression softens (fivid.fe.prestress; on by default for a model with "
+                        "'prestress: true')")
     p.add_argument("--damping-curve", metavar="PNG",
                    help="plot the modal damping ratio vs frequency of the model's damping scheme (classic or "
                         "band-limited Rayleigh, docs/model-config.md) with the modes marked, to this PNG file")
@@ -70,7 +71,7 @@ def run(args) -> int:
                           "model that press it)")
     include = load is not None or bool(args.contact)
     ds = modal_analysis(model, args.n_modes, mass=args.mass, include_contact=include, normal_load=load,
-                        prestress=bool(args.prestress))
+                        prestress=True if args.prestress else None)
     if args.output:
         write_modes(ds, args.output, overwrite=args.overwrite)
     summary = modes_to_json(ds)
