@@ -49,6 +49,7 @@ def main(argv=None) -> int:
     args, load = parse_guarded(ap, argv)
 
     from fivid.fe import load_model
+    from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, RunSchedule
     from fivid.solver.driver import prepare_run
 
     cfg = yaml.safe_load((ROOT / "configs/models/ring.yaml").read_text(encoding="utf-8"))
@@ -59,11 +60,15 @@ def main(argv=None) -> int:
     rounds = 2 if args.quick else 4
     out = {"benchmark": "prestress", "quick": bool(args.quick), "ring_dofs": int(ring.n_dofs),
            "rig_dofs": int(rig.n_dofs)}
+    full = IntegrationOptions(reduced=None)
     cases = {
-        "": lambda m: prepare_run(m, duration=2e-4 if args.quick else 1e-3, sample_rate=100e3, reduced=None),
-        "_rig": lambda m: prepare_run(m, duration=1e-4 if args.quick else 5e-4, mu=0.3, sliding_velocity=0.01,
-                                      normal_load=5.0, sample_rate=51200.0, preload_time=2e-4, settle_time=0.0,
-                                      base_ramp_time=1e-4, reduced=None),
+        "": lambda m: prepare_run(m, schedule=RunSchedule(duration=2e-4 if args.quick else 1e-3, sample_rate=100e3),
+                                  integration=full),
+        "_rig": lambda m: prepare_run(m, OperatingCondition(sliding_velocity=0.01, normal_load=5.0),
+                                      FrictionInput(mu=0.3),
+                                      schedule=RunSchedule(duration=1e-4 if args.quick else 5e-4, sample_rate=51200.0,
+                                                           preload_time=2e-4, settle_time=0.0, base_ramp_time=1e-4),
+                                      integration=full),
     }
     for suffix, model in (("", ring), ("_rig", rig)):
         plain = cases[suffix](dataclasses.replace(model, prestress=False))
