@@ -4,7 +4,7 @@ of a model with ``prestress: true`` describe the same system, ``K + K_sigma`` ab
 Oracle: a steel strip (synthetic, L/h = 50) stretched by an imposed end displacement (uniform ``s_xx = E delta / L``
 = 42 MPa, exact for Q4) and set vibrating by a uniform transverse initial velocity. Its mid-span deflection after
 the stretch ramp rings at the first bending mode, whose frequency the modal analysis gives for ``K + K_sigma``
-(tests/test_fe_prestress.py checks that against the tensioned continuum's closed form: the string's
+(tests/fe/test_fe_prestress.py checks that against the tensioned continuum's closed form: the string's
 ``s (pi/L)^2 / rho`` added to ``omega_1^2``). The tension raises it by 6.4 %, so the comparison tells the two
 systems apart by ~60 times the tolerance."""
 
