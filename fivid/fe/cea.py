@@ -245,17 +245,18 @@ class Linearisation:
     ----------
     damping : bool
         Rayleigh damping and dashpots (default True; False: the conservative system, pure mode coupling).
-    prestress : bool
-        The initial-stress stiffness ``K_sigma`` of the preload solve's static state added to ``K``
-        (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form; the Rayleigh ``beta K`` damping
-        keeps the elastic ``K``; default False).
+    prestress : bool or None
+        Linearise about the prestressed state: the initial-stress stiffness ``K_sigma`` of the preload solve's
+        static state added to ``K`` (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form); the
+        Rayleigh damping is then ``alpha M + beta (K + K_sigma)``, the explicit solver's. None (default): the
+        model's ``prestress`` key.
     augment : bool
         The static responses to unit normal and tangential loads at the contact nodes added to the modal basis
         (see :func:`project_on_modes`; default True).
     """
 
     damping: bool = True
-    prestress: bool = False
+    prestress: bool | None = None
     augment: bool = True
 
 
@@ -300,6 +301,7 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
     from fivid.fe.contact import linearise_preloaded_contact
     from fivid.fe.modal import constrained_matrices
+    from fivid.fe.prestress import geometric_stiffness_matrix
 
     damping, prestress, augment = linearisation.damping, linearisation.prestress, linearisation.augment
     if not model.contacts:
@@ -308,11 +310,15 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     if not np.any(contact.direction):
         raise ConfigError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
                           "motion with role 'base' to the config)", key="motions")
+    prestress = model.prestress if prestress is None else bool(prestress)
     K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact,
                                       prestress=state.u if prestress else None)
     Kf = contact.friction_stiffness_matrix()[free][:, free]
     if damping:
-        C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))[free][:, free]
+        K_damp = stiffness_matrix(model)
+        if prestress:
+            K_damp = K_damp + geometric_stiffness_matrix(model, state.u)
+        C = damping_matrix(model, mass="consistent", stiffness=K_damp)[free][:, free]
     else:
         C = sp.csr_matrix(K.shape)
     n_basis = max(3 * n_modes, 40) if n_basis is None else int(n_basis)
