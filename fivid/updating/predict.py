@@ -70,10 +70,12 @@ class Prediction:
 def pair_critical_mu(ds, mode: int) -> tuple[float, dict]:
     """The critical friction coefficient of the pair containing CEA mode ``mode`` (1-based).
 
-    The smaller finite ``critical_mu`` of the mode and of its partner (the mode it coalesces with). When the
-    pair stays stable over the sweep, the value is extrapolated linearly from the last two sweep points of the
-    larger real part of the mode and of its nearest mode in frequency at the first μ (10 x the last μ when that
-    real part does not grow), so that a fit started far from the instability still sees a slope.
+    The pair is the mode and its nearest mode in frequency at the first μ (a doublet's twin: which of the two
+    turns unstable depends on the arbitrary basis of a degenerate pair), plus the mode the CEA names as its
+    partner; the value is the smallest finite ``critical_mu`` among them. When the pair stays stable over the
+    sweep, it is extrapolated linearly from the last two sweep points of the larger real part of the mode and
+    its nearest mode (10 x the last μ when that real part does not grow), so that a fit started far from the
+    instability still sees a slope.
 
     Parameters
     ----------
@@ -95,20 +97,23 @@ def pair_critical_mu(ds, mode: int) -> tuple[float, dict]:
                           key="critical_mu")
     i = mode - 1
     crit = ds["critical_mu"].values
-    partner = int(ds["partner"].values[i])
-    cands = [crit[i]] + ([crit[partner - 1]] if partner > 0 and int(ds["partner"].values[partner - 1]) == mode
-                         else [])
-    finite = [c for c in cands if np.isfinite(c)]
     f0 = ds["frequency"].values[0]
-    detail = {"mode": mode, "partner": partner if partner > 0 else None, "frequency_hz": float(f0[i]),
-              "extrapolated": not finite}
+    dist = np.abs(f0 - f0[i])
+    dist[i] = np.inf
+    near = int(np.argmin(dist)) if n > 1 else i  # its doublet twin / nearest mode
+    partner = int(ds["partner"].values[i])
+    pair = {i, near} | ({partner - 1} if partner > 0 else set())
+    finite = sorted((float(crit[k]), k) for k in pair if np.isfinite(crit[k]))
     if finite:
-        return float(min(finite)), detail
+        value, k = finite[0]
+        other = int(ds["partner"].values[k]) if k != i else partner
+        detail = {"mode": mode, "partner": (k + 1) if k != i else (other if other > 0 else near + 1),
+                  "frequency_hz": float(f0[i]), "extrapolated": False}
+        return value, detail
+    detail = {"mode": mode, "partner": near + 1, "frequency_hz": float(f0[i]), "extrapolated": True}
     mu = ds["mu"].values
-    near = int(np.argsort(np.abs(f0 - f0[i]))[1]) if n > 1 else i
     re = np.maximum(ds["real_part"].values[:, i], ds["real_part"].values[:, near])
     slope = (re[-1] - re[-2]) / (mu[-1] - mu[-2])
-    detail["partner"] = near + 1
     return (float(mu[-1] - re[-1] / slope) if slope > 0 else float(10 * mu[-1])), detail
 
 

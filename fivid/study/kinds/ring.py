@@ -22,6 +22,10 @@ radius and its counter-clockwise tangent, added after the model's own sensors (t
     the node's radial displacement exceeds the smallest one around the bore (the closed nodes' common radius: the
     rigid core's) by more than ``OPEN_GAP``; stick where its tangential velocity is within ``STICK_SPEED`` of the
     core's surface speed; else slip.
+``vibration_to_sliding_speed``
+    The bore's tangential vibration velocity amplitude in the last quarter (median over the nodes) over the core's
+    surface speed: near 1 when the limit cycle is bounded by local stick within each cycle (the vibration speed
+    catches up with the sliding speed), which sets the limit-cycle level to about ``2 pi f V``.
 ``ods_shape_*``, ``cea_shape_*``, ``velocity_snapshot``
     The two shapes (phase-aligned, unit largest component) and four radial-velocity snapshots a quarter period
     apart at the end of the growth window, for the report's figures.
@@ -114,6 +118,13 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     coords["map_time"] = ("map_time", t[sel] - t[0], {"units": "s", "long_name": "time since the steady part began"})
     data["contact_state"] = (("map_time", "bore_angle"), state, {
         "long_name": "contact state of the bore node", "flag_values": "0 1 2", "flag_meanings": "stick slip open"})
+    # what bounds the limit cycle: the bore's tangential vibration speed against the core's surface speed (once it
+    # reaches it, the nodes stick within each cycle and friction stops feeding the mode)
+    tail = vel[3 * t.size // 4:][:, t_idx]
+    amp = np.max(np.abs(tail - tail.mean(axis=0)), axis=0)
+    data["vibration_to_sliding_speed"] = ((), float(np.median(amp) / speed), {
+        "units": "1", "long_name": "median over the bore of the tangential vibration velocity amplitude (last "
+                                   "quarter) over the core's surface speed"})
     # transient velocity field during growth against the CEA's most unstable mode at this mu
     win = _window(t, data)
     field = np.concatenate([vel[win][:, r_idx], vel[win][:, t_idx]], axis=1)
@@ -201,7 +212,8 @@ class RingRegimes(FeSweep):
     name = "ring"
     description = "instability regimes over mu (seed 002): transients classified and compared with the CEA"
     point_keys = FeSweep.point_keys + (("mac_with_cea", "mac_with_cea"), ("ods_frequency", "ods_frequency"),
-                                       ("cea_mode_frequency", "cea_mode_frequency"), ("amplitude", "amplitude"))
+                                       ("cea_mode_frequency", "cea_mode_frequency"), ("amplitude", "amplitude"),
+                                       ("vibration_to_sliding_speed", "vibration_to_sliding_speed"))
 
     def guess(self, data: dict) -> bool:
         """An FE study with a CEA and transients."""
@@ -238,7 +250,8 @@ class RingRegimes(FeSweep):
         """Each transient's regime, frequency and MAC beside the CEA's at the same mu; contact-state maps and
         velocity snapshots."""
         rows = [[p.get("mu"), p.get("regime"), p.get("growth_rate"), p.get("cea_growth_rate"), p.get("frequency"),
-                 p.get("cea_frequency"), p.get("ods_frequency"), p.get("mac_with_cea")]
+                 p.get("cea_frequency"), p.get("ods_frequency"), p.get("mac_with_cea"), p.get("amplitude"),
+                 p.get("vibration_to_sliding_speed")]
                 for p in summary["points"] if "regime" in p and "mu" in p]
         if not rows:
             return
@@ -246,7 +259,8 @@ class RingRegimes(FeSweep):
         page.paragraph(f"Eigenvalues of the preloaded ring below 15 kHz: {summary.get('eigenvalues_below_15khz')} "
                        "(seed 002: 20).")
         page.raw(table(["mu", "regime", "growth rate [1/s]", "CEA growth rate [1/s]", "frequency [Hz]",
-                        "CEA frequency [Hz]", "growth-window frequency [Hz]", "MAC with CEA"], rows))
+                        "CEA frequency [Hz]", "growth-window frequency [Hz]", "MAC with CEA",
+                        "limit-cycle RMS [m/s²]", "vibration / sliding speed"], rows))
         if "contact_state" in ds:
             page.figure(_state_map_figure(ds, summary), "Contact state along the bore (stick / slip / open) against "
                         "time, per μ (seed 002, Fig. 8).", "contact states")
