@@ -48,14 +48,15 @@ def test_mapped_block_uses_per_node_coefficients():
 
 
 def _prepare(model, n_int, n_sub, dt):
+    from fivid.friction import FrictionInput, OperatingCondition
     from fivid.friction.injection import friction_table
-    from fivid.solver.setup import Schedule, kernel_arrays
+    from fivid.solver.setup import LoadingSequence, kernel_arrays
 
     st = block_stencils(model)
-    sched = Schedule(None, 0.0, 0.0, None, 0.0)
+    sched = LoadingSequence(None, 0.0, 0.0, None, 0.0)
     ka = kernel_arrays(model, st, sched, tangential_sign=1.0, normal_sign=1.0)
-    fric = friction_table(model, ka.slave_pair, np.zeros(ka.slave_pair.size), total_time=1.0, dt=dt,
-                          sample_rate=1.0, sliding_velocity=0.0, roughness_ra=None, normal_load=None, seed=0)
+    fric = friction_table(model, ka.slave_pair, np.zeros(ka.slave_pair.size), FrictionInput(),
+                          OperatingCondition(sliding_velocity=0.0), total_time=1.0, dt=dt, sample_rate=1.0)
     return st, ka, fric
 
 
