@@ -98,3 +98,22 @@ def test_pair_critical_mu_takes_the_pair_minimum_and_extrapolates_a_stable_pair(
     assert value == pytest.approx(2.5)
     ds["real_part"][:, 2] = [-3.0, -4.0, -5.0]  # a pair that only gets more stable: 10 x the last mu
     assert pair_critical_mu(ds, 3)[0] == 10.0
+
+
+@pytest.mark.parametrize("entry, key, words", [
+    ("{value: 0.15, tolerance: 0.05, mode: 6}", "critical_mu[0]", "mu [start, stop, steps]"),
+    ("{value: 1.5, tolerance: 0.05, mode: 6, mu: [0, 1, 21]}", "critical_mu[0].value", "outside the sweep"),
+    ("{value: 0.15, tolerance: 0, mode: 6, mu: [0, 1, 21]}", "critical_mu[0].tolerance", "> 0"),
+    ("{value: 0.15, tolerance: 0.05, mode: 0, mu: [0, 1, 21]}", "critical_mu[0].mode", ">= 1"),
+    ("{value: 0.15, tolerance: 0.05, mode: 6, mu: [1, 0, 21]}", "critical_mu[0].mu", "start < stop"),
+])
+def test_critical_mu_target_errors_name_the_key(tmp_path, entry, key, words):
+    from fivid.errors import ConfigError
+
+    p = tmp_path / "targets.yaml"
+    p.write_text("parameters:\n  - {path: materials.pc.E, bounds: [2 GPa, 2.6 GPa]}\n"
+                 "modes:\n  - {frequency: 10 kHz, tolerance: 1 %}\n"
+                 f"critical_mu:\n  - {entry}\n")
+    with pytest.raises(ConfigError) as err:
+        load_targets(p)
+    assert err.value.key == key and words in err.value.message and err.value.line == 6
