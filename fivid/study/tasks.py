@@ -52,15 +52,22 @@ TRANSIENT_KEYS = (("regime", "regime"), ("growth_rate", "growth_rate"), ("respon
 COUPLING_KEYS = (("coupling_modal", "coupling_modal"),)
 
 
-def fe_point(system: dict, tasks: dict, conditions: dict):
+def fe_point(system: dict, tasks: dict, conditions: dict, *, probes=None, run_analysis=None):
     """An FE model's point: element size, ``modes`` (and the coupling indicator with ``system["coupling_bounds"]``),
-    ``transient`` and ``psd`` (see the module docstring); an xarray Dataset."""
+    ``transient`` and ``psd`` (see the module docstring); an xarray Dataset.
+
+    ``probes(model)`` (optional) returns extra sensor entries (model-config form) added after the model's own
+    (the response stays the first sensor); ``run_analysis(model, run, data, coords, conditions)`` (optional) adds
+    a kind's own variables from the transient's run dataset (its steady part)."""
     import xarray as xr
 
     data, coords = {}, {}
     ra = conditions.get("roughness_ra")
-    model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra,
-                          surface=None if ra is None else system.get("surfaces", {}).get(repr(float(ra))))
+    surface = None if ra is None else system.get("surfaces", {}).get(repr(float(ra)))
+    model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra, surface=surface)
+    if probes is not None:
+        model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra, surface=surface,
+                              sensors=probes(model))
     if "transient" in tasks:  # its size before any work (the modes first), as fivid simulate and fivid run do
         check_simulation_memory(simulation_memory(model, duration=tasks["transient"]["duration"],
                                                   sample_rate=tasks["transient"]["sample_rate"]),
@@ -87,6 +94,8 @@ def fe_point(system: dict, tasks: dict, conditions: dict):
             return _fe_transient(model, {"transient": ref}, {**conditions, "mu": mu0})[1]
 
         transient_variables(t, x, units, state, tasks, data, coords, coulomb=coulomb)
+        if run_analysis is not None:
+            run_analysis(model, state["run"], data, coords, conditions)
     return xr.Dataset(data, coords=coords)
 
 
@@ -164,21 +173,25 @@ def _psd_variable(name, x, fs, tasks, units, data, coords, long_name):
     coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
 
 
-def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None, *, surface: dict | None = None):
+def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None, *, surface: dict | None = None,
+                  sensors: list | None = None):
     """The FE model of ``path`` with every body's divisions multiplied by ``factor`` (rounded, at least 1; a full
     ring keeps at least 3 around); ``factor`` 1 is the model as configured. With ``roughness_ra`` [m], every
     Greenwood-Williamson contact gets the surface of that Ra: ``surface`` (``sigma``, ``asperity_radius``,
     ``asperity_density`` in SI, e.g. :func:`fivid.surface.contact_law.gw_parameters` of a profile, with its
     ``source``) when given, else the summit-height deviation of a Gaussian surface of that Ra,
-    ``sigma = sqrt(pi/2) Ra`` (the rest of its surface parameters as configured)."""
+    ``sigma = sqrt(pi/2) Ra`` (the rest of its surface parameters as configured). ``sensors``: extra sensor
+    entries (model-config form) appended to the model's own."""
     gw = False
     if roughness_ra is not None:
         raw = read_yaml(path, "model config").data
         gw = any(isinstance(c.get("normal"), dict) and c["normal"].get("law") == "greenwood-williamson"
                  for c in raw.get("contacts") or [])
-    if factor == 1.0 and not gw:
+    if factor == 1.0 and not gw and not sensors:
         return load_model(path)
     data = read_config(path)[0]
+    if sensors:
+        data["sensors"] = list(data.get("sensors") or []) + list(sensors)
     for body in data["bodies"].values():
         body["divisions"] = [max(3 if "annulus" in body and i == 0 else 1, int(round(float(d) * factor)))
                              for i, d in enumerate(body["divisions"])]
@@ -234,5 +247,5 @@ def _fe_transient(model, tasks, conditions):
     # the CEA's sliding equilibrium: the contact slides as a whole (most of it; a few nodes of a large contact
     # may stick where the pressure peaks, and a held ring winds up with a shrinking stick zone)
     sliding = stick < 0.5
-    return t, x, "m s-2", {"sliding": sliding, "stick": stick}
+    return t, x, "m s-2", {"sliding": sliding, "stick": stick, "run": ds}
 
