@@ -16,7 +16,7 @@ For every (sliding velocity, roughness) of the ground truth:
    and ``twin_daq/T0k_v<V>_ra<Ra>.csv`` in the LabDAQ export format of ``configs/rigs/labdaq.yaml``
    (semicolons, decimal commas, accelerometer in mV at 100 mV/g, velocity and Ra only in the name).
 
-``twin.sha256`` registers the sha256 of every file; tests/test_pipeline_sample.py checks it. The
+``twin.sha256`` registers the sha256 of every file; tests/pipeline/test_pipeline_sample.py checks it. The
 generation is deterministic (seeded synthesis, serial kernels) for a given version of fivid's solver;
 the files were written with the solver of this commit's history (a later solver change that moves
 the results by round-off changes the bytes, not the statistics: checked 2 % RMS, 0.002 dB band power).
@@ -212,14 +212,15 @@ def rig_csv_name(run: dict) -> str:
 def generate_run(run: dict) -> str:
     """Simulate one run and write both files; returns its id."""
     from fivid.fe import load_model
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
     truth = load_truth()
     model = load_model(truth["model"])
-    ds = simulate(model, law=truth_law(truth), sliding_velocity=run["sliding_velocity"],
-                  normal_load=truth["normal_load"], roughness_ra=run["roughness_ra"],
-                  duration=truth["steady_duration"], sample_rate=truth["sample_rate"], seed=run["seed"],
-                  progress=False, run_id=run["run_id"])
+    ds = simulate(model, OperatingCondition(sliding_velocity=run["sliding_velocity"], normal_load=truth["normal_load"],
+                                            roughness_ra=run["roughness_ra"]),
+                  FrictionInput(law=truth_law(truth), seed=run["seed"]),
+                  schedule=RunSchedule(duration=truth["steady_duration"], sample_rate=truth["sample_rate"]),
+                  output=OutputOptions(progress=False, run_id=run["run_id"]))
     rec = sensor_chain(truth, model, ds, run)
     write_rig_csv(HERE / "twin" / rig_csv_name(run), run, rec, truth)
     write_daq_csv(HERE / "twin_daq" / daq_name(run), run, rec, truth)

@@ -33,7 +33,7 @@ from fivid.pipeline.resources import check_simulation_memory, simulation_memory
 from fivid.signal.spectral import welch_density
 from fivid.signal.steady import steady_part
 from fivid.signal.transient import narrowband_fraction
-from fivid.solver import simulate
+from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.study.analysis import analyse_transient
 from fivid.study.coupling import WEAK_STRONG_THRESHOLD, coupling_bounds, coupling_indicator
 from fivid.surface.rough_pair import RQ_PER_RA
@@ -185,18 +185,16 @@ def element_size(model) -> float:
 
 def _fe_transient(model, tasks, conditions):
     tr = tasks["transient"]
-    kw = {}
-    if "law" in tr:
-        kw["law"] = load_law(tr["law"])
-    elif "mu" in conditions:
-        kw["mu"] = float(conditions["mu"])
-    for name in ("sliding_velocity", "normal_load", "roughness_ra"):  # (mesh, time_step: the model and step)
-        if name in conditions:
-            kw[name] = float(conditions[name])
-    if "time_step" in conditions:
-        kw["safety"] = float(conditions["time_step"])
-    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"],
-                  seed=int(conditions.get("seed", 0)), progress=False, **kw)
+    law = load_law(tr["law"]) if "law" in tr else None
+    mu = float(conditions["mu"]) if law is None and "mu" in conditions else None
+    # (mesh, time_step: the model and step)
+    condition = OperatingCondition(*(float(conditions[name]) if name in conditions else None
+                                     for name in ("sliding_velocity", "normal_load", "roughness_ra")))
+    integration = IntegrationOptions(safety=float(conditions["time_step"])) if "time_step" in conditions \
+        else IntegrationOptions()
+    ds = simulate(model, condition, FrictionInput(law=law, mu=mu, seed=int(conditions.get("seed", 0))),
+                  schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"]),
+                  integration=integration, output=OutputOptions(progress=False))
     ds = steady_part(ds)  # from the run's transient_end
     acc = ds["acceleration"]
     if "sensor" in acc.dims:
