@@ -149,6 +149,7 @@ def _full_scale(rounds, steps):
     from bench_solver import _bare_kernels, _mapped_fraction  # benchmarks/, this script's folder
 
     from fivid.fe import load_model
+    from fivid.solver import OperatingCondition, RunSchedule
     from fivid.solver.stencil import block_stencils
     from fivid.solver.timestep import stable_step
 
@@ -157,8 +158,9 @@ def _full_scale(rounds, steps):
     c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
     bare = _bare_kernels()[0]
     dt = 0.9 * stable_step(model).critical_time_step
-    kw = dict(mu=None, normal_load=None, sliding_velocity=0.03, sample_rate=1.0 / (16 * dt), preload_time=2 * dt,
-              settle_time=0.0, base_ramp_time=2 * dt)
+    kw = dict(condition=OperatingCondition(sliding_velocity=0.03),
+              schedule=RunSchedule(duration=steps * dt, sample_rate=1.0 / (16 * dt), preload_time=2 * dt,
+                                   settle_time=0.0, base_ramp_time=2 * dt))
     out = {"full_scale_model": "configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um)",
            "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
            "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt}
