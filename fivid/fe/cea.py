@@ -239,7 +239,7 @@ def _refine_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -
 def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, n_modes: int = 20,
                                 n_basis: int | None = None, damping: bool = True, augment: bool = True,
                                 velocities: dict | None = None, refine: bool = True, progress=None,
-                                prestress: bool = False):
+                                prestress: bool | None = None):
     """CEA of ``model`` over the friction coefficients ``mu``.
 
     Parameters
@@ -268,10 +268,11 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         Refine each critical μ by root finding (otherwise linear interpolation on the sweep).
     progress : callable, optional
         Called with 1 after each μ point (e.g. ``tqdm.update``).
-    prestress : bool
-        Linearise about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the preload
-        solve's static state to ``K`` (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form;
-        the Rayleigh ``beta K`` damping keeps the elastic ``K``).
+    prestress : bool, optional
+        (None: the model's ``prestress`` key.) Linearise about the prestressed state: add the initial-stress
+        stiffness ``K_sigma`` of the preload solve's static state to ``K`` (:mod:`fivid.fe.prestress`:
+        small-strain, reference-configuration form); the Rayleigh damping is then ``alpha M + beta (K + K_sigma)``,
+        the explicit solver's (its stiffness-proportional term acts on the stencil's ``K + K_sigma``).
 
     Returns
     -------
@@ -284,6 +285,7 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
     from fivid.fe.contact import linearise_preloaded_contact
     from fivid.fe.modal import constrained_matrices
+    from fivid.fe.prestress import geometric_stiffness_matrix
 
     if not model.contacts:
         raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
@@ -291,11 +293,15 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
     if not np.any(contact.direction):
         raise ConfigError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
                           "motion with role 'base' to the config)", key="motions")
+    prestress = model.prestress if prestress is None else bool(prestress)
     K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact,
                                       prestress=state.u if prestress else None)
     Kf = contact.friction_stiffness_matrix()[free][:, free]
     if damping:
-        C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))[free][:, free]
+        K_damp = stiffness_matrix(model)
+        if prestress:
+            K_damp = K_damp + geometric_stiffness_matrix(model, state.u)
+        C = damping_matrix(model, mass="consistent", stiffness=K_damp)[free][:, free]
     else:
         C = sp.csr_matrix(K.shape)
     n_basis = max(3 * n_modes, 40) if n_basis is None else int(n_basis)

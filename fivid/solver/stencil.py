@@ -154,8 +154,13 @@ def _neighbours(block, pad: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     return out
 
 
-def block_stencils(model) -> BlockStencils:
+def block_stencils(model, prestress=None) -> BlockStencils:
     """Stencil coefficients of every block of ``model`` (springs and constraints not included).
+
+    ``prestress`` (n_dofs,), optional: a static state [m] whose initial-stress stiffness
+    (:func:`fivid.fe.prestress.block_geometric_stiffness`) is added to each element's elastic stiffness, so the
+    stencil applies ``K + K_sigma`` (folded into the coefficients: no cost per step; a block whose stress varies
+    is not uniform and takes the mapped path).
 
     A block is uniform when all its element stiffnesses agree to ``1e-12`` of their largest entry
     (float resolution of the element integration, ~10 ulp): its interior nodes then share one coefficient
@@ -163,6 +168,7 @@ def block_stencils(model) -> BlockStencils:
     patches with per-node coefficients; periodic rings list their two seam columns with explicit neighbours.
     """
     from fivid.fe.assembly import block_element_stiffness
+    from fivid.fe.prestress import block_geometric_stiffness
 
     pad = max(b.n_cols for b in model.blocks) + 1
     npd = model.n_nodes + 2 * pad
@@ -170,6 +176,8 @@ def block_stencils(model) -> BlockStencils:
     lst_idx, lst_nbr, lst_coef = [], [], []
     for block in model.blocks:
         ke = block_element_stiffness(block)
+        if prestress is not None:
+            ke = ke + block_geometric_stiffness(block, prestress)
         uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=1e-12 * np.abs(ke[0, 0]).max()))
         uniform = uniform and block.nx >= 2 and block.ny >= 2 and not block.periodic
         c = _block_coefficients(block, ke)

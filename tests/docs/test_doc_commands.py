@@ -133,6 +133,12 @@ DECISIONS: dict[str, Decision] = {
     # docs/roughness.md
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness --quick": slow(
         "4 rough-pair transients of 1.2 ms (under 2 min)"),
+    "fivid study configs/studies/roughness_paper.yaml -o out/rough-paper --quick": slow(
+        "6 points of the 12 x 2 mm cut (about a minute; tests/study/test_roughness_paper.py runs it too)"),
+    "fivid study configs/studies/roughness_paper_cut.yaml -o out/rough-cut": skip(
+        "30 points of the 12 x 2 mm cut, about 20 CPU-minutes (docs/roughness.md gives its measured results)"),
+    "fivid study configs/studies/roughness_paper.yaml -o out/rough-paper": skip(
+        "the 120 x 8 mm study: hours of CPU (docs/roughness.md, 'At the paper's scale: cost')"),
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness": skip(
         "the full seed-003 study is 15-45 min for its 18 points on the shared 2 cores (docs/roughness.md); the "
         "--quick line above runs the same study in the slow test"),
