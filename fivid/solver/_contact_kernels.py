@@ -238,6 +238,7 @@ def _edge_gap(X, u, npd, sn, a, b, n0, n1, nx, ny):
     return gx * nx + gy * ny
 
 
+@kernel
 def _rigid_a(par_p, t):
     """A rigid master's ``SURFACE_A`` column at time ``t`` [s]: a line's normal x-component, a circle's radius
     after its expansion ramp (:func:`fivid.contact._kernels.circle_radius`)."""
