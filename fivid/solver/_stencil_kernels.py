@@ -11,7 +11,8 @@ __all__ = ["StencilArrays", "block_forces", "spring_forces"]
 
 #: the stencil argument of :func:`block_forces` (``block_forces(w, f, stencil)``), built by
 #: :attr:`fivid.solver.stencil.BlockStencils.kernel_args`
-StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "lst_idx", "lst_nbr", "lst_coef"])
+StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "rot", "wr", "lst_idx", "lst_nbr",
+                                             "lst_coef"])
 
 
 @fma_kernel
@@ -133,6 +134,46 @@ def _mapped_component(wx, wy, fo, cm, col0, a, first, ncols, nrows, stride):
 
 
 @fma_kernel
+def _rotate(wx, wy, rx, ry, rot, t0, first, ncols, nrows, stride, sign):
+    """``(rx, ry) = R_k^T (wx, wy)`` (``sign`` 1) or ``R_k (wx, wy)`` (``sign`` -1; in place allowed) on a patch of
+    ``nrows`` rows of ``ncols`` nodes from x-index ``first``, ``R_k`` the rotation by column ``k``'s angle, cosine
+    ``rot[0, t0 + k]`` and sine ``rot[1, t0 + k]``: components from x, y into the column's frame and back."""
+    cs = rot[0, t0:t0 + ncols]
+    sn = rot[1, t0:t0 + ncols]
+    for j in range(nrows):
+        b = uint64(first + j * stride)
+        for k in range(ncols):
+            m = b + uint64(k)
+            x = wx[m]
+            y = wy[m]
+            s = sign * sn[k]
+            rx[m] = cs[k] * x + s * y
+            ry[m] = cs[k] * y - s * x
+
+
+@fma_kernel
+def _rotated_patch(wx, wy, fx, fy, rx, ry, c_uni, rot, blk):
+    """Forces on a patch whose rows are rotations of one stencil (a ring's or an arc's radial layers): the
+    displacements turned into each column's frame (:func:`_rotate` over the whole block, the patch's
+    neighbours included), one shared stencil ``c_uni[blk[5] + row]`` per row in those frames
+    (:func:`_uniform_component`), the forces turned back. ``blk``: the patch's row of
+    ``blocks``."""
+    first = blk[0]
+    ncols = blk[1]
+    nrows = blk[2]
+    stride = blk[3]
+    start = blk[6]
+    t0 = blk[7]
+    _rotate(wx, wy, rx, ry, rot, t0, start, stride, nrows, stride, 1.0)
+    for j in range(nrows):
+        c = c_uni[blk[5] + j]
+        row = first + j * stride
+        _uniform_component(rx, ry, fx, c, 0, row, ncols, 1, stride)
+        _uniform_component(rx, ry, fy, c, 1, row, ncols, 1, stride)
+    _rotate(fx, fy, fx, fy, rot, t0 + first - start, first, ncols, nrows, stride, -1.0)
+
+
+@fma_kernel
 def block_forces(w, f, stencil):
     """``f = K_blocks w`` by the per-block 3x3 stencils (every node of every block is written).
 
@@ -143,20 +184,26 @@ def block_forces(w, f, stencil):
     f : ndarray (2*npd,)
         Output forces [N] (same layout).
     stencil : StencilArrays
-        ``(npd, blocks, c_uni, c_map, lst_idx, lst_nbr, lst_coef)``:
+        ``(npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef)``:
 
     npd : int
         Length of one component (nodes plus padding on both sides).
-    blocks : int64 ndarray (n_patch, 6)
-        Patches: ``first x-index, columns, rows, row stride, kind, coefficients``; kind 0: one shared stencil
-        ``c_uni[coefficients]`` (18 terms per force), 1: the same for rectangular elements (the xy couplings
-        with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
-        ``c_map[:, coefficients + row*columns + column]``. Neighbours outside a block have zero coefficients
-        (the padding keeps their indices in bounds).
+    blocks : int64 ndarray (n_patch, 8)
+        Patches: ``first x-index, columns, rows, row stride, kind, coefficients, block start, angles``; kind 0:
+        one shared stencil ``c_uni[coefficients]`` (18 terms per force), 1: the same for rectangular elements
+        (the xy couplings with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
+        ``c_map[:, coefficients + row*columns + column]``, 3: rows that are rotations of one stencil, in the
+        column frames ``c_uni[coefficients + row]``, the block's column angles at ``rot[:, angles + column]``
+        from its first x-index ``block start`` (:func:`_rotated_patch`). Neighbours outside a block have zero
+        coefficients (the padding keeps their indices in bounds).
     c_uni : ndarray (n_uniform, 36)
         Shared stencils [N m-1].
     c_map : ndarray (36, n_mapped)
         Per-node stencils of mapped patches [N m-1].
+    rot : ndarray (2, n_angles)
+        Cosine and sine of the column angles of rotated patches' blocks.
+    wr : ndarray (2*npd,)
+        Scratch: the displacements of rotated blocks in their column frames [m].
     lst_idx : int64 ndarray (n_list,)
         Listed nodes (block corners, seam columns of periodic rings): x-index.
     lst_nbr : int64 ndarray (n_list, 9)
@@ -164,13 +211,16 @@ def block_forces(w, f, stencil):
     lst_coef : ndarray (n_list, 36)
         Their stencils [N m-1].
     """
-    npd, blocks, c_uni, c_map, lst_idx, lst_nbr, lst_coef = stencil
+    npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef = stencil
     wx = w[:npd]
     wy = w[npd:]
     fx = f[:npd]
     fy = f[npd:]
     for b in range(blocks.shape[0]):
         kind = blocks[b, 4]
+        if kind == 3:
+            _rotated_patch(wx, wy, fx, fy, wr[:npd], wr[npd:], c_uni, rot, blocks[b])
+            continue
         if kind == 2:
             _mapped_component(wx, wy, fx, c_map, blocks[b, 5], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2],
                               blocks[b, 3])
