@@ -64,7 +64,7 @@ def main(argv=None) -> int:
 
     from fivid.fe import load_model
     from fivid.fe.damping import damping_ratio
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
     from fivid.units import parse_quantity
 
     cfg_path = ROOT / "configs" / "models" / ("triboair_coarse.yaml" if args.quick else "triboair.yaml")
@@ -72,8 +72,8 @@ def main(argv=None) -> int:
     cutoff = parse_quantity(args.cutoff, "Hz")
     duration = float(args.duration) if args.duration else 0.1
     law = truth_law(load_truth())
-    kw = dict(law=law, sliding_velocity=0.01, roughness_ra=1.6e-6, normal_load=5.0, seed=7, sample_rate=51200.0,
-              progress=False)
+    kw = dict(condition=OperatingCondition(sliding_velocity=0.01, normal_load=5.0, roughness_ra=1.6e-6),
+              friction=FrictionInput(law=law, seed=7), output=OutputOptions(progress=False))
     out = {"model": cfg_path.stem, "cutoff_hz": cutoff, "duration_s": duration, "quick": bool(args.quick)}
     runs = {}
     for name, cut in (("rayleigh", None), ("band_limited", cutoff)):
@@ -83,9 +83,9 @@ def main(argv=None) -> int:
         if cut is not None:
             c["damping"]["cutoff"] = f"{cut} Hz"
         model = load_model(c)
-        simulate(model, duration=2e-4, **kw)  # compile / warm caches
+        simulate(model, schedule=RunSchedule(duration=2e-4, sample_rate=51200.0), **kw)  # compile / warm caches
         t0 = time.perf_counter()
-        ds = simulate(model, duration=duration, **kw)
+        ds = simulate(model, schedule=RunSchedule(duration=duration, sample_rate=51200.0), **kw)
         wall = time.perf_counter() - t0
         runs[name] = ds
         out[f"{name}_time_step_s"] = float(ds.attrs["time_step"])

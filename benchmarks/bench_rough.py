@@ -34,6 +34,7 @@ def main(argv=None) -> int:
     args, load = parse_guarded(ap, argv)
 
     from fivid.fe import load_model
+    from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, RunSchedule
     from fivid.solver.driver import prepare_run
     from fivid.study.config import load_study
     from fivid.study.roughness import ROUGHNESS_TASK, build_point_model
@@ -45,13 +46,17 @@ def main(argv=None) -> int:
     default = load_model(ROOT / "configs/models/triboair.yaml")
 
     duration = 0.3e-3 if args.quick else 1e-3  # the rough record; the start-up ramps are 0.2 ms
-    rough_prep = prepare_run(rough, duration=duration, sample_rate=study.points["transient"]["sample_rate"],
-                             sliding_velocity=conditions["sliding_velocity"], roughness_ra=conditions["roughness_ra"],
-                             settle_time=spec["settle_time"], gs_tolerance=spec["gs_tolerance"],
-                             gs_max_iterations=spec["gs_max_iterations"])
-    default_prep = prepare_run(default, duration=1e-4 if args.quick else 5e-4, mu=0.3, sliding_velocity=0.01,
-                               normal_load=5.0, sample_rate=51200.0, preload_time=2e-4, settle_time=0.0,
-                               base_ramp_time=1e-4)
+    rough_prep = prepare_run(rough, OperatingCondition(sliding_velocity=conditions["sliding_velocity"],
+                                                       roughness_ra=conditions["roughness_ra"]),
+                             schedule=RunSchedule(duration=duration,
+                                                  sample_rate=study.points["transient"]["sample_rate"],
+                                                  settle_time=spec["settle_time"]),
+                             integration=IntegrationOptions(gs_tolerance=spec["gs_tolerance"],
+                                                            gs_max_iterations=spec["gs_max_iterations"]))
+    default_prep = prepare_run(default, OperatingCondition(sliding_velocity=0.01, normal_load=5.0),
+                               FrictionInput(mu=0.3),
+                               schedule=RunSchedule(duration=1e-4 if args.quick else 5e-4, sample_rate=51200.0,
+                                                    preload_time=2e-4, settle_time=0.0, base_ramp_time=1e-4))
     rough_prep.run(progress=False)  # warm-up: load the cached kernels
     t_rough = t_default = c_rough = c_default = float("inf")
     for _ in range(2 if args.quick else 3):

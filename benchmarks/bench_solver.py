@@ -127,7 +127,7 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
     bare stencil alone (interleaved rounds, best of each)."""
     from fivid.solver.driver import prepare_run
 
-    prep = prepare_run(model, duration=duration, **kw)
+    prep = prepare_run(model, **_lasting(kw, duration))
     s = prep.settings
     steps = s.n_intervals * s.steps_per_interval
     npd, blocks, c_uni = _bare_layout(model, c_rect)
@@ -159,6 +159,15 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
             t_bare_st / t_st)
 
 
+def _lasting(kw, duration, **integration) -> dict:
+    """The benchmark's inputs ``kw`` of :func:`fivid.solver.driver.prepare_run` with ``duration`` [s] of steady
+    sliding and ``integration`` (:class:`fivid.solver.IntegrationOptions` fields)."""
+    from fivid.solver import IntegrationOptions
+
+    return {**kw, "schedule": dataclasses.replace(kw["schedule"], duration=duration),
+            "integration": IntegrationOptions(**integration)}
+
+
 def _time(fn, *args, repeat=3):
     best = np.inf
     for _ in range(repeat):
@@ -180,14 +189,16 @@ def main(argv=None) -> int:
     os.environ["FIVID_CACHE_DIR"] = tempfile.mkdtemp(prefix="fivid-bench-bases-")
 
     from fivid.fe import load_model
+    from fivid.solver import FrictionInput, OperatingCondition, RunSchedule
     from fivid.solver.driver import prepare_run
 
     default = load_model(ROOT / "configs/models/triboair.yaml")
     coarse = load_model(ROOT / "configs/models/triboair_coarse.yaml")
-    kw = dict(mu=0.3, sliding_velocity=0.01, normal_load=5.0, sample_rate=51200.0, preload_time=2e-4,
-              settle_time=0.0, base_ramp_time=1e-4)
+    kw = dict(condition=OperatingCondition(sliding_velocity=0.01, normal_load=5.0), friction=FrictionInput(mu=0.3),
+              schedule=RunSchedule(duration=1e-4, sample_rate=51200.0, preload_time=2e-4, settle_time=0.0,
+                                   base_ramp_time=1e-4))
     # warm-up: load the cached kernels
-    prepare_run(coarse, duration=1e-4, **kw).run(progress=False)
+    prepare_run(coarse, **_lasting(kw, 1e-4)).run(progress=False)
     out = {"benchmark": "solver", "quick": bool(args.quick), "load_average_1min": load}
     rounds = 2 if args.quick else 3
     duration = 1e-4 if args.quick else 5e-4
@@ -225,7 +236,7 @@ def _full_path_throughput(model, kw, duration, rounds, quick, bare, bare_par):
     from fivid.solver.driver import prepare_run
     from fivid.solver.stencil import block_stencils
 
-    prep = prepare_run(model, duration=duration, **kw)
+    prep = prepare_run(model, **_lasting(kw, duration))
     s = prep.settings
     steps = s.n_intervals * s.steps_per_interval
     n_dofs = model.n_dofs
@@ -313,7 +324,7 @@ def _coarse_wall(coarse, kw, quick):
     (``--quick``)."""
     from fivid.solver.driver import prepare_run
 
-    cprep = prepare_run(coarse, duration=1e-3 if quick else 0.1 - (2e-4 + 1e-4), **kw)
+    cprep = prepare_run(coarse, **_lasting(kw, 1e-3 if quick else 0.1 - (2e-4 + 1e-4)))
     t0 = time.perf_counter()
     cprep.run(progress=False)
     cwall = time.perf_counter() - t0
@@ -337,11 +348,11 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
     from fivid.solver.reduced import prepare_reduced
     from fivid.signal.compare import band_distance, steady_psds
 
-    full = prepare_run(model, duration=duration, **kw)
+    full = prepare_run(model, **_lasting(kw, duration))
     t0 = time.perf_counter()
-    plain = prepare_run(model, duration=duration, reduced=True, **kw)
+    plain = prepare_run(model, **_lasting(kw, duration, reduced=True))
     t_plain_setup = time.perf_counter() - t0
-    f_s = scaling_factor * kw["sample_rate"] / 2.0
+    f_s = scaling_factor * kw["schedule"].sample_rate / 2.0
     t0 = time.perf_counter()
     fast = prepare_reduced(full, cutoff=f_s, mass_scaling=f_s)
     t_setup = time.perf_counter() - t0
@@ -352,7 +363,7 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
             t0 = time.perf_counter()
             runs[key] = prep.run(progress=False)
             walls[key] = min(walls[key], time.perf_counter() - t0)
-    runs["ref"] = prepare_run(model, duration=duration, time_step=0.97 * full.settings.time_step, **kw).run(
+    runs["ref"] = prepare_run(model, **_lasting(kw, duration, time_step=0.97 * full.settings.time_step)).run(
         progress=False)
     f, psd, nperseg = steady_psds([runs[k] for k in ("full", "plain", "fast", "ref")], nperseg=256)
     dist = {k: band_distance(f, psd[0], p, (200.0, 10e3))[:2] for k, p in zip(("plain", "fast", "ref"), psd[1:])}
@@ -372,7 +383,7 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
         "reduced_full_wall_s": walls["full"],
         "reduced_setup_s": t_setup,
         "reduced_plain_setup_s": t_plain_setup,
-        "reduced_simulated_s": float(full.settings.n_intervals / (full.settings.oversample * kw["sample_rate"])),
+        "reduced_simulated_s": float(full.settings.n_intervals / (full.settings.oversample * kw["schedule"].sample_rate)),
         "reduced_size": a["reduced_size"],
         "reduced_plain_size": runs["plain"].attrs["reduced_size"],
         "reduced_boundary_nodes": a["reduced_boundary_nodes"],

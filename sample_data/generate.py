@@ -212,14 +212,15 @@ def rig_csv_name(run: dict) -> str:
 def generate_run(run: dict) -> str:
     """Simulate one run and write both files; returns its id."""
     from fivid.fe import load_model
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
     truth = load_truth()
     model = load_model(truth["model"])
-    ds = simulate(model, law=truth_law(truth), sliding_velocity=run["sliding_velocity"],
-                  normal_load=truth["normal_load"], roughness_ra=run["roughness_ra"],
-                  duration=truth["steady_duration"], sample_rate=truth["sample_rate"], seed=run["seed"],
-                  progress=False, run_id=run["run_id"])
+    ds = simulate(model, OperatingCondition(sliding_velocity=run["sliding_velocity"], normal_load=truth["normal_load"],
+                                            roughness_ra=run["roughness_ra"]),
+                  FrictionInput(law=truth_law(truth), seed=run["seed"]),
+                  schedule=RunSchedule(duration=truth["steady_duration"], sample_rate=truth["sample_rate"]),
+                  output=OutputOptions(progress=False, run_id=run["run_id"]))
     rec = sensor_chain(truth, model, ds, run)
     write_rig_csv(HERE / "twin" / rig_csv_name(run), run, rec, truth)
     write_daq_csv(HERE / "twin_daq" / daq_name(run), run, rec, truth)

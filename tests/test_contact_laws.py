@@ -11,7 +11,7 @@ from fivid.contact import GreenwoodWilliamson, NormalLaw
 from fivid.friction import FrictionCurve
 from fivid.errors import ConfigError
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 
 
 def test_gw_f32_closed_form_against_quadrature_and_gamma():
@@ -85,7 +85,8 @@ def test_solver_slides_on_the_stribeck_and_viscous_curve():
     mu, mu_s, vs, cv, V = 0.3, 0.5, 0.01, 1.0, 0.05
     model = load_model(block_on_belt(mu=mu, mu_static=mu_s, belt=V, spring=1e6, stribeck=f"{vs} m/s",
                                      viscous=f"{cv} s/m", alpha="3000 s-1"))
-    ds = simulate(model, duration=0.01, sample_rate=100e3, oversample=1, progress=False, settle_time=0.0)
+    ds = simulate(model, schedule=RunSchedule(duration=0.01, sample_rate=100e3, settle_time=0.0),
+                  output=OutputOptions(oversample=1, progress=False))
     belt = ds.sel(contact="belt")
     late = ds.time.values > 0.008
     assert belt.slip_fraction.values[late].min() == 1.0

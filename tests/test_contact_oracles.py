@@ -12,7 +12,7 @@ from contact_models import block_on_belt, block_on_line, ring_on_shaft
 from fivid.fe import load_model
 from fivid.fe.modal import modal_analysis
 from fivid.fe.static import preload_state
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify import evaluate_case, select_cases
 from fivid.verify.cases.contact_rough_ringing import N_POW, POWER_LAW, bar_on_spring_frequency
 
@@ -91,7 +91,8 @@ def test_coulomb_free_decay_on_a_rigid_flat_with_equal_coefficients():
     decrement; doubled, 2e-4."""
     mu, k = 0.1, 1.24e4
     model = load_model(block_on_belt(mu=mu, mu_static=mu, belt=0.0, spring=k, v0=1.2))
-    ds = simulate(model, duration=0.012, sample_rate=1e6, oversample=1, progress=False, settle_time=0.0)
+    ds = simulate(model, schedule=RunSchedule(duration=0.012, sample_rate=1e6, settle_time=0.0),
+                  output=OutputOptions(oversample=1, progress=False))
     from scipy.signal import find_peaks
 
     t, x = ds.time.values, ds.sensor_displacement.values
@@ -110,7 +111,8 @@ def test_coulomb_free_decay_on_a_rigid_flat_with_equal_coefficients():
 def test_ring_on_frictionless_rotating_shaft_stays_at_rest():
     """mu = 0: the turning shaft exerts only normal forces, through its centre: the ring does not turn."""
     model = load_model(ring_on_shaft(0.0))
-    ds = simulate(model, duration=0.01, sample_rate=20e3, progress=False, settle_time=0.0)
+    ds = simulate(model, schedule=RunSchedule(duration=0.01, sample_rate=20e3, settle_time=0.0),
+                  output=OutputOptions(progress=False))
     assert np.abs(ds.sensor_displacement.values).max() < 1e-12  # vs 7e-5 m with mu = 0.1
     assert float(np.abs(ds.drive_work).max()) == 0.0
 

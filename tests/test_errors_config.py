@@ -48,10 +48,11 @@ def test_model_config_wrong_key_or_unit_names_the_key(edit, key):
 
 def test_one_per_node_friction_builder(model):
     """The solver's constant-friction table and the preload use the same per-node coefficients."""
+    from fivid.friction import FrictionInput, OperatingCondition
     from fivid.friction.curve import slave_coefficients
     from fivid.friction.injection import friction_table
 
     pair = np.concatenate([[p] * len(c.slave_nodes) for p, c in enumerate(model.contacts)])
-    table = friction_table(model, pair, np.zeros(pair.size), total_time=1e-3, dt=1e-6, sample_rate=1e4,
-                           sliding_velocity=0.01, roughness_ra=None, normal_load=None, seed=0)
+    table = friction_table(model, pair, np.zeros(pair.size), FrictionInput(), OperatingCondition(sliding_velocity=0.01),
+                           total_time=1e-3, dt=1e-6, sample_rate=1e4)
     np.testing.assert_array_equal(table.mu[0], slave_coefficients(model))

@@ -199,7 +199,7 @@ def test_graded_fractions_are_geometric():
 
 def test_flat_profile_reproduces_the_rectangular_block_exactly():
     """A zero profile is today's rectangle: same nodes, matrices and simulated signals, bit for bit."""
-    from fivid.solver import simulate
+    from fivid.solver import OutputOptions, RunSchedule, simulate
 
     rect = cantilever()
     flat = profiled_cantilever({"edge": "top", "x": [0.0, 0.016, 0.032], "z": [0.0, 0.0, 0.0]})
@@ -209,7 +209,8 @@ def test_flat_profile_reproduces_the_rectangular_block_exactly():
     assert (stiffness_matrix(a) != stiffness_matrix(b)).nnz == 0
     assert (consistent_mass(a) != consistent_mass(b)).nnz == 0
     np.testing.assert_array_equal(lumped_mass(a), lumped_mass(b))
-    kw = dict(duration=2e-4, sample_rate=51200.0, settle_time=0.0, record_state=True, progress=False)
+    kw = dict(schedule=RunSchedule(duration=2e-4, sample_rate=51200.0, settle_time=0.0),
+              output=OutputOptions(record_state=True, progress=False))
     ra, rb = simulate(a, **kw), simulate(b, **kw)
     np.testing.assert_array_equal(ra.acceleration.values, rb.acceleration.values)
     np.testing.assert_array_equal(ra.strain_energy.values, rb.strain_energy.values)

@@ -100,11 +100,12 @@ def test_explicit_run_with_pressure_closes_the_energy_balance_and_settles_to_the
     round-off. Statics: with mass damping alpha every mode decays like exp(-alpha t / 2) (no mode is
     overdamped: alpha/2 is below the first angular frequency), so after the ramp the displacement tends to
     K^-1 F; after 2 ms, exp(-alpha t/2) = exp(-20) bounds the relative remainder."""
-    from fivid.solver import simulate
+    from fivid.solver import OutputOptions, RunSchedule, simulate
 
     alpha = 2e4
     model = load_model(loaded_cantilever("2 MPa", ramp="0.1 ms", alpha=alpha))
-    ds = simulate(model, duration=2e-3, sample_rate=51200.0, settle_time=0.0, record_state=True, progress=False)
+    ds = simulate(model, schedule=RunSchedule(duration=2e-3, sample_rate=51200.0, settle_time=0.0),
+                  output=OutputOptions(record_state=True, progress=False))
     scale = float(ds.load_work.max())
     assert scale > 0
     assert np.abs(ds.energy_balance_error.values).max() <= 1e-9 * scale
@@ -157,7 +158,7 @@ def test_pressurised_free_ring_stays_axisymmetric_in_the_explicit_solver():
     displacement is the same at every node of a radius, the hoop displacement and the mean displacement vanish.
     Any seam artefact (wrong neighbours across the seam columns) would break the symmetry at O(1). Discrete
     rotational symmetry is exact, so the asymmetry is round-off: ~ steps x eps x |u_r|."""
-    from fivid.solver import simulate
+    from fivid.solver import OutputOptions, RunSchedule, simulate
 
     cfg = {"plane": "stress",
            "bodies": {"ring": {"annulus": {"center": [0, 0], "inner_radius": "30 mm", "outer_radius": "50 mm"},
@@ -166,7 +167,8 @@ def test_pressurised_free_ring_stays_axisymmetric_in_the_explicit_solver():
            "loads": [{"name": "p", "body": "ring", "edge": "inner", "pressure": "40 MPa", "ramp_time": "0.1 ms"}],
            "sensors": [{"name": "top", "body": "ring", "at": ["0 mm", "50 mm"], "direction": "y"}]}
     model = load_model(cfg)
-    ds = simulate(model, duration=2e-4, sample_rate=51200.0, settle_time=0.0, record_state=True, progress=False)
+    ds = simulate(model, schedule=RunSchedule(duration=2e-4, sample_rate=51200.0, settle_time=0.0),
+                  output=OutputOptions(record_state=True, progress=False))
     scale = float(ds.load_work.max())
     assert np.abs(ds.energy_balance_error.values).max() <= 1e-9 * scale
     u = np.asarray(ds.attrs["final_u"]).reshape(-1, 2)

@@ -18,8 +18,11 @@ from fivid.schema import apply_cf_attrs, new_history
 GAIN = 300.0  # acceleration per unit μp [m s-2] of the linear SYNTHETIC response
 
 
-def linear_response(law, velocity, roughness, normal_load, duration, sample_rate, seed):
+def linear_response(friction, condition, schedule):
     """SYNTHETIC simulator: acceleration = GAIN μp(t), a RunDataset whose steady part starts at 0."""
+    law, seed = friction.law, friction.seed
+    velocity, roughness, normal_load = condition.sliding_velocity, condition.roughness_ra, condition.normal_load
+    duration, sample_rate = schedule.duration, schedule.sample_rate
     x = GAIN * law.sample(duration, sample_rate, velocity, roughness, seed=seed, normal_load=normal_load)[0]
     t = np.arange(x.size) / sample_rate
     ds = xr.Dataset({"acceleration": ("time", x), "friction_force": ("time", np.zeros_like(x)),
@@ -61,13 +64,13 @@ def test_identified_law_file_drives_the_fe_solver(tmp_path):
     from fivid.fe import load_model
     from fivid.friction import load_law
     from fivid.identify import identify_friction_law
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
     res = identify_friction_law(run_grid(true_law(), seed=2), band=ANALYSIS_BAND, tare=(0.0, 0.5), nperseg=2048)
     law = load_law(res.write(tmp_path / "law.nc"))
     model = load_model(Path(__file__).resolve().parents[1] / "configs" / "models" / "triboair_coarse.yaml")
-    sim = simulate(model, law=law, sliding_velocity=0.01, normal_load=5.0, roughness_ra=0.4e-6, duration=0.02,
-                   sample_rate=51200.0, seed=1, progress=False)
+    sim = simulate(model, OperatingCondition(0.01, 5.0, 0.4e-6), FrictionInput(law=law, seed=1),
+                   schedule=RunSchedule(duration=0.02, sample_rate=51200.0), output=OutputOptions(progress=False))
     steady = sim.sel(time=slice(sim.attrs["transient_end"], None))
     mu = steady["friction_force"] / steady["normal_force"]
     assert law.sha256 in str(sim.attrs)
@@ -78,7 +81,7 @@ def test_identified_law_file_drives_the_fe_solver(tmp_path):
 @pytest.mark.slow
 def test_inverse_route_with_the_fe_solver():
     from fivid.fe import load_model
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
     model = load_model(Path(__file__).resolve().parents[1] / "configs" / "models" / "triboair_coarse.yaml")
     # at the synthetic law's own amplitude (A ~ 0.004) the coarse model's acceleration in 1-15 kHz is
@@ -86,8 +89,8 @@ def test_inverse_route_with_the_fe_solver():
     # with it); from x8 on the level grows by 20 log10 of the amplitude (x8 -> x64: +16.6 dB vs 18.1).
     # The test works where the perturbation dominates: forward law x10, "measurement" x20.
     law = true_law().scaled(10.0)
-    measured = simulate(model, law=law.scaled(2.0), sliding_velocity=0.01, normal_load=5.0, roughness_ra=0.4e-6,
-                        duration=0.08, sample_rate=51200.0, seed=11, progress=False)
+    measured = simulate(model, OperatingCondition(0.01, 5.0, 0.4e-6), FrictionInput(law=law.scaled(2.0), seed=11),
+                        schedule=RunSchedule(duration=0.08, sample_rate=51200.0), output=OutputOptions(progress=False))
     res = inverse_amplitude_scale(law, measured, model, band=(1000.0, 15000.0), duration=0.08, seed=12,
                                   nperseg=512, max_iterations=3, tolerance_db=0.5)
     print("inverse route iterations", res.iterations)

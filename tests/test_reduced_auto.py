@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reduced_setup import COARSE, RUN, coarse  # noqa: F401  (shared set-up; coarse is a fixture)
+from reduced_setup import COARSE, coarse, run_inputs  # noqa: F401  (shared set-up; coarse is a fixture)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -49,10 +49,9 @@ def test_cached_basis_is_the_built_one_and_the_key_follows_the_model(coarse, tmp
     from fivid.fe import load_model
     from fivid.solver.driver import prepare_run
 
-    kw = dict(duration=1e-3, reduced="reduced", **RUN)
-    fresh = prepare_run(coarse, basis_cache=False, **kw).reduced
-    built = prepare_run(coarse, cache_dir=tmp_path, **kw).reduced
-    read = prepare_run(coarse, cache_dir=tmp_path, **kw).reduced
+    fresh = prepare_run(coarse, **run_inputs(1e-3, reduced="reduced", basis_cache=False)).reduced
+    built = prepare_run(coarse, **run_inputs(1e-3, reduced="reduced", cache_dir=tmp_path)).reduced
+    read = prepare_run(coarse, **run_inputs(1e-3, reduced="reduced", cache_dir=tmp_path)).reduced
     assert (built.basis_source, read.basis_source) == ("built", "cache")
     for name in ("T", "M", "K", "unscaled_mass", "truncation_flexibility", "mode_frequencies"):
         np.testing.assert_array_equal(getattr(read, name), getattr(built, name))
@@ -63,7 +62,7 @@ def test_cached_basis_is_the_built_one_and_the_key_follows_the_model(coarse, tmp
     assert "E: 210 GPa" in text
     (tmp_path / "stiffer.yaml").write_text(text.replace("E: 210 GPa", "E: 212 GPa"))
     stiffer = load_model(tmp_path / "stiffer.yaml")
-    other = prepare_run(stiffer, cache_dir=tmp_path, **kw).reduced
+    other = prepare_run(stiffer, **run_inputs(1e-3, reduced="reduced", cache_dir=tmp_path)).reduced
     assert other.basis_key != read.basis_key and other.basis_source == "built"
 
 
@@ -71,7 +70,7 @@ def test_cache_command_lists_and_clears(tmp_path, capsys, coarse):
     from fivid.cli import main
     from fivid.solver.driver import prepare_run
 
-    prepare_run(coarse, duration=1e-3, reduced="reduced", cache_dir=tmp_path, **RUN)
+    prepare_run(coarse, **run_inputs(1e-3, reduced="reduced", cache_dir=tmp_path))
     assert main(["cache", "info", "--cache-dir", str(tmp_path), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
     assert len(info["entries"]) == 1 and info["entries"][0]["boundary_nodes"] > 0 and info["total_bytes"] > 0
@@ -106,7 +105,7 @@ def test_truncation_shift_predicts_the_reduced_frequency_error(coarse):
     K, M, _ = constrained_matrices(coarse, mass="lumped")
     lam, _ = lowest_modes(K, M, 6)
     full = np.sqrt(lam) / (2.0 * np.pi)
-    rs = prepare_run(coarse, duration=1e-3, reduced=12, **RUN).reduced
+    rs = prepare_run(coarse, **run_inputs(1e-3, reduced=12)).reduced
     nf, nb2 = rs.n_free, 2 * rs.kernel["nb"]
     lam_r, x = _tied_modes(rs.K[:nf, :nf], rs.M[:nf, :nf], np.zeros((0, nf)), (2 * math.pi * 10e3) ** 2)
     n = lam_r.size
@@ -121,14 +120,14 @@ def test_auto_choice_follows_the_tolerance_and_is_recorded(coarse):
     recorded) when the tolerance is below it; ``None`` records the full path as requested."""
     from fivid.solver.driver import choice_attrs, prepare_run
 
-    auto = prepare_run(coarse, duration=1e-3, reduced="auto", **RUN)
+    auto = prepare_run(coarse, **run_inputs(1e-3, reduced="auto"))
     est = auto.choice["estimate"]["lsd_db"]
     assert auto.reduced is not None and 0.0 < est <= 0.5
-    strict = prepare_run(coarse, duration=1e-3, reduced="auto", reduced_tolerance=est / 2, **RUN)
+    strict = prepare_run(coarse, **run_inputs(1e-3, reduced="auto", reduced_tolerance=est / 2))
     assert strict.reduced is None and strict.choice["path"] == "full" and "tolerance" in strict.choice["reason"]
     a = choice_attrs(strict.choice)
     assert a["solver_path"] == "full" and a["reduced_error_estimate_db"] == pytest.approx(est)
-    full = prepare_run(coarse, duration=1e-3, reduced=None, **RUN)
+    full = prepare_run(coarse, **run_inputs(1e-3, reduced=None))
     assert choice_attrs(full.choice)["solver_path"] == "full" and math.isnan(
         choice_attrs(full.choice)["reduced_error_estimate_db"])
 
@@ -159,13 +158,12 @@ def test_estimate_against_measured_full_vs_reduced_distance(model):
     from fivid.solver import simulate
 
     m = load_model(ROOT / "configs/models" / model)
-    kw = dict(duration=0.03, progress=False, **RUN)
-    red = simulate(m, reduced="auto", **kw)
+    red = simulate(m, **run_inputs(0.03, reduced="auto"))
     rough = red.attrs["solver_path"] == "full"
     if rough:
         assert "compliant normal law" in red.attrs["solver_choice_reason"]
-        red = simulate(m, reduced="reduced", **kw)
-    full = simulate(m, reduced=None, **kw)
+        red = simulate(m, **run_inputs(0.03, reduced="reduced"))
+    full = simulate(m, **run_inputs(0.03, reduced=None))
 
     def psd(ds):
         a = ds.acceleration.sel(time=slice(float(ds.attrs["transient_end"]), None))

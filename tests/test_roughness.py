@@ -4,6 +4,7 @@ The runs use a 5 x 1 mm cut of configs/models/rough_pair_short.yaml (20 x 2 elem
 so each takes seconds."""
 
 import copy
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,14 +12,16 @@ import pytest
 
 from fivid.fe import load_model
 from fivid.fe.config import read_config
-from fivid.solver import simulate
+from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.fe.rough_pair import rough_pair_config
 from fivid.score.roughness import detect_shocks, roughness_metrics, vibration_level
 from fivid.surface.rough_pair import synthetic_rough_profiles
 
 LENGTH = 5e-3
-RUN = dict(sample_rate=100e3, progress=False, settle_time=0.05e-3, base_ramp_time=0.2e-3, gs_tolerance=1e-6,
-           gs_max_iterations=30)
+#: the runs' settings: 100 kHz records after 0.05 ms settling and a 0.2 ms base ramp, 30 contact sweeps at most
+SCHEDULE = RunSchedule(duration=0.0, sample_rate=100e3, settle_time=0.05e-3, base_ramp_time=0.2e-3)
+RUN = dict(integration=IntegrationOptions(gs_tolerance=1e-6, gs_max_iterations=30),
+           output=OutputOptions(progress=False))
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +87,7 @@ def test_flat_profiles_give_no_shocks_and_the_smooth_contact_result(tiny_base):
         smooth[key] = built[key]
     smooth = load_model(smooth)
     assert np.array_equal(flat.coords, smooth.coords)
-    kw = dict(RUN, duration=0.3e-3, sliding_velocity=0.03)
+    kw = dict(RUN, condition=OperatingCondition(sliding_velocity=0.03), schedule=replace(SCHEDULE, duration=0.3e-3))
     a, b = simulate(flat, **kw), simulate(smooth, **kw)
     for name in ("friction_force", "normal_force", "sensor_velocity", "contact_normal_force"):
         np.testing.assert_array_equal(a[name].values, b[name].values)
@@ -100,7 +103,7 @@ def test_flat_profiles_give_no_shocks_and_the_smooth_contact_result(tiny_base):
 def test_lv_grows_with_roughness(tiny_base):
     """At one velocity and dead load (1 N), Ra 10 um gives a higher back-face level than Ra 1 um (a result of the
     model, not tuned; measured in docs/roughness.md)."""
-    kw = dict(RUN, duration=2e-3, sliding_velocity=0.05)
+    kw = dict(RUN, condition=OperatingCondition(sliding_velocity=0.05), schedule=replace(SCHEDULE, duration=2e-3))
     lv = {}
     for ra in (1e-6, 10e-6):
         model, _ = _pair(tiny_base, ra)
@@ -124,8 +127,9 @@ def test_a_rough_run_goes_through_fivid_identify(tiny_base, tmp_path):
 
     model, _ = _pair(tiny_base, 5e-6)
     # 2 cm/s: the slider moves 2.4 mm of the 5 mm pair in 0.12 s (at 5 cm/s it ran off the lower body's end)
-    ds = simulate(model, **dict(RUN, duration=0.12, sample_rate=50e3, sliding_velocity=0.02, roughness_ra=5e-6,
-                                run_id="rough-ra5um-v20mm"))
+    ds = simulate(model, OperatingCondition(sliding_velocity=0.02, roughness_ra=5e-6),
+                  schedule=replace(SCHEDULE, duration=0.12, sample_rate=50e3), integration=RUN["integration"],
+                  output=OutputOptions(run_id="rough-ra5um-v20mm", progress=False))
     run = identification_run(ds)
     # the interface's forces stand in for the missing transducer; their mean is the nominal load
     assert run.attrs["normal_load"] == pytest.approx(run.normal_force.values.mean(), rel=1e-12)

@@ -5,6 +5,7 @@ The runs use the study's --quick model (rough_pair_graded_quick.yaml: 544 dofs, 
 6.3e-9 s step): 0.8 ms records, about 10-50 s each on a shared 2-core machine."""
 
 import copy
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +13,7 @@ import pytest
 
 from fivid.fe import load_model
 from fivid.fe.config import read_config
-from fivid.solver import simulate
+from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.fe.rough_pair import rough_pair_config
 from fivid.score.roughness import roughness_metrics, vibration_level
 from fivid.study.roughness import RSM_LEVELS, ROUGHNESS_TASK, build_point_model, point_profiles_design
@@ -21,7 +22,10 @@ from fivid.surface.rough_pair import RSM_PER_CORRELATION_LENGTH, synthetic_rough
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs/models/rough_pair_graded_quick.yaml"
 COARSE = ROOT / "configs/models/rough_pair_graded_coarse.yaml"  # 100 um: the bridge's 0.1 s runs
-RUN = dict(sample_rate=2e6, progress=False, settle_time=0.05e-3, gs_tolerance=1e-6, gs_max_iterations=30)
+#: the runs' settings: 2 MHz records after 0.05 ms settling, 30 contact sweeps at most
+SCHEDULE = RunSchedule(duration=0.0, sample_rate=2e6, settle_time=0.05e-3)
+RUN = dict(integration=IntegrationOptions(gs_tolerance=1e-6, gs_max_iterations=30),
+           output=OutputOptions(progress=False))
 
 
 def test_rsm_per_correlation_length_is_rices_zero_crossing_spacing():
@@ -89,7 +93,7 @@ def test_flat_profiles_give_no_shocks_and_the_smooth_transducer_result():
     flat, _, _, _ = build_point_model(QUICK, {}, {"roughness_ra": 0.0, "normal_load": 1.0})
     smooth = _smooth_quick_model()
     assert np.array_equal(flat.coords, smooth.coords)
-    kw = dict(RUN, duration=0.6e-3, sliding_velocity=0.1)
+    kw = dict(RUN, condition=OperatingCondition(sliding_velocity=0.1), schedule=replace(SCHEDULE, duration=0.6e-3))
     a, b = simulate(flat, **kw), simulate(smooth, **kw)
     for name in ("friction_force", "sensor_velocity", "contact_normal_force"):
         np.testing.assert_array_equal(a[name].values, b[name].values)
@@ -109,7 +113,8 @@ def test_lv_grows_with_roughness_at_fixed_velocity():
     lv = {}
     for ra in (2e-6, 10e-6):
         model, _, _, _ = build_point_model(QUICK, {}, {"roughness_ra": ra, "normal_load": 1.0})
-        ds = simulate(model, **dict(RUN, duration=0.8e-3, sliding_velocity=0.1, roughness_ra=ra))
+        ds = simulate(model, OperatingCondition(sliding_velocity=0.1, roughness_ra=ra),
+                      schedule=replace(SCHEDULE, duration=0.8e-3), **RUN)
         lv[ra] = vibration_level(ds)[0]
         assert np.all(np.isfinite(ds.friction_force.values))
     assert lv[10e-6] > lv[2e-6]

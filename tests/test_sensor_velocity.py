@@ -3,7 +3,7 @@
 import numpy as np
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from solver_models import block_on_base
 
 
@@ -12,7 +12,8 @@ def test_sensor_velocity_integrates_to_the_displacement():
     T sum_{a..b-1} vel = u[b-1] - u[a-1] up to the trapezoid's error (T^2/12 max|a| per interval) and the
     half-step lag of the central-difference velocity (dt/2 |v(t_b) - v(t_a)|)."""
     model = load_model(block_on_base(mu=0.3, spring=1.24e4, v0=3.0, load=-2e-9))
-    ds = simulate(model, duration=0.004, sample_rate=100e3, oversample=1, progress=False, settle_time=0.0)
+    ds = simulate(model, schedule=RunSchedule(duration=0.004, sample_rate=100e3, settle_time=0.0),
+                  output=OutputOptions(oversample=1, progress=False))
     assert ds["sensor_velocity"].attrs["units"] == "m s-1"
     T = 1.0 / 100e3
     v, u = ds.sensor_velocity.values, ds.sensor_displacement.values

@@ -1,5 +1,6 @@
 """The solver's driver and CLI: time-step checks, friction injection, loading sequence, outputs, guards."""
 
+import dataclasses
 import shlex
 import subprocess
 import sys
@@ -10,7 +11,17 @@ import xarray as xr
 
 from fivid.errors import ConfigError
 from fivid.fe import load_model
-from fivid.solver import SimulationDiverged, critical_time_step, simulate, stable_step
+from fivid.solver import (
+    FrictionInput,
+    IntegrationOptions,
+    OperatingCondition,
+    OutputOptions,
+    RunSchedule,
+    SimulationDiverged,
+    critical_time_step,
+    simulate,
+    stable_step,
+)
 from fivid.units import conversion
 from solver_models import block_on_base, cantilever
 
@@ -60,7 +71,8 @@ def test_time_step_above_critical_is_refused():
     model = load_model(cantilever())
     dt = critical_time_step(model)
     with pytest.raises(ConfigError, match="above the critical step"):
-        simulate(model, duration=1e-4, sample_rate=1e5, time_step=1.01 * dt, progress=False)
+        simulate(model, schedule=RunSchedule(duration=1e-4, sample_rate=1e5),
+                 integration=IntegrationOptions(time_step=1.01 * dt), output=OutputOptions(progress=False))
 
 
 def test_divergence_is_diagnosed():
@@ -68,23 +80,31 @@ def test_divergence_is_diagnosed():
     from fivid.solver import driver
 
     model = load_model(cantilever(nx=8, ny=2))
-    prep = driver.prepare_run(model, duration=2e-4, sample_rate=2e5)
+    prep = driver.prepare_run(model, schedule=RunSchedule(duration=2e-4, sample_rate=2e5))
     s = prep.settings
     bad = driver.IntegrationSettings(2.5 * s.critical_time_step, s.critical_time_step, s.omega_max,
                              s.steps_per_interval, s.oversample, s.n_intervals, s.gs_max_iterations, s.gs_tolerance)
     with pytest.raises(SimulationDiverged, match=r"diverged at step \d+ \(t = .* node \d+ \(body 'beam'"):
-        driver.PreparedRun(prep.model, prep.stencils, prep.arrays, prep.friction, bad, prep.schedule,
-                           prep.preload, prep.wrap).run(progress=False)
+        dataclasses.replace(prep, settings=bad).run(progress=False)
 
 
-@pytest.mark.parametrize("bad", [dict(duration=-1.0), dict(sample_rate=0.0), dict(mu=-0.1), dict(safety=1.5),
-                                 dict(mu=0.3, law=StandInLaw()), dict(seed=-1), dict(seed=1.5),
-                                 dict(sample_rate=1e4)])  # 1e-4 s x 1e4 Hz: one sample
-def test_bad_settings_are_refused(bad):
-    kw = dict(duration=1e-4, sample_rate=1e5)
-    kw.update(bad)
+@pytest.mark.parametrize("group, bad", [("schedule", dict(duration=-1.0)), ("schedule", dict(sample_rate=0.0)),
+                                        ("friction", dict(mu=-0.1)), ("integration", dict(safety=1.5)),
+                                        ("friction", dict(mu=0.3, law=StandInLaw())), ("friction", dict(seed=-1)),
+                                        ("friction", dict(seed=1.5)), ("output", dict(oversample=0)),
+                                        ("schedule", dict(sample_rate=1e4))])  # 1e-4 s x 1e4 Hz: one sample
+def test_bad_settings_are_refused(group, bad):
+    kw = dict(friction=FrictionInput(), schedule=RunSchedule(duration=1e-4, sample_rate=1e5),
+              integration=IntegrationOptions(), output=OutputOptions(progress=False))
+    kw[group] = dataclasses.replace(kw[group], **bad)
     with pytest.raises(ConfigError):
-        simulate(load_model(block_on_base()), progress=False, **kw)
+        simulate(load_model(block_on_base()), **kw)
+
+
+def test_a_group_of_the_wrong_type_is_refused_by_name():
+    """The groups are typed: a dict (the old keywords) where a RunSchedule belongs is refused, naming the group."""
+    with pytest.raises(ConfigError, match=r"schedule must be a fivid\.solver\.options\.RunSchedule, got dict"):
+        simulate(load_model(block_on_base()), schedule=dict(duration=1e-4, sample_rate=1e5))
 
 
 def test_friction_injection_modes():
@@ -95,19 +115,19 @@ def test_friction_injection_modes():
     model = load_model(block_on_base())
     pairs = np.zeros(3, dtype=np.int64)
     x = np.array([0.018, 0.020, 0.022])
-    kw = dict(total_time=0.01, dt=1e-7, sample_rate=5e4, sliding_velocity=2.0, roughness_ra=1e-6, normal_load=5.0,
-              seed=3)
-    uni = friction_table(model, pairs, x, law=StandInLaw(injection="uniform"), **kw)
+    kw = dict(total_time=0.01, dt=1e-7, sample_rate=5e4)
+    cond = OperatingCondition(sliding_velocity=2.0, normal_load=5.0, roughness_ra=1e-6)
+    uni = friction_table(model, pairs, x, FrictionInput(law=StandInLaw(injection="uniform"), seed=3), cond, **kw)
     assert uni.rate == pytest.approx(4e5) and np.ptp(uni.mu - uni.mu[:, :1]) == 0.0
     assert uni.mu.mean() == pytest.approx(0.3, abs=3 * 0.02 * np.sqrt(5 / uni.mu.shape[0]))
-    per = friction_table(model, pairs, x, law=StandInLaw(injection="per_node"), **kw)
+    per = friction_table(model, pairs, x, FrictionInput(law=StandInLaw(injection="per_node"), seed=3), cond, **kw)
     c = np.corrcoef(per.mu.T)
     assert np.abs(c[np.triu_indices(3, 1)]).max() < 0.05  # independent: |r| ~ 1/sqrt(N/5) = 0.008
-    con = friction_table(model, pairs, x, law=StandInLaw(injection="convected"), **kw)
+    con = friction_table(model, pairs, x, FrictionInput(law=StandInLaw(injection="convected"), seed=3), cond, **kw)
     lag = int(round((x[2] - x[0]) / 2.0 * con.rate))  # 1e-3 m / 2 m/s = 0.5 ms = 200 samples
     # the downstream node (larger x) sees the same surface point later: mu_2(t) = mu_0(t - (x_2 - x_0)/V)
     np.testing.assert_allclose(con.mu[lag:, 2], con.mu[:-lag, 0], atol=1e-12)
-    again = friction_table(model, pairs, x, law=StandInLaw(injection="per_node"), **kw)
+    again = friction_table(model, pairs, x, FrictionInput(law=StandInLaw(injection="per_node"), seed=3), cond, **kw)
     np.testing.assert_array_equal(again.mu, per.mu)  # reproducible from the seed
 
 
@@ -124,8 +144,8 @@ def test_friction_law_protocol():
 
     model = load_model(block_on_base())
     with pytest.raises(ConfigError, match="NoSample.*'sha256', 'amplitude', 'sample', 'describe'"):
-        friction_table(model, np.zeros(1, dtype=np.int64), np.zeros(1), law=NoSample(), total_time=0.01, dt=1e-7,
-                       sample_rate=5e4, sliding_velocity=1.0, roughness_ra=None, normal_load=None, seed=0)
+        friction_table(model, np.zeros(1, dtype=np.int64), np.zeros(1), FrictionInput(law=NoSample()),
+                       OperatingCondition(sliding_velocity=1.0), total_time=0.01, dt=1e-7, sample_rate=5e4)
 
 
 def test_run_is_a_scoreable_rundataset_and_reproducible(tmp_path):
@@ -134,9 +154,10 @@ def test_run_is_a_scoreable_rundataset_and_reproducible(tmp_path):
     from fivid.io import read_run, write_run
 
     model = load_model(block_on_base(base_velocity=0.02))
-    kw = dict(law=StandInLaw(injection="per_node"), sliding_velocity=0.02, duration=2e-3, sample_rate=51200.0,
-              roughness_ra=0.8e-6, seed=7, progress=False)
-    ds = simulate(model, **kw)
+    kw = dict(condition=OperatingCondition(sliding_velocity=0.02, roughness_ra=0.8e-6),
+              schedule=RunSchedule(duration=2e-3, sample_rate=51200.0), output=OutputOptions(progress=False))
+    friction = FrictionInput(law=StandInLaw(injection="per_node"), seed=7)
+    ds = simulate(model, friction=friction, **kw)
     path = write_run(ds, tmp_path / "sim.nc")
     back = read_run(path)
     for name in ("acceleration", "friction_force", "normal_force", "contact_normal_force", "stick_fraction",
@@ -145,8 +166,8 @@ def test_run_is_a_scoreable_rundataset_and_reproducible(tmp_path):
     assert back.attrs["sample_rate"] == 51200.0 and "seed 7" in back.attrs["source"]
     scale = float(np.abs(ds.external_work).max() + ds.kinetic_energy.max() + ds.friction_dissipation.max())
     assert np.abs(ds.energy_balance_error.values).max() < 1e-9 * scale
-    np.testing.assert_array_equal(simulate(model, **kw).acceleration.values, ds.acceleration.values)
-    other = simulate(model, **{**kw, "seed": 8})
+    np.testing.assert_array_equal(simulate(model, friction=friction, **kw).acceleration.values, ds.acceleration.values)
+    other = simulate(model, friction=dataclasses.replace(friction, seed=8), **kw)
     assert not np.array_equal(other.acceleration.values, ds.acceleration.values)
 
 
@@ -154,8 +175,8 @@ def test_rig_preload_reaches_target_load(root):
     """Coarse rig: the static preload gives the target transducer force; the explicit run settles to it
     (before sliding: friction only sticks), and in steady sliding Ft/Fn = mu (slip at the tip)."""
     model = load_model(root / "configs/models/triboair_coarse.yaml")
-    ds = simulate(model, mu=0.3, sliding_velocity=0.01, normal_load=5.0, duration=2e-3, sample_rate=51200.0,
-                  progress=False)
+    ds = simulate(model, OperatingCondition(sliding_velocity=0.01, normal_load=5.0), FrictionInput(mu=0.3),
+                  schedule=RunSchedule(duration=2e-3, sample_rate=51200.0), output=OutputOptions(progress=False))
     t = ds.time.values
     load_end = model.motion("load").ramp_time
     settled = (t > load_end + 0.5e-3) & (t < ds.attrs["base_start"])
@@ -198,8 +219,8 @@ def test_time_step_halving_on_a_linear_model():
     from fivid.solver import time_step_halving
 
     model = load_model(cantilever(nx=8, ny=2, v0=0.5, beta=1e-8))
-    res = time_step_halving(model, duration=5e-3, sample_rate=200e3, oversample=1, nperseg=256, band=(1e3, 50e3),
-                          progress=False)
+    res = time_step_halving(model, schedule=RunSchedule(duration=5e-3, sample_rate=200e3),
+                            output=OutputOptions(oversample=1, progress=False), nperseg=256, band=(1e3, 50e3))
     assert res.attrs["time_step_fine"] == pytest.approx(res.attrs["time_step_coarse"] / 2, rel=0.01)
     assert abs(res.attrs["level_diff_db"]) < 0.1
     assert res.psd_coarse.size == res.psd_fine.size and res.frequency.attrs["units"] == "Hz"

@@ -6,7 +6,7 @@ import pytest
 from fivid.errors import ConfigError
 from fivid.fe import load_model
 from fivid.fe.damping import damping_ratio, modal_root, rayleigh_through_two_ratios
-from fivid.solver import simulate, stable_step
+from fivid.solver import OutputOptions, RunSchedule, simulate, stable_step
 from fivid.solver.timestep import _largest_stable_step, amplification_matrix
 from solver_models import cantilever
 
@@ -97,7 +97,8 @@ def test_free_decay_damping_follows_the_scheme_at_three_modes():
     bending = (shape[..., 1] ** 2).sum(axis=1) > (shape[..., 0] ** 2).sum(axis=1)
     f_bend = modes["frequency"].values[bending][:3]
     fs = 1.0e6
-    ds = simulate(model, duration=8e-3, sample_rate=fs, oversample=1, progress=False)
+    ds = simulate(model, schedule=RunSchedule(duration=8e-3, sample_rate=fs),
+                  output=OutputOptions(oversample=1, progress=False))
     assert ds.attrs["damping_scheme"] == "band_limited"
     t = ds["time"].values
     y = ds["acceleration"].values.ravel()
@@ -114,7 +115,8 @@ def test_energy_balance_closes_with_band_limited_damping():
     """KE - KE0 = W_ext + W_cn + W_ct - W_int - D_alpha holds to round-off whatever the damping force is, since
     W_int accumulates the force the kernel applied; the inferred damping loss W_int - U is positive."""
     cfg = _with_damping(cantilever(nx=16, ny=3), beta="2e-7 s", alpha="100 s-1", cutoff="20 kHz")
-    ds = simulate(load_model(cfg), duration=2e-3, sample_rate=2e5, oversample=1, progress=False)
+    ds = simulate(load_model(cfg), schedule=RunSchedule(duration=2e-3, sample_rate=2e5),
+                  output=OutputOptions(oversample=1, progress=False))
     ke0 = ds.kinetic_energy.values[0]
     assert np.abs(ds.energy_balance_error.values).max() <= 1e-10 * ke0
     assert ds.damping_dissipation.values[-1] > 0

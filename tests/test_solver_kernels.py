@@ -48,14 +48,15 @@ def test_mapped_block_uses_per_node_coefficients():
 
 
 def _prepare(model, n_int, n_sub, dt):
+    from fivid.friction import FrictionInput, OperatingCondition
     from fivid.friction.injection import friction_table
-    from fivid.solver.setup import Schedule, kernel_arrays
+    from fivid.solver.setup import LoadingSequence, kernel_arrays
 
     st = block_stencils(model)
-    sched = Schedule(None, 0.0, 0.0, None, 0.0)
+    sched = LoadingSequence(None, 0.0, 0.0, None, 0.0)
     ka = kernel_arrays(model, st, sched, tangential_sign=1.0, normal_sign=1.0)
-    fric = friction_table(model, ka.slave_pair, np.zeros(ka.slave_pair.size), total_time=1.0, dt=dt,
-                          sample_rate=1.0, sliding_velocity=0.0, roughness_ra=None, normal_load=None, seed=0)
+    fric = friction_table(model, ka.slave_pair, np.zeros(ka.slave_pair.size), FrictionInput(),
+                          OperatingCondition(sliding_velocity=0.0), total_time=1.0, dt=dt, sample_rate=1.0)
     return st, ka, fric
 
 
@@ -202,14 +203,15 @@ def test_rotated_ring_stencils_give_the_per_node_run(root, monkeypatch):
     (``omega_max ~ 2 / dt``: the fastest mode's phase), 1e-6 here; a wrong rotation or row would be O(1) off."""
     import functools
 
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
     from fivid.solver import stencil as S
 
     model = load_model(root / "configs/models/ring_pressure.yaml")
     assert block_stencils(model).blocks[:, 4].tolist() == [S.PATCH_ROTATED]
-    rotated = simulate(model, duration=1e-3, sample_rate=51200.0, progress=False)
+    args = dict(schedule=RunSchedule(duration=1e-3, sample_rate=51200.0), output=OutputOptions(progress=False))
+    rotated = simulate(model, OperatingCondition(), FrictionInput(), **args)
     monkeypatch.setattr(S, "block_stencils", functools.partial(S.block_stencils, rotated=False))
-    per_node = simulate(model, duration=1e-3, sample_rate=51200.0, progress=False)
+    per_node = simulate(model, OperatingCondition(), FrictionInput(), **args)
     t = float(per_node.time[-1])
     eps = 36 * S.SAME_STENCIL_RTOL * (2.0 / per_node.attrs["time_step"]) * t
     for name in ("acceleration", "sensor_velocity", "strain_energy", "kinetic_energy"):

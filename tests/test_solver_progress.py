@@ -8,7 +8,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_progress_bar_counts_output_samples(monkeypatch):
-    from fivid.solver import simulate
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
     bars = []
 
@@ -23,8 +23,10 @@ def test_progress_bar_counts_output_samples(monkeypatch):
             return super().update(n)
 
     monkeypatch.setattr(tqdm.auto, "tqdm", Recorder)
-    ds = simulate(str(ROOT / "configs/models/triboair_coarse.yaml"), mu=0.3, sliding_velocity=0.01, normal_load=5.0,
-                  duration=1e-3, sample_rate=51200.0, oversample=4, progress=True)
+    ds = simulate(str(ROOT / "configs/models/triboair_coarse.yaml"),
+                  OperatingCondition(sliding_velocity=0.01, normal_load=5.0), FrictionInput(mu=0.3),
+                  schedule=RunSchedule(duration=1e-3, sample_rate=51200.0),
+                  output=OutputOptions(oversample=4, progress=True))
     ((kwargs, bar),) = bars
     assert kwargs["unit"] == "sample"
     assert kwargs["total"] == ds.sizes["time"] == sum(bar.updates)

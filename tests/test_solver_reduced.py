@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reduced_setup import COARSE, RUN, coarse  # noqa: F401  (shared set-up; coarse is a fixture)
+from reduced_setup import COARSE, coarse, run_inputs  # noqa: F401  (shared set-up; coarse is a fixture)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -20,7 +20,7 @@ def test_reduced_natural_frequencies_match_the_full_model(coarse):
     K, M, _ = constrained_matrices(coarse, mass="lumped")
     lam, _ = lowest_modes(K, M, 10)
     full = np.sqrt(lam) / (2.0 * np.pi)
-    rs = prepare_run(coarse, duration=1e-3, reduced=40, **RUN).reduced
+    rs = prepare_run(coarse, **run_inputs(1e-3, reduced=40)).reduced
     assert rs.mode_frequencies.size == 40
     np.testing.assert_allclose(rs.natural_frequencies(10), full, rtol=1e-3)
     # Craig-Bampton only adds stiffness: every reduced frequency is an upper bound
@@ -30,7 +30,7 @@ def test_reduced_natural_frequencies_match_the_full_model(coarse):
 def test_reduced_contact_run_closes_its_energy_balance_and_records_the_truncation(coarse):
     from fivid.solver import simulate
 
-    ds = simulate(coarse, duration=1e-3, reduced=True, progress=False, **RUN)
+    ds = simulate(coarse, **run_inputs(1e-3, reduced=True))
     scale = max(float(np.abs(ds.external_work).max()), float(ds.kinetic_energy.max()))
     assert float(ds.contact_normal_force.max()) > 0.0
     assert float(np.abs(ds.energy_balance_error).max()) < 1e-10 * scale
@@ -103,9 +103,8 @@ def test_reduced_psd_matches_the_full_run_in_band(coarse):
     0.003 dB, so the Welch scatter of independent estimates does not enter this paired comparison)."""
     from fivid.solver import simulate
 
-    kw = dict(RUN, duration=0.05, progress=False)
-    full = simulate(coarse, **kw)
-    red = simulate(coarse, reduced=True, **kw)
+    full = simulate(coarse, **run_inputs(0.05))
+    red = simulate(coarse, **run_inputs(0.05, reduced=True))
     _assert_same_in_band(full, red)
 
 
@@ -177,7 +176,7 @@ def test_mass_scaled_reduced_system_keeps_the_first_ten_frequencies_and_closes_i
     K, M, _ = constrained_matrices(coarse, mass="lumped")
     lam, _ = lowest_modes(K, M, 10)
     full = np.sqrt(lam) / (2.0 * np.pi)
-    prep = prepare_run(coarse, duration=1e-3, **RUN)
+    prep = prepare_run(coarse, **run_inputs(1e-3))
     plain = prepare_reduced(prep, n_modes=40)
     scaled = prepare_reduced(prep, n_modes=40, mass_scaling=153600.0)
     np.testing.assert_allclose(scaled.reduced.natural_frequencies(10), full, rtol=1e-3)
@@ -201,7 +200,7 @@ def test_mass_scaled_reduction_matches_the_full_run_in_band_at_a_longer_step(coa
     from fivid.solver.driver import prepare_run
     from fivid.solver.reduced import prepare_reduced
 
-    full = prepare_run(coarse, duration=0.05, **RUN)
+    full = prepare_run(coarse, **run_inputs(0.05))
     fast = prepare_reduced(full, cutoff=153600.0, mass_scaling=153600.0)
     assert fast.settings.time_step >= 6 * full.settings.time_step
     ds_full, ds_fast = full.run(progress=False), fast.run(progress=False)
@@ -214,15 +213,16 @@ def test_driver_mass_scaling_option():
     refused without reduced=True or with a mode count (its frequency sets the modes kept)."""
     from fivid.errors import ConfigError
     from fivid.fe import load_model
+    from fivid.solver import FrictionInput, IntegrationOptions, RunSchedule
     from fivid.solver.driver import prepare_run
 
     model = load_model(COARSE)
-    kw = dict(mu=0.3, duration=2e-3, sample_rate=51200.0)
-    plain = prepare_run(model, reduced=True, **kw)
-    scaled = prepare_run(model, reduced=True, reduced_mass_scaling=153.6e3, **kw)
+    kw = dict(friction=FrictionInput(mu=0.3), schedule=RunSchedule(duration=2e-3, sample_rate=51200.0))
+    plain = prepare_run(model, integration=IntegrationOptions(reduced=True), **kw)
+    scaled = prepare_run(model, integration=IntegrationOptions(reduced=True, reduced_mass_scaling=153.6e3), **kw)
     assert scaled.reduced.attrs()["reduced_mass_scaling"] == 153.6e3
     assert scaled.settings.time_step > plain.settings.time_step
     with pytest.raises(ConfigError, match="reduced=True"):
-        prepare_run(model, reduced_mass_scaling=153.6e3, **kw)
+        prepare_run(model, integration=IntegrationOptions(reduced_mass_scaling=153.6e3), **kw)
     with pytest.raises(ConfigError, match="number of modes"):
-        prepare_run(model, reduced=20, reduced_mass_scaling=153.6e3, **kw)
+        prepare_run(model, integration=IntegrationOptions(reduced=20, reduced_mass_scaling=153.6e3), **kw)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from fivid.fe import load_model, lumped_mass, stiffness_matrix
-from fivid.solver import simulate
+from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
 
 
 @pytest.mark.slow
@@ -25,8 +25,8 @@ def test_coulomb_rig_psd_peaks_at_coupled_modes(root):
     from fivid.fe.static import contact_geometry
 
     model = load_model(root / "configs/models/triboair_coarse.yaml")
-    ds = simulate(model, mu=0.3, sliding_velocity=0.01, normal_load=5.0, duration=0.1, sample_rate=51200.0,
-                  progress=False)
+    ds = simulate(model, OperatingCondition(sliding_velocity=0.01, normal_load=5.0), FrictionInput(mu=0.3),
+                  schedule=RunSchedule(duration=0.1, sample_rate=51200.0), output=OutputOptions(progress=False))
     steady = ds.time.values > ds.attrs["transient_end"]
     active = ds.open_fraction.values[steady].mean()
     assert active == pytest.approx(5 / 6)  # one of six slave nodes carries the load: the tip corner

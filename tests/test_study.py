@@ -301,7 +301,7 @@ def test_study_points_take_the_automatic_path_unless_forced():
     assert solver_choice({}, {"mu": 0.3}) == {"reduced": "auto", "reduced_tolerance": 0.5}
     assert solver_choice({"reduced_tolerance": 0.2}, {}) == {"reduced": "auto", "reduced_tolerance": 0.2}
     assert solver_choice({"solver": "full"}, {}) == {"reduced": None}
-    assert solver_choice({"solver": "reduced"}, {"mesh": 2.0}) == {"reduced": True}
+    assert solver_choice({"solver": "reduced"}, {"mesh": 2.0}) == {"reduced": "reduced"}
     assert solver_choice({}, {"mesh": 2.0}) == {"reduced": None}
     assert solver_choice({}, {"time_step": 0.5}) == {"reduced": None}
     study = load_study({"fivid-study": 1, "name": "s", "system": {"model": str(ROOT / "configs/models/triboair_coarse.yaml")},

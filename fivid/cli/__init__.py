@@ -22,10 +22,10 @@ import pkgutil
 import sys
 
 from fivid import __version__
-from fivid.cli.types import QuantityArgument, integer_at_least, quantity
+from fivid.cli.types import QuantityArgument, in_si, integer_at_least, quantity
 from fivid.errors import FividError, Interrupted, exit_status
 
-__all__ = ["main", "build_parser", "integer_at_least", "quantity", "QuantityArgument", "quiet",
+__all__ = ["main", "build_parser", "integer_at_least", "quantity", "QuantityArgument", "in_si", "quiet",
            "EXIT_OK", "EXIT_FAILURE", "EXIT_BAD_INPUT", "EXIT_BELOW_THRESHOLD", "exit_status_of_signal"]
 
 EXIT_OK = 0

@@ -10,7 +10,7 @@ import argparse
 import math
 import re
 
-__all__ = ["integer_at_least", "quantity", "QuantityArgument"]
+__all__ = ["integer_at_least", "quantity", "QuantityArgument", "in_si"]
 
 # canonical SI unit -> (the physical quantity it measures, units usual on a rig, for the messages)
 _DIMENSIONS = {
@@ -105,3 +105,7 @@ def quantity(units: str, *, bare_numbers: bool = True, positive: bool = False, n
     return parse
 
 
+def in_si(value) -> float | None:
+    """A parsed :func:`quantity` argument (a :class:`QuantityArgument`, already in SI units) as a plain float;
+    None (an option not given) stays None."""
+    return None if value is None else float(value)

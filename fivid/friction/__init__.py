@@ -11,6 +11,8 @@
 - :func:`friction_table` (:class:`FrictionTable`) — μ0 + μp(t) per contact node on the solver's time grid, the
   injection modes (uniform, per node, convected); the kernels (:mod:`fivid.friction._curve_kernels`) evaluate the
   curve and the table, reading the curve's parameters from a pair's record (:mod:`fivid.contact._layout_kernels`).
+- :class:`OperatingCondition`, :class:`FrictionInput` — the condition (V, Fn, Ra) and the friction (law or constant
+  μ, seed) of a simulation, the first groups of :func:`fivid.solver.simulate`.
 - :mod:`fivid.friction.jenkins` — Jenkins (Masing) and Iwan elements for friction dampers (seed 004).
 """
 
@@ -31,6 +33,7 @@ from fivid.friction.prediction import AmplitudePrediction, ExtrapolationWarning,
 from fivid.friction.laws import INJECTION_MODES, CoulombLaw, FrictionLaw, PerturbedCoulombLaw
 from fivid.friction.curve import FrictionCurve, slave_coefficients
 from fivid.friction.injection import FrictionTable, friction_table
+from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.friction.synthesis import synthesise_perturbation
 
 __all__ = [
@@ -53,6 +56,8 @@ __all__ = [
     "FrictionCurve",
     "slave_coefficients",
     "FrictionTable",
+    "FrictionInput",
+    "OperatingCondition",
     "friction_table",
     "load_law",
     "write_law",

@@ -24,6 +24,7 @@ import numpy as np
 
 from fivid.errors import ConfigError
 from fivid.friction.curve import slave_coefficients
+from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.friction.laws import FRICTION_LAW_MEMBERS, INJECTION_MODES, FrictionLaw
 
 __all__ = ["FrictionTable", "friction_table"]
@@ -43,9 +44,8 @@ class FrictionTable:
     injection: str
 
 
-def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, *, law=None, mu=None, total_time: float,
-                   dt: float, sample_rate: float, sliding_velocity: float, roughness_ra: float | None,
-                   normal_load: float | None, seed: int) -> FrictionTable:
+def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, friction: FrictionInput,
+                   condition: OperatingCondition, *, total_time: float, dt: float, sample_rate: float) -> FrictionTable:
     """Build the friction table of the slave nodes (see the module docstring).
 
     Parameters
@@ -55,17 +55,17 @@ def friction_table(model, slave_pair: np.ndarray, slave_x: np.ndarray, *, law=No
         Contact-pair index of each slave node.
     slave_x : ndarray (n_slave,)
         Reference position of each slave node along the sliding direction [m] (for ``convected``).
-    law : friction-law object, optional
-    mu : float, optional
-        Constant friction coefficient for every pair (overrides the pairs' ``mu``); not with ``law``.
+    friction : FrictionInput
+        The law (or constant ``mu``, overriding the pairs' ``mu``; not both) and the seed of the law's synthesis.
+    condition : OperatingCondition
+        ``sliding_velocity`` [m s-1] as run, signed along the base motion; ``roughness_ra`` [m] and
+        ``normal_load`` [N] (or None), passed to the law.
     total_time, dt, sample_rate : float
         Simulated time [s], solver step [s], output sample rate [Hz].
-    sliding_velocity : float
-        [m s-1]; signed along the base motion.
-    roughness_ra, normal_load : float or None
-        [m], [N]; passed to the law.
-    seed : int
     """
+    law, mu, seed = friction.law, friction.mu, friction.seed
+    sliding_velocity, roughness_ra, normal_load = condition.sliding_velocity, condition.roughness_ra, \
+        condition.normal_load
     ns = slave_pair.size
     if law is not None and mu is not None:
         raise ConfigError("give either a friction law or a constant mu, not both")

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fivid.errors import ConfigError, FividError
+from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.solver.options import RunSchedule
 
 __all__ = ["InverseAmplitude", "inverse_amplitude_scale"]
 
@@ -63,7 +65,7 @@ class InverseAmplitude:
 
 def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float = 0.1, seed: int = 0,
                             nperseg: int | None = None, max_iterations: int = 4, tolerance_db: float = 0.5,
-                            simulator=None, progress=None) -> InverseAmplitude:
+                            simulator=None) -> InverseAmplitude:
     """Amplitude scale g such that the simulated acceleration level matches ``measured`` in ``band``.
 
     Parameters
@@ -88,10 +90,9 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
     tolerance_db : float
         Stop when ``|level_diff_db|`` is below this [dB].
     simulator : callable, optional
-        ``simulator(law, velocity, roughness, normal_load, duration, sample_rate, seed) -> RunDataset``;
-        default :func:`fivid.solver.simulate` on ``model``.
-    progress : bool, optional
-        Progress bar of the simulations.
+        ``simulator(friction, condition, schedule) -> RunDataset`` (a :class:`fivid.friction.FrictionInput`, a
+        :class:`fivid.friction.OperatingCondition` and a :class:`fivid.solver.RunSchedule`); default
+        :func:`fivid.solver.simulate` on ``model`` (progress bar only on a terminal).
     """
     from fivid.score import score_runs
     from fivid.signal.steady import steady_part
@@ -106,10 +107,8 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
             raise FividError("the inverse route needs an FE model (model=) to simulate")
         from fivid.solver import simulate
 
-        def simulator(lw, velocity, roughness, normal_load, duration, sample_rate, seed):
-            return simulate(model, law=lw, sliding_velocity=velocity, normal_load=normal_load,
-                            roughness_ra=roughness, duration=duration, sample_rate=sample_rate, seed=seed,
-                            progress=progress)
+        def simulator(friction, condition, schedule):
+            return simulate(model, condition, friction, schedule=schedule)
 
     v = float(measured.attrs["sliding_velocity"])
     ra = float(measured.attrs["roughness_ra"])
@@ -120,8 +119,9 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
     a_fwd = float(law.amplitude(v, ra, fn))
     g, history = 1.0, []
     converged, reason, peaks, used_nperseg = False, f"not converged in {max_iterations} iterations", {}, 0
+    condition, schedule = OperatingCondition(v, fn, ra), RunSchedule(duration=duration, sample_rate=fs)
     for it in range(int(max_iterations)):
-        sim = steady_part(simulator(law.scaled(g), v, ra, fn, duration, fs, seed))
+        sim = steady_part(simulator(FrictionInput(law=law.scaled(g), seed=seed), condition, schedule))
         scores = score_runs(meas, sim, band=band, nperseg=nperseg)
         d = float(scores["level_diff_db"])
         used_nperseg = int(scores.attrs["nperseg"])

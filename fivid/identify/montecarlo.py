@@ -22,14 +22,17 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+from dataclasses import dataclass
 
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.signal.steady import steady_part
+from fivid.solver.options import IntegrationOptions, OutputOptions, RunSchedule
 
 __all__ = ["draw_coefficients", "law_with_coefficients", "sample_seeds", "monte_carlo_laws", "sample_spectrum",
-           "SAMPLED", "NOT_SAMPLED"]
+           "EnvelopeSpectrum", "SAMPLED", "NOT_SAMPLED"]
 
 log = logging.getLogger("fivid")
 
@@ -108,25 +111,49 @@ def monte_carlo_laws(law, n: int, seed: int = 0) -> dict:
             "seeds": sample_seeds(seed, n), "covariance_sampled": used}
 
 
-def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration", sensor=None,
-                    nperseg: int = 8192, noverlap=None, window: str = "hann", detrend: str = "constant",
-                    settle: float = 0.0) -> dict:
+@dataclass(frozen=True)
+class EnvelopeSpectrum:
+    """The spectrum taken of each Monte-Carlo sample, and the band of the envelope's band levels.
+
+    Attributes
+    ----------
+    variable, sensor : str, str or None
+        Which signal (as ``fivid score``: ``sensor`` when the variable has several; default acceleration).
+    nperseg : int
+        Welch segment length [samples] (default 8192, as ``fivid score``).
+    noverlap, window, detrend
+        The other Welch settings (:func:`fivid.signal.welch_psd`; default half-overlapping Hann segments, constant
+        detrend).
+    settle : float
+        Time [s] skipped after the end of each simulation's transient (as the pipeline's scores skip it).
+    band : (float, float) or None
+        Band [Hz] of the stored 1/3-octave band levels (None: that of the scores).
+    """
+
+    variable: str = "acceleration"
+    sensor: str | None = None
+    nperseg: int = 8192
+    noverlap: int | None = None
+    window: str = "hann"
+    detrend: str = "constant"
+    settle: float = 0.0
+    band: tuple[float, float] | None = None
+
+
+def sample_spectrum(model, friction: FrictionInput, condition: OperatingCondition, schedule: RunSchedule,
+                    integration: IntegrationOptions = IntegrationOptions(),
+                    spectrum: EnvelopeSpectrum = EnvelopeSpectrum()) -> dict:
     """One Monte-Carlo sample (runs on a worker): simulate, keep the steady part, Welch PSD.
 
     Parameters
     ----------
     model : Model
-    law : PerturbedCoulombLaw
-        This sample's law (:func:`monte_carlo_laws`).
-    params : dict
-        Keyword arguments of :func:`fivid.solver.simulate` (``seed``, ``duration``, ``sample_rate``, the
-        condition ...).
-    variable, sensor
-        Which signal (as ``fivid score``: ``sensor`` when the variable has several).
-    nperseg, noverlap, window, detrend
-        Welch settings (:func:`fivid.signal.welch_psd`).
-    settle : float, default 0
-        Time [s] skipped after the end of the transient (as the pipeline's scores skip it).
+    friction : FrictionInput
+        This sample's law (:func:`monte_carlo_laws`) and synthesis seed.
+    condition, schedule, integration
+        As :func:`fivid.solver.simulate` (no progress bar).
+    spectrum : EnvelopeSpectrum
+        The signal and the Welch settings.
 
     Returns
     -------
@@ -139,13 +166,15 @@ def sample_spectrum(model, law, params: dict, *, variable: str = "acceleration",
     from fivid.signal.welch import welch_psd
     from fivid.solver import simulate
 
-    ds = simulate(model, law=law, progress=False, **params)
-    steady = steady_part(ds, settle=settle)  # from the simulation's transient_end
-    label = f"Monte-Carlo sample (seed {params.get('seed')})"
-    da = _signal(steady, variable, sensor, label)
-    psd = welch_psd(da, nperseg=int(nperseg), noverlap=noverlap, window=window, detrend=detrend,
-                    fs=float(params["sample_rate"]), label=label)
-    amp = law.amplitude(ds.attrs["sliding_velocity"], params.get("roughness_ra"), params.get("normal_load"))
+    law = friction.law
+    ds = simulate(model, condition, friction, schedule=schedule, integration=integration,
+                  output=OutputOptions(progress=False))
+    steady = steady_part(ds, settle=spectrum.settle)  # from the simulation's transient_end
+    label = f"Monte-Carlo sample (seed {friction.seed})"
+    da = _signal(steady, spectrum.variable, spectrum.sensor, label)
+    psd = welch_psd(da, nperseg=int(spectrum.nperseg), noverlap=spectrum.noverlap, window=spectrum.window,
+                    detrend=spectrum.detrend, fs=float(schedule.sample_rate), label=label)
+    amp = law.amplitude(ds.attrs["sliding_velocity"], condition.roughness_ra, condition.normal_load)
     keys = ("nperseg", "noverlap", "window", "detrend", "equivalent_degrees_of_freedom", "fft_backend")
     return {"frequency": psd["frequency"].values, "psd": np.asarray(psd.values, dtype=float),
             "units": da.attrs["units"], "amplitude": float(np.asarray(amp).reshape(-1)[0]),

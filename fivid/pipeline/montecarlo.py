@@ -10,65 +10,77 @@ depend on the number of workers nor on the order in which the samples finish.
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from fivid.errors import ConfigError, FividError
+from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.identify.montecarlo import NOT_SAMPLED, SAMPLED, EnvelopeSpectrum, monte_carlo_laws, sample_spectrum
+from fivid.solver.options import IntegrationOptions, RunSchedule
 
-__all__ = ["run_monte_carlo"]
+__all__ = ["run_monte_carlo", "SampleExecution"]
 
 log = logging.getLogger("fivid")
 
 
-def _sample_task(model, law, params, spectrum_kw):
-    from fivid.identify.montecarlo import sample_spectrum
+@dataclass(frozen=True)
+class SampleExecution:
+    """Where the Monte-Carlo samples run.
 
-    return sample_spectrum(model, law, params, **spectrum_kw)
+    Attributes
+    ----------
+    workers : int
+        dask worker processes (default 2); 0 runs the samples in this process.
+    scheduler : str or None
+        ``tcp://host:port`` of a running dask scheduler.
+    progress : bool or None
+        Progress bar over the samples (None: when the terminal is interactive).
+    """
+
+    workers: int = 2
+    scheduler: str | None = None
+    progress: bool | None = None
 
 
-def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float, sample_rate: float,
-                    sliding_velocity=None, normal_load=None, roughness_ra=None, time_step=None, reduced=None,
-                    reduced_mass_scaling=None, reduced_tolerance=0.5, error_band=None, variable: str = "acceleration", sensor=None, nperseg: int = 8192,
-                    settle: float = 0.0, band=None,
-                    workers: int = 2, scheduler: str | None = None, progress=None, attrs: dict | None = None):
+def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSchedule, *, samples: int, seed: int = 0,
+                    integration: IntegrationOptions = IntegrationOptions(),
+                    spectrum: EnvelopeSpectrum = EnvelopeSpectrum(),
+                    execution: SampleExecution = SampleExecution(), attrs: dict | None = None):
     """Simulate ``samples`` draws of ``law`` at one condition and return their PSD envelope (a Dataset).
 
     Parameters
     ----------
     model : Model
     law : PerturbedCoulombLaw
+    condition, schedule : OperatingCondition, RunSchedule
+        As :func:`fivid.solver.simulate` (sliding velocity [m s-1], normal load [N], Ra [m]; duration [s], sample
+        rate [Hz]).
     samples : int
         Number of Monte-Carlo samples (>= 2).
     seed : int
         Seed of the whole Monte-Carlo (coefficient draws and every sample's synthesis seed).
-    duration, sample_rate, sliding_velocity, normal_load, roughness_ra, time_step
-        As :func:`fivid.solver.simulate` [s, Hz, m s-1, N, m, s].
-    reduced, reduced_mass_scaling, reduced_tolerance, error_band
-        The solver path, as :func:`fivid.solver.simulate` (``"auto"``: reduced when its estimated in-band error
-        is within the tolerance [dB] over ``error_band`` [Hz]). The samples share one model, so with a reduced path
-        the basis is built once (the first worker, under the cache's lock) and read by the others.
-    variable, sensor
-        The signal whose PSD is taken (as ``fivid score``).
-    nperseg : int
-        Welch segment length [samples]; the analysed record (``(duration - settle) * sample_rate``) must hold one.
-    settle : float
-        Time [s] skipped after the end of each simulation's transient before the PSD.
-    band : (float, float), optional
-        Band [Hz] of the stored 1/3-octave band levels (default: that of the scores).
-    workers : int
-        dask worker processes; 0 runs the samples in this process.
-    scheduler : str, optional
-        ``tcp://host:port`` of a running dask scheduler.
-    progress : bool, optional
-        Progress bar over the samples (default: when the terminal is interactive).
+    integration : IntegrationOptions
+        The time step and the solver path, as :func:`fivid.solver.simulate` (``reduced="auto"``: reduced when its
+        estimated in-band error is within the tolerance [dB] over ``error_band`` [Hz]). The samples share one
+        model, so with a reduced path the basis is built once (the first worker, under the cache's lock) and read
+        by the others.
+    spectrum : EnvelopeSpectrum
+        The signal whose PSD is taken (as ``fivid score``), the Welch segment length [samples] (the analysed record,
+        ``(duration - settle) * sample_rate``, must hold one), the time [s] skipped after each simulation's
+        transient, and the band [Hz] of the stored 1/3-octave band levels.
+    execution : SampleExecution
+        dask workers (0: in this process) or a scheduler's address, and the progress bar.
     attrs : dict, optional
         More provenance for the file (law file name and sha256, model, command line).
     """
     from tqdm.auto import tqdm
 
-    from fivid.identify.montecarlo import NOT_SAMPLED, SAMPLED, monte_carlo_laws
     from fivid.score.envelope import envelope_dataset
 
+    duration, sample_rate = schedule.duration, schedule.sample_rate
+    nperseg, settle = spectrum.nperseg, spectrum.settle
+    workers, scheduler, progress = execution.workers, execution.scheduler, execution.progress
     n_steady = int(np.floor((float(duration) - float(settle)) * float(sample_rate) + 1e-9))
     if n_steady < int(nperseg):
         raise ConfigError(f"the analysed record of {duration:g} s (less {settle:g} s settling) at {sample_rate:g} Hz has "
@@ -79,24 +91,22 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
 
         check_scheduler_address(scheduler)
     draws = monte_carlo_laws(law, samples, seed)
-    base = dict(duration=float(duration), sample_rate=float(sample_rate), sliding_velocity=sliding_velocity,
-                normal_load=normal_load, roughness_ra=roughness_ra, time_step=time_step, reduced=reduced,
-                reduced_mass_scaling=reduced_mass_scaling, reduced_tolerance=reduced_tolerance, error_band=error_band)
-    spectrum_kw = dict(variable=variable, sensor=sensor, nperseg=int(nperseg), settle=float(settle))
-    items = {f"mc{i:04d}": (model, draws["laws"][i], {**base, "seed": int(draws["seeds"][i])}, spectrum_kw)
-             for i in range(int(samples))}
+    schedule = replace(schedule, duration=float(duration), sample_rate=float(sample_rate))
+    spectrum = replace(spectrum, nperseg=int(nperseg), settle=float(settle))
+    items = {f"mc{i:04d}": (model, FrictionInput(law=draws["laws"][i], seed=int(draws["seeds"][i])), condition,
+                            schedule, integration, spectrum) for i in range(int(samples))}
     results = {}
     bar = tqdm(total=len(items), desc="Monte-Carlo", unit="sample", leave=False, disable=None if progress is None
                else not progress)
     try:
         if workers == 0 and scheduler is None:
             for name, args in items.items():
-                results[name] = _sample_task(*args)
+                results[name] = sample_spectrum(*args)
                 bar.update(1)
         else:
             from fivid.pipeline.sweep import map_tasks
 
-            for name, out, seconds, pid in map_tasks(_sample_task, items, workers=max(int(workers), 1),
+            for name, out, seconds, pid in map_tasks(sample_spectrum, items, workers=max(int(workers), 1),
                                                      scheduler=scheduler):
                 log.info("Monte-Carlo %s: %.3g s on worker pid %d", name, seconds, pid)
                 results[name] = out
@@ -114,8 +124,8 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
         "not_sampled": NOT_SAMPLED,
         "coefficient_covariance_sampled": int(draws["covariance_sampled"]),
         "law_sha256": str(law.sha256),
-        "variable": variable,
-        "sensor": "" if sensor is None else str(sensor),
+        "variable": spectrum.variable,
+        "sensor": "" if spectrum.sensor is None else str(spectrum.sensor),
         "duration": float(duration),
         "duration_units": "s",
         "sample_rate": float(sample_rate),
@@ -131,12 +141,12 @@ def run_monte_carlo(model, law, *, samples: int, seed: int = 0, duration: float,
     paths = sorted({r.get("solver", {}).get("solver_path", "full") for r in ordered})
     meta.update({k: v for k, v in ordered[0].get("solver", {}).items()})  # the same model and settings for all
     meta["solver_path"] = "+".join(paths)
-    for name, value in (("sliding_velocity", sliding_velocity), ("normal_load", normal_load),
-                        ("roughness_ra", roughness_ra)):
+    for name, value in (("sliding_velocity", condition.sliding_velocity), ("normal_load", condition.normal_load),
+                        ("roughness_ra", condition.roughness_ra)):
         if value is not None:
             meta[name] = float(value)
     meta.update(attrs or {})
-    return envelope_dataset(freq, np.stack([r["psd"] for r in ordered]), ordered[0]["units"], band=band,
+    return envelope_dataset(freq, np.stack([r["psd"] for r in ordered]), ordered[0]["units"], band=spectrum.band,
                             seeds=draws["seeds"], coefficients=draws["coefficients"],
                             coefficient_names=draws["names"], amplitudes=[r["amplitude"] for r in ordered],
                             attrs=meta)

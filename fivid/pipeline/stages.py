@@ -270,17 +270,19 @@ def _envelope(ctx, task) -> None:
     """One condition's Monte-Carlo envelope, written to the task's output."""
     from fivid.fe import load_model
     from fivid.friction import load_law
-    from fivid.pipeline.montecarlo import run_monte_carlo
+    from fivid.identify.montecarlo import EnvelopeSpectrum
+    from fivid.pipeline.montecarlo import SampleExecution, run_monte_carlo
+    from fivid.pipeline.sweep import simulation_inputs
     from fivid.schema import new_history
     from fivid.storage import write_netcdf
 
     p = dict(task.params)
     law_path = ctx.data["law_path"]
-    env = run_monte_carlo(load_model(ctx.config.model), load_law(law_path), samples=p["samples"], seed=p["seed"],
-                          duration=p["duration"], sample_rate=p["sample_rate"], sliding_velocity=p["sliding_velocity"],
-                          normal_load=p["normal_load"], roughness_ra=p["roughness_ra"], nperseg=p["nperseg"],
-                          settle=p["settle"], reduced=p["reduced"], reduced_tolerance=p["reduced_tolerance"],
-                          error_band=p["error_band"], workers=ctx.workers, scheduler=ctx.scheduler, progress=ctx.progress,
+    condition, schedule, integration = simulation_inputs(p)
+    env = run_monte_carlo(load_model(ctx.config.model), load_law(law_path), condition, schedule, samples=p["samples"],
+                          seed=p["seed"], integration=integration,
+                          spectrum=EnvelopeSpectrum(nperseg=p["nperseg"], settle=p["settle"]),
+                          execution=SampleExecution(ctx.workers, ctx.scheduler, ctx.progress),
                           attrs={"law_file": str(law_path), "law_file_sha256": file_sha256(law_path),
                                  "model": str(ctx.config.model), "history": new_history(
                                      f"fivid pipeline: Monte-Carlo envelope {task.name}, {p['samples']} samples")})

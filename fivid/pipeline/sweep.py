@@ -19,7 +19,10 @@ import logging
 import os
 import time
 
-__all__ = ["dask_client", "check_scheduler_address", "simulate_condition", "run_simulations", "map_tasks",
+from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.solver.options import IntegrationOptions, OutputOptions, RunSchedule
+
+__all__ = ["dask_client", "check_scheduler_address", "simulation_inputs", "simulate_condition", "run_simulations", "map_tasks",
            "SCHEDULER_SCHEMES"]
 
 #: address schemes of dask.distributed's comm backends that reach a scheduler over the network
@@ -239,11 +242,24 @@ def _timed_call(func, *args):
     return out, time.perf_counter() - t0, os.getpid()
 
 
+def simulation_inputs(params: dict) -> tuple[OperatingCondition, RunSchedule, IntegrationOptions]:
+    """The condition, schedule and solver path of a pipeline simulate task's flat ``params`` (its cache record:
+    ``sliding_velocity`` [m s-1], ``normal_load`` [N], ``roughness_ra`` [m], ``duration`` [s], ``sample_rate``
+    [Hz], ``reduced``, ``reduced_tolerance`` [dB], ``error_band`` [Hz])."""
+    return (OperatingCondition(params["sliding_velocity"], params["normal_load"], params["roughness_ra"]),
+            RunSchedule(duration=params["duration"], sample_rate=params["sample_rate"]),
+            IntegrationOptions(reduced=params["reduced"], reduced_tolerance=params["reduced_tolerance"],
+                               error_band=params["error_band"]))
+
+
 def simulate_condition(model, law, params: dict):
-    """One simulation (runs on a worker): ``fivid.solver.simulate(model, law=law, **params)``."""
+    """One simulation (runs on a worker) of a simulate task's ``params`` (:func:`simulation_inputs`, ``seed`` of
+    the law's synthesis, ``run_id``) with ``law``."""
     from fivid.solver import simulate
 
-    return simulate(model, law=law, progress=False, **params)
+    condition, schedule, integration = simulation_inputs(params)
+    return simulate(model, condition, FrictionInput(law=law, seed=params["seed"]), schedule=schedule,
+                    integration=integration, output=OutputOptions(run_id=params["run_id"], progress=False))
 
 
 def run_simulations(ctx, tasks) -> None:

@@ -8,12 +8,30 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fivid.errors import ConfigError, FividError
+from fivid.fe.model import Model, load_model
+from fivid.fe.static import Preload, preload_state
+from fivid.friction.curve import slave_coefficients
+from fivid.friction.injection import FrictionTable, friction_table
+from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.solver.inputs import check_energy_balance, check_simulation_inputs
+from fivid.solver.options import (
+    DEFAULT_REDUCED_TOLERANCE,
+    IntegrationOptions,
+    OutputOptions,
+    RunSchedule,
+    SimulationInputs,
+)
+from fivid.solver.setup import KernelArrays, LoadingSequence, kernel_arrays
+from fivid.solver.stencil import BlockStencils, block_stencils
+
+if TYPE_CHECKING:  # an annotation of PreparedRun (fivid.solver.reduced imports this module)
+    from fivid.solver.reduced import ReducedSystem
 
 __all__ = ["SimulationDiverged", "IntegrationSettings", "PreparedRun", "simulate", "prepare_run", "AUTO_SCALING_FACTOR",
            "DEFAULT_REDUCED_TOLERANCE"]
@@ -23,8 +41,6 @@ log = logging.getLogger("fivid")
 #: the reduced path's cut-off and mass-scaling target with ``reduced="auto"``/``"reduced"``, in units of the band
 #: top ``sample_rate / 2``: 18 x 25.6 kHz = 460.8 kHz (docs/solver.md, "Reduced-order path")
 AUTO_SCALING_FACTOR = 18.0
-#: largest estimated in-band error [dB] for which ``reduced="auto"`` takes the reduced path
-DEFAULT_REDUCED_TOLERANCE = 0.5
 
 
 class SimulationDiverged(FividError):
@@ -58,31 +74,56 @@ def _positive(name, value, *, allow_zero=False):
 
 @dataclass(frozen=True)
 class PreparedRun:
-    """A run ready for the time loop: model, stencils, kernel arrays, friction table, settings, schedule."""
+    """A run ready for the time loop: model, stencils, kernel arrays, friction table, settings, loading sequence.
 
-    model: object
-    stencils: object
-    arrays: object
-    friction: object
+    Attributes
+    ----------
+    model : Model
+    stencils : BlockStencils
+        The block stencils of the model (:func:`fivid.solver.stencil.block_stencils`).
+    arrays : KernelArrays
+        The kernel arrays (:func:`fivid.solver.setup.kernel_arrays`).
+    friction : FrictionTable
+        ``mu0 + mu_p(t)`` of every slave node on the solver's time grid (:func:`fivid.friction.friction_table`).
+    settings : IntegrationSettings
+        Step [s], intervals and contact iterations as chosen.
+    loading : LoadingSequence
+        The loading sequence [s] and amplitudes.
+    preload : Preload or None
+        The static preload solve (None without a target normal load).
+    inputs : SimulationInputs
+        The validated inputs (SI floats; ``condition.sliding_velocity`` the magnitude run [m s-1]).
+    reduced : ReducedSystem or None
+        The reduced system of a reduced run (None: the full model).
+    choice : dict or None
+        Which path and why (:func:`choice_attrs`).
+    """
+
+    model: Model
+    stencils: BlockStencils
+    arrays: KernelArrays
+    friction: FrictionTable
     settings: IntegrationSettings
-    schedule: object
-    preload: object
-    wrap: dict
-    reduced: object = None
+    loading: LoadingSequence
+    preload: Preload | None
+    inputs: SimulationInputs
+    reduced: ReducedSystem | None = None
     choice: dict | None = None
 
     def run(self, *, progress=None):
-        """Integrate and wrap the RunDataset (see :func:`simulate`)."""
+        """Integrate and wrap the RunDataset (see :func:`simulate`); ``progress`` (bool or None: only on a
+        terminal) overrides ``inputs.output.progress``."""
         from fivid.solver.integrate import integrate
         from fivid.solver.output import run_dataset
 
+        progress = self.inputs.output.progress if progress is None else progress
         if self.reduced is not None:
             from fivid.solver.reduced import integrate_reduced
 
             raw = integrate_reduced(self.model, self.reduced, self.friction, self.settings, progress=progress)
         else:
             raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
-        ds = run_dataset(self.model, raw, self.settings, self.schedule, self.friction, self.preload, **self.wrap)
+        ds = run_dataset(self.model, raw, self.settings, self.loading, self.friction, self.preload, self.inputs)
         if self.reduced is not None:
             ds.attrs.update(self.reduced.attrs())
         ds.attrs.update(choice_attrs(self.choice))
@@ -90,78 +131,33 @@ class PreparedRun:
         return ds
 
 
-def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None,
-             duration, sample_rate, seed=0, progress=None, time_step=None, safety=0.9, settle_time=1e-3,
-             preload_time=None, base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100,
-             gs_tolerance=1e-10, record_state=False, reduced=None, reduced_mass_scaling=None,
-             reduced_tolerance=DEFAULT_REDUCED_TOLERANCE, error_band=None, basis_cache=True, cache_dir=None):
+_CONDITION = OperatingCondition()
+_FRICTION = FrictionInput()
+_INTEGRATION = IntegrationOptions()
+_OUTPUT = OutputOptions()
+
+
+def simulate(model, condition: OperatingCondition = _CONDITION, friction: FrictionInput = _FRICTION, *,
+             schedule: RunSchedule, integration: IntegrationOptions = _INTEGRATION,
+             output: OutputOptions = _OUTPUT):
     """Simulate the rig: preload, settle, base-velocity ramp, steady sliding; return a RunDataset.
 
     Parameters
     ----------
     model : Model or str or path-like
-        The FE model (or its config file).
-    law : friction-law object, optional
-        ``mu_k(t) = mu0 + mu_p,k(t)`` (interface of :mod:`fivid.friction`); default: Coulomb.
-    mu : float, optional
-        Constant friction coefficient [-] for every pair (default: each pair's ``mu``). Not with ``law``.
-    sliding_velocity : float, optional
-        Velocity of the "base" motion after its ramp [m s-1]; the sign of the configured amplitude gives
-        the direction. None: as configured.
-    normal_load : float, optional
-        Target normal force at the transducer [N], set by the "load" clamp's displacement (static
-        preload solve, :mod:`fivid.fe.static`). None: the configured clamp displacement.
-    roughness_ra : float, optional
-        Ra [m], passed to the law and recorded.
-    duration : float
-        Steady-sliding time recorded after the transient [s]; the output covers transient + duration.
-    sample_rate : float
-        Output sample rate [Hz] (the rig's DAQ rate).
-    seed : int
-        Seed of the friction-law synthesis (the run is otherwise deterministic).
-    progress : bool or None
-        Progress bar; None: only when stderr is a terminal.
-    time_step : float, optional
-        Solver step [s]; refused above the critical step. Default ``safety * dt_crit``.
-    safety : float
-        Fraction of the critical step used by default (0 < safety <= 1).
-    settle_time : float
-        Time between the end of the preload ramp and the start of the base ramp [s].
-    preload_time, base_ramp_time : float, optional
-        Ramp times of the clamp and of the base velocity [s] (default: the motions' ``ramp_time``).
-    oversample : int
-        Internal recording rate = ``oversample * sample_rate``; the records are decimated with a
-        zero-phase FIR low-pass (anti-aliasing) to ``sample_rate``.
-    run_id : str, optional
-    gs_max_iterations, gs_tolerance
-        Contact Gauss-Seidel limits: sweeps, and the largest node-pair correction of the last sweep as a
-        fraction of the shortest master segment.
-    record_state : bool
-        Also return the final displacement and velocity (global dofs) in ``attrs`` -- for tests.
-    reduced : None, "auto", "reduced", True or int
-        The solver path. None (or False): the full model. ``"auto"``: the Craig-Bampton reduced system
-        (:mod:`fivid.solver.reduced`; fixed-interface modes and mass scaling at :data:`AUTO_SCALING_FACTOR` x
-        ``sample_rate / 2``, basis from the cache) when its estimated in-band error
-        (:mod:`fivid.solver.reduced_error`) is at most ``reduced_tolerance``, else the full model (also when the
-        model cannot be reduced: dashpots, pressure loads, constrained contact nodes). ``"reduced"``: those reduced
-        settings, whatever the estimate. ``True``: fixed-interface modes up to 3 x ``sample_rate / 2`` (or up to
-        ``reduced_mass_scaling``), an int that many modes. Every run records the path and why (``solver_path``,
-        ``solver_choice``, ``reduced_error_estimate_db``...) and a reduced one its truncation (``reduced_*`` attrs).
-    reduced_mass_scaling : float, optional
-        With ``reduced``: keep the fixed-interface modes up to this frequency [Hz] and mass-scale every mode of the
-        reduced system above it down to it (:func:`fivid.solver.reduced.scale_high_modes`: modes below unchanged,
-        static compliance exact), which lengthens the stable step. 18 x the band top (460.8 kHz for 51.2 kHz
-        records) gave 11.5x at 0.44 dB in-band on the default rig (docs/solver.md); recorded as
-        ``reduced_mass_scaling`` and ``reduced_added_mass_fraction``.
-    reduced_tolerance : float
-        Largest estimated in-band log-spectral distance [dB] for which ``reduced="auto"`` runs reduced (default 0.5).
-    error_band : (float, float), optional
-        Band [Hz] of that estimate (the scoring band; default :data:`fivid.solver.reduced_error.DEFAULT_ERROR_BAND`
-        clipped to ``sample_rate / 2``).
-    basis_cache : bool
-        Read/store the reduced basis in the on-disk cache (:mod:`fivid.solver.basis_cache`).
-    cache_dir : path-like, optional
-        The cache folder (default ``$FIVID_CACHE_DIR`` or the user cache folder).
+        The FE model (or its config file, or the name of a shipped model).
+    condition : OperatingCondition
+        Sliding velocity [m s-1], normal load [N] and roughness Ra [m] (each None: as configured).
+    friction : FrictionInput
+        A friction law (``mu_k(t) = mu0 + mu_p,k(t)``), a constant ``mu`` [-] or each pair's own ``mu``, and the
+        seed of the law's synthesis.
+    schedule : RunSchedule
+        Steady-sliding duration [s], output sample rate [Hz], settling and ramp times [s].
+    integration : IntegrationOptions
+        Time step [s] (or the safety fraction of the critical step), contact Gauss-Seidel limits, and the solver
+        path (full, ``"auto"``, ``"reduced"``, a number of modes; its tolerance [dB], band [Hz], basis cache).
+    output : OutputOptions
+        Oversampling of the recording, run id, final state for tests, progress bar.
 
     Returns
     -------
@@ -175,32 +171,36 @@ def simulate(model, *, law=None, mu=None, sliding_velocity=None, normal_load=Non
         Bad settings or model (message names the value and what is allowed).
     SimulationDiverged
         NaN or runaway energy (step, time, node).
+
+    Examples
+    --------
+    Coulomb friction mu = 0.3 at 10 mm/s and 5 N, 0.1 s of steady sliding recorded at 51.2 kHz:
+
+    >>> ds = simulate("triboair_coarse", OperatingCondition(0.01, 5.0), FrictionInput(mu=0.3),
+    ...               schedule=RunSchedule(duration=0.1, sample_rate=51200.0))  # doctest: +SKIP
     """
-    prepared = prepare_run(
-        model, law=law, mu=mu, sliding_velocity=sliding_velocity, normal_load=normal_load, roughness_ra=roughness_ra,
-        duration=duration, sample_rate=sample_rate, seed=seed, time_step=time_step, safety=safety,
-        settle_time=settle_time, preload_time=preload_time, base_ramp_time=base_ramp_time, oversample=oversample,
-        run_id=run_id, gs_max_iterations=gs_max_iterations, gs_tolerance=gs_tolerance, record_state=record_state,
-        reduced=reduced, reduced_mass_scaling=reduced_mass_scaling, reduced_tolerance=reduced_tolerance,
-        error_band=error_band, basis_cache=basis_cache, cache_dir=cache_dir)
-    return prepared.run(progress=progress)
+    return prepare_run(model, condition, friction, schedule=schedule, integration=integration,
+                       output=output).run()
 
 
-def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=None, roughness_ra=None, duration,
-                sample_rate, seed=0, time_step=None, safety=0.9, settle_time=1e-3, preload_time=None,
-                base_ramp_time=None, oversample=4, run_id=None, gs_max_iterations=100, gs_tolerance=1e-10,
-                record_state=False, reduced=None, reduced_mass_scaling=None,
-                reduced_tolerance=DEFAULT_REDUCED_TOLERANCE, error_band=None, basis_cache=True,
-                cache_dir=None) -> PreparedRun:
-    """Validate the settings and build everything :func:`simulate` integrates (same parameters)."""
-    from fivid.fe.model import Model, load_model
-    from fivid.solver.stencil import block_stencils
+def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: FrictionInput = _FRICTION, *,
+                schedule: RunSchedule, integration: IntegrationOptions = _INTEGRATION,
+                output: OutputOptions = _OUTPUT) -> PreparedRun:
+    """Validate the inputs and build everything :func:`simulate` integrates (same parameters)."""
     from fivid.solver.timestep import stable_step
 
     if not isinstance(model, Model):
         model = load_model(model)
-    duration = _positive("duration", duration)
-    sample_rate = _positive("sample_rate", sample_rate)
+    for name, value, kind in (("condition", condition, OperatingCondition), ("friction", friction, FrictionInput),
+                              ("schedule", schedule, RunSchedule), ("integration", integration, IntegrationOptions),
+                              ("output", output, OutputOptions)):
+        if not isinstance(value, kind):
+            raise ConfigError(f"{name} must be a {kind.__module__}.{kind.__name__}, got {type(value).__name__}")
+    law, mu, seed = friction.law, friction.mu, friction.seed
+    sliding_velocity, normal_load, roughness_ra = condition.sliding_velocity, condition.normal_load, \
+        condition.roughness_ra
+    duration = _positive("duration", schedule.duration)
+    sample_rate = _positive("sample_rate", schedule.sample_rate)
     if duration * sample_rate < 2.0:  # e.g. '51.2 Hz' typed for kHz: a one-sample run is no record
         raise ConfigError(f"duration x sample_rate = {duration:g} s x {sample_rate:g} Hz = {duration * sample_rate:.3g} "
                           "samples: the steady-sliding record needs at least 2; raise the sample rate or the duration")
@@ -211,33 +211,28 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     if roughness_ra is not None:
         roughness_ra = _positive("roughness_ra", roughness_ra, allow_zero=True)
     check_simulation_inputs(model, law=law, mu=mu, sliding_velocity=sliding_velocity, normal_load=normal_load)
+    safety = integration.safety
     if not (0.0 < float(safety) <= 1.0):
         raise ConfigError(f"safety must be in (0, 1], got {safety!r}")
-    oversample = int(oversample)
+    oversample = int(output.oversample)
     if oversample < 1:
-        raise ConfigError(f"oversample must be an integer >= 1, got {oversample!r}")
-    settle_time = _positive("settle_time", settle_time, allow_zero=True)
+        raise ConfigError(f"oversample must be an integer >= 1, got {output.oversample!r}")
+    settle_time = _positive("settle_time", schedule.settle_time, allow_zero=True)
     # numpy.random.default_rng refuses a negative or fractional seed with a bare ValueError deep in the law
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ConfigError(f"seed must be an integer >= 0, got {seed!r}")
 
-    from fivid.friction.curve import slave_coefficients
-
     mu_slave = slave_coefficients(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
-    schedule, signs, preload = _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time,
-                                         settle_time, mu_slave)
-    total = schedule.transient_end + duration
+    loading, signs, preload = _loading(model, sliding_velocity, normal_load,
+                                       replace(schedule, settle_time=settle_time), mu_slave)
+    total = loading.transient_end + duration
     n_out = max(1, math.ceil(total * sample_rate - 1e-9))
     n_int = n_out * oversample
     st = block_stencils(model)
-    from fivid.solver.setup import kernel_arrays
-
-    ka = kernel_arrays(model, st, schedule, tangential_sign=signs[0], normal_sign=signs[1])
+    ka = kernel_arrays(model, st, loading, tangential_sign=signs[0], normal_sign=signs[1])
     base = model.motion("base")
     v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
-    rs, choice = _choose_path(model, ka, reduced, reduced_mass_scaling, reduced_tolerance, error_band,
-                              sliding_distance=v_max * total, sample_rate=sample_rate, basis_cache=basis_cache,
-                              cache_dir=cache_dir)
+    rs, choice = _choose_path(model, ka, integration, sliding_distance=v_max * total, sample_rate=sample_rate)
     if rs is not None:
         from fivid.solver.timestep import stable_step_of
 
@@ -246,6 +241,7 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     else:
         stab = stable_step(model)
     dt_crit = stab.critical_time_step
+    time_step = integration.time_step
     if time_step is not None:
         time_step = _positive("time_step", time_step)
         if time_step > dt_crit:
@@ -262,21 +258,20 @@ def prepare_run(model, *, law=None, mu=None, sliding_velocity=None, normal_load=
     n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
     dt = t_int / n_sub
 
-    from fivid.friction.injection import friction_table
-
     v_signed = (sliding_velocity if sliding_velocity is not None else abs(base.amplitude) if base else 0.0)
     if base is not None and base.amplitude < 0:
         v_signed = -v_signed
     comp = base.component if base is not None else 0
     slave_x = model.coords[ka.slave_global, comp] if ka.slave_global.size else np.zeros(0)
-    fric = friction_table(model, ka.slave_pair, slave_x, law=law, mu=mu, total_time=n_int * t_int, dt=dt,
-                          sample_rate=sample_rate, sliding_velocity=v_signed, roughness_ra=roughness_ra,
-                          normal_load=normal_load, seed=seed)
-    settings = IntegrationSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int, int(gs_max_iterations),
-                           float(gs_tolerance))
-    return PreparedRun(model, st, ka, fric, settings, schedule, preload, dict(
-        law=law, mu=mu, seed=seed, sliding_velocity=abs(v_signed), normal_load=normal_load,
-        roughness_ra=roughness_ra, sample_rate=sample_rate, run_id=run_id, record_state=record_state), rs, choice)
+    run_condition = OperatingCondition(v_signed, normal_load, roughness_ra)  # signed along the base motion
+    fric = friction_table(model, ka.slave_pair, slave_x, friction, run_condition, total_time=n_int * t_int, dt=dt,
+                          sample_rate=sample_rate)
+    settings = IntegrationSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int,
+                                   int(integration.gs_max_iterations), float(integration.gs_tolerance))
+    inputs = SimulationInputs(replace(run_condition, sliding_velocity=abs(v_signed)), friction,
+                              replace(schedule, duration=duration, sample_rate=sample_rate, settle_time=settle_time),
+                              integration, replace(output, oversample=oversample))
+    return PreparedRun(model, st, ka, fric, settings, loading, preload, inputs, rs, choice)
 
 
 def _reduced_options(reduced, reduced_mass_scaling, sample_rate):
@@ -301,17 +296,18 @@ def _reduced_options(reduced, reduced_mass_scaling, sample_rate):
     return n_modes, scaling, scaling
 
 
-def _choose_path(model, ka, reduced, reduced_mass_scaling, tolerance, error_band, *, sliding_distance, sample_rate,
-                 basis_cache, cache_dir):
+def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance, sample_rate):
     """The reduced system to run (None: the full model) and the record of the choice (:func:`choice_attrs`)."""
     from fivid.solver.reduced import reduced_system
     from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
 
+    reduced, reduced_mass_scaling = integration.reduced, integration.reduced_mass_scaling
+    error_band = integration.error_band
     if reduced is None or reduced is False:
         if reduced_mass_scaling is not None:
             raise ConfigError("reduced_mass_scaling needs reduced=True (it scales the reduced system's modes)")
         return None, {"path": "full", "choice": "requested", "reason": "full model requested", "estimate": None}
-    tolerance = _positive("reduced_tolerance", tolerance, allow_zero=True)
+    tolerance = _positive("reduced_tolerance", integration.reduced_tolerance, allow_zero=True)
     band = tuple(float(b) for b in (error_band if error_band is not None else
                                     (DEFAULT_ERROR_BAND[0], min(DEFAULT_ERROR_BAND[1], sample_rate / 2.0))))
     if len(band) != 2 or not (0.0 <= band[0] < band[1]):
@@ -327,8 +323,8 @@ def _choose_path(model, ka, reduced, reduced_mass_scaling, tolerance, error_band
                                 "the reduced path's error estimate covers (rigid contact)"}
     try:
         rs = reduced_system(model, ka, sliding_distance=sliding_distance, band_top=sample_rate / 2.0,
-                            n_modes=n_modes, cutoff=cutoff, mass_scaling=scaling, cache=basis_cache,
-                            cache_dir=cache_dir)
+                            n_modes=n_modes, cutoff=cutoff, mass_scaling=scaling, cache=integration.basis_cache,
+                            cache_dir=integration.cache_dir)
     except ConfigError as exc:
         if not auto:
             raise
@@ -366,11 +362,9 @@ def choice_attrs(choice) -> dict:
     return out
 
 
-def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time, settle_time, mu_slave):
+def _loading(model, sliding_velocity, normal_load, schedule: RunSchedule, mu_slave):
     """The loading sequence, the transducer signs and the preload (None without a target load)."""
-    from fivid.fe.static import preload_state
-    from fivid.solver.setup import Schedule
-
+    preload_time, base_ramp_time, settle_time = schedule.preload_time, schedule.base_ramp_time, schedule.settle_time
     load = model.motion("load")
     base = model.motion("base")
     load_ramp = float(preload_time) if preload_time is not None else (load.ramp_time if load else 0.0)
@@ -393,4 +387,4 @@ def _schedule(model, sliding_velocity, normal_load, preload_time, base_ramp_time
     pressure_ramp = max([float(ld.start + ld.ramp_time) for ld in model.loads]
                         + [float(c.rigid.start + c.rigid.ramp_time) for c in model.contacts if c.rigid is not None],
                         default=0.0)
-    return Schedule(load_disp, load_ramp, base_start, base_velocity, base_ramp, pressure_ramp), signs, preload
+    return LoadingSequence(load_disp, load_ramp, base_start, base_velocity, base_ramp, pressure_ramp), signs, preload

@@ -37,13 +37,18 @@ def _block_mean(x: np.ndarray, q: int) -> np.ndarray:
     return x[:n_out * q].reshape(n_out, q, *x.shape[1:]).mean(axis=1)
 
 
-def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed, sliding_velocity, normal_load,
-                roughness_ra, sample_rate, run_id, record_state):
-    """The RunDataset of a finished run (see the module docstring)."""
+def run_dataset(model, raw, settings, loading, fric, preload, inputs):
+    """The RunDataset of a finished run (see the module docstring).
+
+    ``loading`` is the run's :class:`fivid.solver.setup.LoadingSequence`, ``inputs`` its validated
+    :class:`fivid.solver.SimulationInputs` (``condition.sliding_velocity`` the magnitude run [m s-1]).
+    """
     import xarray as xr
 
     from fivid.schema import apply_cf_attrs, with_condition_coords
 
+    normal_load, roughness_ra = inputs.condition.normal_load, inputs.condition.roughness_ra
+    sample_rate = inputs.schedule.sample_rate
     q = settings.oversample
     t_int = 1.0 / (sample_rate * q)
     n_out = raw.rec.shape[0] // q
@@ -58,14 +63,12 @@ def run_dataset(model, raw, settings, schedule, fric, preload, *, law, mu, seed,
         _add_contact_variables(data, coords, [c.name for c in model.contacts], raw, q)
     ds = xr.Dataset(data, coords=coords)
     _describe_variables(ds, sensors)
-    fn_nominal = normal_load if normal_load is not None else float(np.mean(fn[time >= schedule.transient_end])) \
-        if np.any(time >= schedule.transient_end) else 0.0
-    ds.attrs.update(_run_attrs(model, raw, settings, schedule, fric, seed=seed, sliding_velocity=sliding_velocity,
-                               normal_load=fn_nominal, roughness_ra=roughness_ra, sample_rate=sample_rate,
-                               run_id=run_id))
+    fn_nominal = normal_load if normal_load is not None else float(np.mean(fn[time >= loading.transient_end])) \
+        if np.any(time >= loading.transient_end) else 0.0
+    ds.attrs.update(_run_attrs(model, raw, settings, loading, fric, inputs, normal_load=fn_nominal))
     if roughness_ra is None:
         ds.attrs["roughness_ra_note"] = "not given: recorded as 0"
-    if record_state:
+    if inputs.output.record_state:
         ds.attrs["final_u"] = raw.u
         ds.attrs["final_v"] = raw.v
     return apply_cf_attrs(with_condition_coords(ds))
@@ -154,22 +157,23 @@ def _describe_variables(ds, sensors):
         ds["acceleration"].attrs["sensor"] = sensors[0]
 
 
-def _run_attrs(model, raw, settings, schedule, fric, *, seed, sliding_velocity, normal_load, roughness_ra,
-               sample_rate, run_id) -> dict:
+def _run_attrs(model, raw, settings, loading, fric, inputs, *, normal_load) -> dict:
     """The run's attrs: conditions (``normal_load`` the target or the mean transducer force of the steady part
     [N]), provenance, the integration settings, damping and contact method, Gauss-Seidel statistics."""
     from fivid.schema import new_history
 
+    seed, run_id = inputs.friction.seed, inputs.output.run_id
+    roughness_ra = inputs.condition.roughness_ra
     q = settings.oversample
     mu_desc = fric.description
     law_part = f"law sha256:{fric.sha256}" if fric.sha256 else "law none"
     return {
         "run_id": run_id or f"sim-{model.sha256[:8] or 'model'}-s{int(seed)}",
         "rig": str(model.config.get("name", "model")) if isinstance(model.config, dict) else "model",
-        "sliding_velocity": float(sliding_velocity),
+        "sliding_velocity": float(inputs.condition.sliding_velocity),
         "normal_load": float(normal_load),
         "roughness_ra": float(roughness_ra) if roughness_ra is not None else 0.0,
-        "sample_rate": float(sample_rate),
+        "sample_rate": float(inputs.schedule.sample_rate),
         "source": f"simulation: model {model.source}; {law_part}; seed {int(seed)}",
         "history": new_history(
             f"simulate: {mu_desc}; dt {settings.time_step:.6g} s; {settings.n_intervals // q} samples"),
@@ -180,10 +184,10 @@ def _run_attrs(model, raw, settings, schedule, fric, *, seed, sliding_velocity, 
         "critical_time_step": settings.critical_time_step,
         "omega_max": settings.omega_max,
         "oversample": q,
-        "transient_end": schedule.transient_end,
-        "base_start": schedule.base_start,
+        "transient_end": loading.transient_end,
+        "base_start": loading.base_start,
         "transient_description": "time < transient_end: preload ramp, settling and base-velocity ramp",
-        "preload_displacement": float(schedule.load_displacement) if schedule.load_displacement is not None else np.nan,
+        "preload_displacement": float(loading.load_displacement) if loading.load_displacement is not None else np.nan,
         "rayleigh_alpha": float(model.rayleigh_alpha),
         "rayleigh_beta": float(model.rayleigh_beta),
         "damping_scheme": scheme_name(model.rayleigh_beta, model.damping_cutoff),

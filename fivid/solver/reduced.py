@@ -469,11 +469,12 @@ def prepare_reduced(prep, *, n_modes: int | None = None, cutoff: float | None = 
     from fivid.solver.timestep import stable_step_of
 
     model, s = prep.model, prep.settings
-    t_int = 1.0 / (s.oversample * float(prep.wrap["sample_rate"]))
+    fs = float(prep.inputs.schedule.sample_rate)
+    t_int = 1.0 / (s.oversample * fs)
     total = s.n_intervals * t_int
     base = model.motion("base")
-    v_max = float(prep.wrap["sliding_velocity"] or 0.0) if base is not None else 0.0
-    rs = reduced_system(model, prep.arrays, sliding_distance=v_max * total, band_top=float(prep.wrap["sample_rate"]) / 2,
+    v_max = float(prep.inputs.condition.sliding_velocity or 0.0) if base is not None else 0.0
+    rs = reduced_system(model, prep.arrays, sliding_distance=v_max * total, band_top=fs / 2,
                         n_modes=n_modes, cutoff=cutoff, mass_scaling=mass_scaling)
     stab = stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
                           float(model.damping_cutoff))

@@ -16,7 +16,7 @@ import numpy as np
 from fivid.errors import ConfigError
 from fivid.solver.stencil import BlockStencils
 
-__all__ = ["Schedule", "KernelArrays", "kernel_arrays", "KIND_FIXED", "KIND_DISPLACEMENT", "KIND_VELOCITY"]
+__all__ = ["LoadingSequence", "KernelArrays", "kernel_arrays", "KIND_FIXED", "KIND_DISPLACEMENT", "KIND_VELOCITY"]
 
 KIND_FIXED = 0
 KIND_DISPLACEMENT = 1
@@ -24,8 +24,9 @@ KIND_VELOCITY = 2
 
 
 @dataclass(frozen=True)
-class Schedule:
-    """The loading sequence [s] and amplitudes.
+class LoadingSequence:
+    """The loading sequence [s] and amplitudes as the driver resolved them (from a :class:`fivid.solver.RunSchedule`
+    and the model's motions).
 
     Attributes
     ----------
@@ -97,9 +98,9 @@ def _idx(a, dtype=np.int64):
     return np.ascontiguousarray(np.asarray(a, dtype=dtype))
 
 
-def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_sign: float,
+def kernel_arrays(model, st: BlockStencils, loading: LoadingSequence, *, tangential_sign: float,
                   normal_sign: float) -> KernelArrays:
-    """Assemble the kernel arrays of ``model`` in the layout of ``st`` with the loading ``schedule``.
+    """Assemble the kernel arrays of ``model`` in the layout of ``st`` with the ``loading`` sequence.
 
     ``tangential_sign``/``normal_sign`` orient the transducer: ``friction_force = tangential_sign * sum R_t``,
     ``normal_force = normal_sign * sum R_n`` over the reaction nodes of the first Reaction.
@@ -110,7 +111,7 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     minv = np.zeros_like(mass)
     minv[mass > 0] = 1.0 / mass[mass > 0]
     # ---- constrained dofs: fixed unless a motion drives them
-    kind, par = _motion_parameters(model, schedule)
+    kind, par = _motion_parameters(model, loading)
     con_global = np.flatnonzero(kind >= 0)
     con_react = _transducer_weights(model, con_global, tangential_sign, normal_sign)
     # motion groups: dofs sharing (kind, amplitude, start, ramp) get one velocity evaluation per step
@@ -137,9 +138,9 @@ def kernel_arrays(model, st: BlockStencils, schedule: Schedule, *, tangential_si
     )
 
 
-def _motion_parameters(model, schedule: Schedule) -> tuple[np.ndarray, np.ndarray]:
+def _motion_parameters(model, loading: LoadingSequence) -> tuple[np.ndarray, np.ndarray]:
     """Per global dof: the kind of its motion (-1 free, ``KIND_*``) and ``(amplitude, start, ramp time)``, the
-    "load" and "base" motions set by the loading ``schedule``."""
+    "load" and "base" motions set by the ``loading`` sequence."""
     kind = np.full(model.n_dofs, -1, dtype=np.int64)
     par = np.zeros((model.n_dofs, 3))
     kind[model.fixed_dofs] = KIND_FIXED
@@ -147,16 +148,16 @@ def _motion_parameters(model, schedule: Schedule) -> tuple[np.ndarray, np.ndarra
         dofs = mo.dofs
         k = KIND_DISPLACEMENT if mo.kind == "displacement" else KIND_VELOCITY
         amp, t0, tr = float(mo.amplitude), 0.0, float(mo.ramp_time)
-        if mo.role == "load" and schedule.load_displacement is not None:
+        if mo.role == "load" and loading.load_displacement is not None:
             if k != KIND_DISPLACEMENT:
                 raise ConfigError(f"motions.{mo.name}: the 'load' motion must be of kind displacement, got {mo.kind!r}")
-            amp, tr = schedule.load_displacement, schedule.load_ramp
+            amp, tr = loading.load_displacement, loading.load_ramp
         if mo.role == "base":
             if k != KIND_VELOCITY:
                 raise ConfigError(f"motions.{mo.name}: the 'base' motion must be of kind velocity, got {mo.kind!r}")
-            if schedule.base_velocity is not None:
-                amp = schedule.base_velocity
-            t0, tr = schedule.base_start, schedule.base_ramp
+            if loading.base_velocity is not None:
+                amp = loading.base_velocity
+            t0, tr = loading.base_start, loading.base_ramp
         kind[dofs] = k
         par[dofs] = (amp, t0, tr)
     return kind, par

@@ -7,25 +7,32 @@ distance come from :mod:`fivid.signal.compare`.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from fivid.fe.model import Model, load_model
 from fivid.signal.compare import band_distance, steady_psds
+from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.solver.driver import simulate
+from fivid.solver.options import IntegrationOptions, OutputOptions, RunSchedule
 from fivid.solver.timestep import stable_step
 from fivid.units import power_units
 
 __all__ = ["time_step_halving"]
 
 
-def time_step_halving(model, *, time_step=None, variable="acceleration", band=None, nperseg=None, **simulate_kwargs):
+def time_step_halving(model, condition: OperatingCondition = OperatingCondition(),
+                      friction: FrictionInput = FrictionInput(), *, schedule: RunSchedule,
+                      integration: IntegrationOptions = IntegrationOptions(), output: OutputOptions = OutputOptions(),
+                      variable="acceleration", band=None, nperseg=None):
     """Run :func:`fivid.solver.simulate` at ``dt`` and ``dt/2`` and report how the PSD changes.
 
     Parameters
     ----------
     model : Model or path
-    time_step : float, optional
-        The coarser step [s] (default: the solver's default step), rounded down to fit a whole number of
-        steps in a recording interval; the finer run uses exactly half of it.
+    condition, friction, schedule, integration, output
+        As :func:`fivid.solver.simulate`. ``integration.time_step`` is the coarser step [s] (None: the solver's
+        default step, ``integration.safety`` x critical), rounded down to fit a whole number of steps in a
+        recording interval; the finer run uses exactly half of it.
     variable : str
         Variable whose PSD is compared (first sensor if it has a sensor dim).
     band : (float, float), optional
@@ -33,8 +40,6 @@ def time_step_halving(model, *, time_step=None, variable="acceleration", band=No
     nperseg : int, optional
         Welch segment length [samples] (Hann window, 50 % overlap, constant detrend, density scaling); default
         :func:`fivid.signal.welch.default_nperseg` of the steady part. The result's ``welch`` attr states it.
-    **simulate_kwargs
-        Passed to :func:`simulate` (``duration``, ``sample_rate``, ``mu``/``law`` ...).
 
     Returns
     -------
@@ -48,13 +53,15 @@ def time_step_halving(model, *, time_step=None, variable="acceleration", band=No
 
     if not isinstance(model, Model):
         model = load_model(model)
+    time_step = integration.time_step
     if time_step is None:
-        time_step = float(simulate_kwargs.pop("safety", 0.9)) * stable_step(model).critical_time_step
+        time_step = float(integration.safety) * stable_step(model).critical_time_step
     # the solver fits a whole number of steps in each recording interval: take that step and exactly half of it
-    t_int = 1.0 / (float(simulate_kwargs["sample_rate"]) * int(simulate_kwargs.get("oversample", 4)))
+    t_int = 1.0 / (float(schedule.sample_rate) * int(output.oversample))
     n_sub = max(1, math.ceil(t_int / time_step * (1.0 - 1e-12)))
     coarse = t_int / n_sub
-    runs = [simulate(model, time_step=dt, **simulate_kwargs) for dt in (coarse, t_int / (2 * n_sub))]
+    runs = [simulate(model, condition, friction, schedule=schedule, integration=replace(integration, time_step=dt),
+                     output=output) for dt in (coarse, t_int / (2 * n_sub))]
     f, psds, n = steady_psds(runs, variable=variable, nperseg=nperseg)
     fs = float(runs[0].attrs["sample_rate"])
     lo, hi = band if band is not None else (0.0, 0.8 * fs / 2)

@@ -26,7 +26,7 @@ from fivid.score.roughness import (
     roughness_metrics,
 )
 from fivid.signal.steady import steady_part
-from fivid.solver import simulate
+from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.surface import evaluate_profile
 from fivid.surface.rough_pair import RQ_PER_RA, RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
 
@@ -116,6 +116,17 @@ def build_point_model(model_path, spec: dict, conditions: dict):
     return load_model(cfg), lower, info, design
 
 
+def _point_condition(conditions: dict, roughness_ra: float) -> OperatingCondition:
+    """The point's sliding velocity [m s-1] (as configured when not a condition) and Ra [m]."""
+    v = float(conditions["sliding_velocity"]) if "sliding_velocity" in conditions else None
+    return OperatingCondition(sliding_velocity=v, roughness_ra=roughness_ra)
+
+
+def _contact_iterations(spec: dict) -> IntegrationOptions:
+    """The contact Gauss-Seidel limits of a roughness task (``gs_tolerance``, ``gs_max_iterations``)."""
+    return IntegrationOptions(gs_tolerance=spec["gs_tolerance"], gs_max_iterations=spec["gs_max_iterations"])
+
+
 def simulate_rough_run(model_path, conditions: dict, *, duration: float, sample_rate: float, run_id: str,
                        **spec):
     """A rough-pair run as a rig records it, ready for ``fivid identify`` (:func:`identification_run`): the pair
@@ -126,10 +137,9 @@ def simulate_rough_run(model_path, conditions: dict, *, duration: float, sample_
     ``sliding_velocity x duration`` below about 1 mm, i.e. <= ~9 mm/s for 0.1 s)."""
     spec = {**ROUGHNESS_TASK, **spec}
     model, _, _, design = build_point_model(model_path, spec, conditions)
-    kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
-    ds = simulate(model, duration=duration, sample_rate=sample_rate, progress=False, run_id=run_id,
-                  roughness_ra=float(conditions.get("roughness_ra", 0.0)), settle_time=spec["settle_time"],
-                  gs_tolerance=spec["gs_tolerance"], gs_max_iterations=spec["gs_max_iterations"], **kw)
+    ds = simulate(model, _point_condition(conditions, float(conditions.get("roughness_ra", 0.0))),
+                  schedule=RunSchedule(duration=duration, sample_rate=sample_rate, settle_time=spec["settle_time"]),
+                  integration=_contact_iterations(spec), output=OutputOptions(run_id=run_id, progress=False))
     out = identification_run(ds)
     out.attrs["profile_rsm_target"] = design["rsm"]
     out.attrs["profile_seeds"] = " ".join(map(str, design["seeds"]))
@@ -151,11 +161,11 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
     ra = float(conditions.get("roughness_ra", 0.0))
     model, lower, info, design = build_point_model(model_path, spec, conditions)
     n_slave = int(sum(c.slave_nodes.size for c in model.contacts))
-    kw = {"sliding_velocity": float(conditions["sliding_velocity"])} if "sliding_velocity" in conditions else {}
     t0 = time.perf_counter()
-    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"], progress=False, roughness_ra=ra,
-                  settle_time=spec["settle_time"], gs_tolerance=spec["gs_tolerance"],
-                  gs_max_iterations=spec["gs_max_iterations"], **kw)
+    ds = simulate(model, _point_condition(conditions, ra),
+                  schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"],
+                                       settle_time=spec["settle_time"]),
+                  integration=_contact_iterations(spec), output=OutputOptions(progress=False))
     seconds = time.perf_counter() - t0
     r = roughness_metrics(ds, n_slave)
     ev = evaluate_profile(lower, form="line").parameters if ra > 0 else {}

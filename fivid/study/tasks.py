@@ -35,7 +35,7 @@ from fivid.pipeline.resources import check_simulation_memory, simulation_memory
 from fivid.signal.spectral import welch_density
 from fivid.signal.steady import steady_part
 from fivid.signal.transient import narrowband_fraction
-from fivid.solver import simulate
+from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.study.analysis import analyse_transient
 from fivid.study.coupling import WEAK_STRONG_THRESHOLD, coupling_bounds, coupling_indicator
 from fivid.surface.rough_pair import RQ_PER_RA
@@ -193,19 +193,18 @@ def element_size(model) -> float:
 
 def _fe_transient(model, tasks, conditions):
     tr = tasks["transient"]
-    kw = {}
-    if "law" in tr:
-        kw["law"] = load_law(tr["law"])
-    elif "mu" in conditions:
-        kw["mu"] = float(conditions["mu"])
-    for name in ("sliding_velocity", "normal_load", "roughness_ra"):  # (mesh, time_step: the model and step)
-        if name in conditions:
-            kw[name] = float(conditions[name])
+    law = load_law(tr["law"]) if "law" in tr else None
+    mu = float(conditions["mu"]) if law is None and "mu" in conditions else None
+    # (mesh, time_step: the model and step)
+    condition = OperatingCondition(*(float(conditions[name]) if name in conditions else None
+                                     for name in ("sliding_velocity", "normal_load", "roughness_ra")))
+    kw = solver_choice(tr, conditions)
     if "time_step" in conditions:
         kw["safety"] = float(conditions["time_step"])
-    kw.update(solver_choice(tr, conditions))
-    ds = simulate(model, duration=tr["duration"], sample_rate=tr["sample_rate"],
-                  seed=int(conditions.get("seed", 0)), progress=False, **kw)
+    integration = IntegrationOptions(**kw)
+    ds = simulate(model, condition, FrictionInput(law=law, mu=mu, seed=int(conditions.get("seed", 0))),
+                  schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"]),
+                  integration=integration, output=OutputOptions(progress=False))
     solver = {"solver_path": ds.attrs.get("solver_path", "full"),
               "solver_choice_reason": ds.attrs.get("solver_choice_reason", ""),
               "reduced_error_estimate_db": float(ds.attrs.get("reduced_error_estimate_db", np.nan))}
@@ -227,15 +226,16 @@ def _fe_transient(model, tasks, conditions):
 
 
 def solver_choice(transient: dict, conditions: dict) -> dict:
-    """The solver-path arguments of :func:`fivid.solver.simulate` for a point's transient: ``transient["solver"]``
-    (``auto``, the default: the reduced path when its estimated in-band error is within
-    ``transient["reduced_tolerance"]`` [dB], 0.5 by default, as ``fivid simulate``; ``full``; ``reduced``). A point
+    """The solver-path fields of :class:`fivid.solver.IntegrationOptions` for a point's transient:
+    ``transient["solver"]`` (``auto``, the default: the reduced path when its estimated in-band error is within
+    ``transient["reduced_tolerance"]`` [dB], 0.5 by default, as ``fivid simulate``; ``full``; ``reduced``: the
+    automatic path's reduced settings whatever the estimate). A point
     that refines the ``mesh`` or the ``time_step`` studies the full model's discretisation: ``auto`` runs it on the
     full path."""
     solver = transient.get("solver", "auto")
     if solver == "auto" and ({"mesh", "time_step"} & set(conditions)):
         solver = "full"
-    kw = {"reduced": {"full": None, "reduced": True}.get(solver, solver)}
+    kw = {"reduced": {"full": None}.get(solver, solver)}
     if solver == "auto":
         kw["reduced_tolerance"] = float(transient.get("reduced_tolerance", 0.5))
     return kw

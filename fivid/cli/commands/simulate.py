@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from fivid.cli import integer_at_least, quantity
+from fivid.cli import in_si, integer_at_least, quantity
 
 __all__ = ["register"]
 
@@ -110,9 +110,6 @@ def run(args) -> int:
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
 
-    def si(value):  # a parsed QuantityArgument -> plain float (None stays None)
-        return None if value is None else float(value)
-
     if args.samples is not None and not args.law:
         raise FividError("--samples needs --law LAW.nc: the Monte-Carlo samples the law's uncertainty")
     if not args.dry_run:
@@ -122,20 +119,19 @@ def run(args) -> int:
     if args.law:
         law, law_file = _law_checked(args, model)
         args.law_domain = law_file.pop("domain")
-    duration, sample_rate, time_step = si(args.duration), si(args.sample_rate), si(args.time_step)
-    size = simulation_memory(model, duration=duration, sample_rate=sample_rate, time_step=time_step, law=law)
+    inputs = _simulation_inputs(args, law)
+    size = simulation_memory(model, duration=inputs.schedule.duration, sample_rate=inputs.schedule.sample_rate,
+                             time_step=inputs.integration.time_step, law=law)
     check_simulation_memory(size, n_dofs=2 * model.n_nodes)  # before any allocation: a year of records fails here
     if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.pipeline.resources)
         check_monte_carlo_size(size, samples=args.samples, nperseg=args.nperseg, n_dofs=2 * model.n_nodes,
                                workers=args.workers)
-    run_kw = dict(law=law, mu=args.mu, sliding_velocity=si(args.velocity), normal_load=si(args.load),
-                  roughness_ra=si(args.roughness), duration=duration, sample_rate=sample_rate, seed=args.seed,
-                  time_step=time_step, run_id=args.run_id, **_path_options(args))
     if args.dry_run:
-        return _dry_run(args, model, size, run_kw)
+        return _dry_run(args, model, size, inputs)
     if args.samples is not None:
-        return _run_samples(args, model, law, law_file)
-    ds = simulate(model, **run_kw)
+        return _run_samples(args, model, inputs, law_file)
+    ds = simulate(model, inputs.condition, inputs.friction, schedule=inputs.schedule,
+                  integration=inputs.integration, output=inputs.output)
     from fivid.schema import append_history
 
     append_history(ds, _command_line(args))
@@ -187,6 +183,25 @@ def _mode_count(text):
     return n
 
 
+def _simulation_inputs(args, law):
+    """The grouped inputs of :func:`fivid.solver.simulate` from the parsed arguments (SI floats)."""
+    from fivid.solver import (
+        FrictionInput,
+        IntegrationOptions,
+        OperatingCondition,
+        OutputOptions,
+        RunSchedule,
+        SimulationInputs,
+    )
+
+    return SimulationInputs(
+        OperatingCondition(in_si(args.velocity), in_si(args.load), in_si(args.roughness)),
+        FrictionInput(law=law, mu=args.mu, seed=args.seed),
+        RunSchedule(duration=in_si(args.duration), sample_rate=in_si(args.sample_rate)),
+        IntegrationOptions(time_step=in_si(args.time_step), **_path_options(args)),
+        OutputOptions(run_id=args.run_id))
+
+
 def _path_options(args) -> dict:
     """The solver-path arguments of :func:`fivid.solver.simulate` from ``--full``/``--reduced [N]`` (default auto),
     ``--reduced-tolerance``, ``--error-band``, ``--reduced-mass-scaling`` and ``--cache-dir``."""
@@ -211,7 +226,7 @@ def _path_options(args) -> dict:
                 error_band=band, cache_dir=args.cache_dir)
 
 
-def _dry_run(args, model, size, run_kw) -> int:
+def _dry_run(args, model, size, inputs) -> int:
     """``--dry-run``: the memory estimate, the solver path and the run time estimated from a short timed probe."""
     import time
 
@@ -220,7 +235,8 @@ def _dry_run(args, model, size, run_kw) -> int:
     from fivid.storage import dumps_json
 
     t0 = time.perf_counter()
-    prep = prepare_run(model, **run_kw)
+    prep = prepare_run(model, inputs.condition, inputs.friction, schedule=inputs.schedule,
+                       integration=inputs.integration, output=inputs.output)
     timing = estimate_run_time(prep, setup_seconds=time.perf_counter() - t0)
     path = choice_attrs(prep.choice)
     if args.samples is not None:  # every sample runs the same steps; the workers share the cached basis
@@ -257,28 +273,24 @@ def _law_checked(args, model):
     if isinstance(law, PerturbedCoulombLaw):  # a Coulomb law has no amplitude, hence no domain to leave
         base = model.motion("base")
         velocity = float(args.velocity) if args.velocity is not None else abs(base.amplitude) if base else None
-        pred = check_law_condition(law, domain, velocity, None if args.roughness is None else float(args.roughness),
-                                   None if args.load is None else float(args.load), strict=args.strict,
+        pred = check_law_condition(law, domain, velocity, in_si(args.roughness), in_si(args.load), strict=args.strict,
                                    command="simulate")
         record["domain"] = {"checked": domain is not None, "inside": bool(pred.inside[0]), "warnings": pred.messages}
     return law, record
 
 
-def _run_samples(args, model, law, law_file) -> int:
+def _run_samples(args, model, inputs, law_file) -> int:
     """``--samples N``: the Monte-Carlo envelope of the law at the condition, written to ``-o``."""
-    from fivid.pipeline.montecarlo import run_monte_carlo
+    from fivid.identify.montecarlo import EnvelopeSpectrum
+    from fivid.pipeline.montecarlo import SampleExecution, run_monte_carlo
     from fivid.schema import new_history
     from fivid.storage import dumps_json, write_netcdf
 
-    def si(value):
-        return None if value is None else float(value)
-
     env = run_monte_carlo(
-        model, law, samples=args.samples, seed=args.seed, duration=si(args.duration), sample_rate=si(args.sample_rate),
-        sliding_velocity=si(args.velocity), normal_load=si(args.load), roughness_ra=si(args.roughness),
-        time_step=si(args.time_step), **{k: v for k, v in _path_options(args).items() if k != "cache_dir"},
-        variable=args.variable, sensor=args.sensor,
-        nperseg=args.nperseg, workers=args.workers, scheduler=args.scheduler, progress=args.progress,
+        model, inputs.friction.law, inputs.condition, inputs.schedule, samples=args.samples, seed=args.seed,
+        integration=inputs.integration,
+        spectrum=EnvelopeSpectrum(variable=args.variable, sensor=args.sensor, nperseg=args.nperseg),
+        execution=SampleExecution(workers=args.workers, scheduler=args.scheduler, progress=args.progress),
         attrs={**law_file, "law_domain_check": _domain_text(args.law_domain), "model": str(args.model),
                "model_description": model.describe(),
                "history": new_history(_command_line(args))},

@@ -6,7 +6,7 @@ import numpy as np
 
 from fivid.fe import load_model
 from fivid.fe.assembly import lumped_mass
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify.case import Case, Curve, Outcome, Plot
 from fivid.verify.models import block_on_belt
 
@@ -29,7 +29,8 @@ def stick_slip_closed_form(normal_force: float, mu=MU, mu_s=MU_S, belt=V, k=K, m
 def stick_slip_run():
     """The block on the rigid belt for 30 ms at 1 MHz output; returns ``(model, dataset)``."""
     model = load_model(block_on_belt(mu=MU, mu_static=MU_S, belt=V, spring=K))
-    return model, simulate(model, duration=0.03, sample_rate=1e6, oversample=1, progress=False, settle_time=0.0)
+    return model, simulate(model, schedule=RunSchedule(duration=0.03, sample_rate=1e6, settle_time=0.0),
+                           output=OutputOptions(oversample=1, progress=False))
 
 
 def _compute(quick: bool, data) -> Outcome:

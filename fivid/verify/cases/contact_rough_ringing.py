@@ -6,7 +6,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify.case import Case, Curve, Outcome, Plot
 from fivid.verify.models import block_on_line
 
@@ -32,7 +32,8 @@ def bar_on_spring_frequency(force: float) -> tuple[float, float, float]:
 
 def _compute(quick: bool, data) -> Outcome:
     model = load_model(block_on_line(law=POWER_LAW, pressure=PRESSURE, kick=KICK))
-    ds = simulate(model, duration=2e-3, sample_rate=2e6, oversample=1, progress=False, settle_time=0.0)
+    ds = simulate(model, schedule=RunSchedule(duration=2e-3, sample_rate=2e6, settle_time=0.0),
+                  output=OutputOptions(oversample=1, progress=False))
     f_ref, _, d = bar_on_spring_frequency((PRESSURE + KICK) * W * T)
     t, x = ds.time.values, ds.sensor_displacement.values
     sel = t > 1.1e-3

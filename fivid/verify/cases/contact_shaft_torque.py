@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify.case import Case, Curve, Outcome, Plot
 from fivid.verify.models import ring_on_shaft
 
@@ -17,8 +17,8 @@ MU, K_HOLD, R, R_OUT = 0.1, 1e6, 0.03, 0.05  # [-], holder springs [N/m], shaft 
 def shaft_torque_run():
     """The polycarbonate ring squeezed on the shaft turning at 600 rpm, 30 ms; returns ``(model, dataset)``."""
     model = load_model(ring_on_shaft(MU, holder=K_HOLD))
-    return model, simulate(model, duration=0.03, sample_rate=20e3, progress=False, settle_time=0.0,
-                           record_state=True)
+    return model, simulate(model, schedule=RunSchedule(duration=0.03, sample_rate=20e3, settle_time=0.0),
+                           output=OutputOptions(progress=False, record_state=True))
 
 
 def _compute(quick: bool, data) -> Outcome:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify.case import Case, Curve, Outcome, Plot
 from fivid.verify.models import block_on_base
 
@@ -18,7 +18,8 @@ BLOCK_MASS = 7850.0 * 0.004 * 0.004 * 0.01  # the 4 x 4 x 10 mm steel block [kg]
 def block_on_belt_run():
     """The block on the base driven at V after a 0.1 ms ramp; returns the dataset."""
     model = load_model(block_on_base(mu=MU, spring=K, base_velocity=V, load=-2e-9, base_ramp="0.1 ms"))
-    return simulate(model, duration=0.008, sample_rate=100e3, oversample=1, progress=False, settle_time=1e-4)
+    return simulate(model, schedule=RunSchedule(duration=0.008, sample_rate=100e3, settle_time=1e-4),
+                    output=OutputOptions(oversample=1, progress=False))
 
 
 def _compute(quick: bool, data) -> Outcome:

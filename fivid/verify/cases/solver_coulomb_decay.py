@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify.case import Case, Curve, Outcome, Plot
 from fivid.verify.models import block_on_base
 
@@ -17,7 +17,8 @@ MU, K = 0.3, 1.24e4  # friction coefficient [-], holder spring [N/m]
 def coulomb_decay():
     """The block on a fixed base, held by a spring k and released at 3 m/s; returns the dataset."""
     model = load_model(block_on_base(mu=MU, spring=K, v0=3.0, load=-2e-9))
-    return simulate(model, duration=0.012, sample_rate=100e3, oversample=1, progress=False, settle_time=0.0)
+    return simulate(model, schedule=RunSchedule(duration=0.012, sample_rate=100e3, settle_time=0.0),
+                    output=OutputOptions(oversample=1, progress=False))
 
 
 def half_cycle_decrements(t, x, N, mu, k, after):

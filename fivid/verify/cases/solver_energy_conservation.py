@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.solver.timestep import stable_step
 from fivid.verify.case import Case, Curve, Outcome, Plot
 
@@ -31,7 +31,8 @@ def energy_run(steps: int):
     model = load_model(free_cantilever())
     st = stable_step(model)
     duration = steps * 0.9 * st.critical_time_step
-    ds = simulate(model, duration=duration, sample_rate=400 / duration, oversample=1, progress=False)
+    ds = simulate(model, schedule=RunSchedule(duration=duration, sample_rate=400 / duration),
+                  output=OutputOptions(oversample=1, progress=False))
     return ds, st
 
 

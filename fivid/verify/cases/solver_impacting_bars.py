@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.fe import load_model
-from fivid.solver import simulate
+from fivid.solver import OutputOptions, RunSchedule, simulate
 from fivid.verify.case import Case, Curve, Outcome, Plot
 from fivid.verify.models import impacting_bars
 
@@ -20,8 +20,8 @@ def simulate_bars(n: int, v0: float = 1.0, length: float = 0.01):
     2L/c; returns ``(model, dataset, 2L/c)``."""
     model = load_model(impacting_bars(length=length, n=n, v0=v0, gap=0.0))
     duration = 2 * length / np.sqrt(E / RHO)
-    ds = simulate(model, duration=1.5 * duration, sample_rate=100 / duration, oversample=1, progress=False,
-                  record_state=True)
+    ds = simulate(model, schedule=RunSchedule(duration=1.5 * duration, sample_rate=100 / duration),
+                  output=OutputOptions(oversample=1, progress=False, record_state=True))
     return model, ds, duration
 
 
