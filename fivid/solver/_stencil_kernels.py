@@ -134,43 +134,65 @@ def _mapped_component(wx, wy, fo, cm, col0, a, first, ncols, nrows, stride):
 
 
 @fma_kernel
-def _rotate(wx, wy, rx, ry, rot, t0, first, ncols, nrows, stride, sign):
-    """``(rx, ry) = R_k^T (wx, wy)`` (``sign`` 1) or ``R_k (wx, wy)`` (``sign`` -1; in place allowed) on a patch of
-    ``nrows`` rows of ``ncols`` nodes from x-index ``first``, ``R_k`` the rotation by column ``k``'s angle, cosine
-    ``rot[0, t0 + k]`` and sine ``rot[1, t0 + k]``: components from x, y into the column's frame and back."""
+def _rotate(wx, wy, rx, ry, rot, t0, first, ncols, nrows):
+    """``(rx, ry) = R_k^T (wx, wy)`` on a block of ``nrows`` rows of ``ncols`` nodes (row stride ``ncols``) from
+    x-index ``first``: each node's components in its column's frame, ``R_k`` the rotation by column ``k``'s
+    angle, cosine ``rot[0, t0 + k]`` and sine ``rot[1, t0 + k]``."""
     cs = rot[0, t0:t0 + ncols]
     sn = rot[1, t0:t0 + ncols]
     for j in range(nrows):
-        b = uint64(first + j * stride)
+        b = uint64(first + j * ncols)
         for k in range(ncols):
             m = b + uint64(k)
             x = wx[m]
             y = wy[m]
-            s = sign * sn[k]
-            rx[m] = cs[k] * x + s * y
-            ry[m] = cs[k] * y - s * x
+            rx[m] = cs[k] * x + sn[k] * y
+            ry[m] = cs[k] * y - sn[k] * x
+
+
+@fma_kernel
+def _rotated_row(rx, ry, fx, fy, c, cs, sn, first, ncols, stride):
+    """Both force components of a row of ``ncols`` nodes from x-index ``first`` with one stencil ``c`` in the
+    column frames (displacements ``rx, ry`` in those frames), turned back to x, y by the columns' cosines ``cs``
+    and sines ``sn``: one pass, the 18 neighbour values loaded once for both components."""
+    st = uint64(stride)
+    one = uint64(1)
+    b = uint64(first)
+    for i in range(ncols):
+        m = b + uint64(i)
+        s = m - st
+        n = m + st
+        # both components from the same 18 neighbour values (LLVM loads each once)
+        gx = (c[0] * rx[s - one] + c[1] * ry[s - one] + c[4] * rx[s] + c[5] * ry[s] + c[8] * rx[s + one]
+              + c[9] * ry[s + one] + c[12] * rx[m - one] + c[13] * ry[m - one] + c[16] * rx[m] + c[17] * ry[m]
+              + c[20] * rx[m + one] + c[21] * ry[m + one] + c[24] * rx[n - one] + c[25] * ry[n - one]
+              + c[28] * rx[n] + c[29] * ry[n] + c[32] * rx[n + one] + c[33] * ry[n + one])
+        gy = (c[2] * rx[s - one] + c[3] * ry[s - one] + c[6] * rx[s] + c[7] * ry[s] + c[10] * rx[s + one]
+              + c[11] * ry[s + one] + c[14] * rx[m - one] + c[15] * ry[m - one] + c[18] * rx[m] + c[19] * ry[m]
+              + c[22] * rx[m + one] + c[23] * ry[m + one] + c[26] * rx[n - one] + c[27] * ry[n - one]
+              + c[30] * rx[n] + c[31] * ry[n] + c[34] * rx[n + one] + c[35] * ry[n + one])
+        fx[m] = cs[i] * gx - sn[i] * gy
+        fy[m] = sn[i] * gx + cs[i] * gy
 
 
 @fma_kernel
 def _rotated_patch(wx, wy, fx, fy, rx, ry, c_uni, rot, blk):
     """Forces on a patch whose rows are rotations of one stencil (a ring's or an arc's radial layers): the
     displacements turned into each column's frame (:func:`_rotate` over the whole block, the patch's
-    neighbours included), one shared stencil ``c_uni[blk[5] + row]`` per row in those frames
-    (:func:`_uniform_component`), the forces turned back. ``blk``: the patch's row of
-    ``blocks``."""
+    neighbours included), then per row its stencil ``c_uni[blk[5] + row]`` in those frames and the turn back
+    (:func:`_rotated_row`). ``blk``: the patch's row of ``blocks``."""
     first = blk[0]
     ncols = blk[1]
     nrows = blk[2]
     stride = blk[3]
     start = blk[6]
     t0 = blk[7]
-    _rotate(wx, wy, rx, ry, rot, t0, start, stride, nrows, stride, 1.0)
+    _rotate(wx, wy, rx, ry, rot, t0, start, stride, nrows)
+    t1 = t0 + first - start
+    cs = rot[0, t1:t1 + ncols]
+    sn = rot[1, t1:t1 + ncols]
     for j in range(nrows):
-        c = c_uni[blk[5] + j]
-        row = first + j * stride
-        _uniform_component(rx, ry, fx, c, 0, row, ncols, 1, stride)
-        _uniform_component(rx, ry, fy, c, 1, row, ncols, 1, stride)
-    _rotate(fx, fy, fx, fy, rot, t0 + first - start, first, ncols, nrows, stride, -1.0)
+        _rotated_row(rx, ry, fx, fy, c_uni[blk[5] + j], cs, sn, first + j * stride, ncols, stride)
 
 
 @fma_kernel
