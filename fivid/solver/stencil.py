@@ -3,30 +3,35 @@
 Node ``p = (i, j)`` of a structured block couples with its 3x3 neighbourhood through 2x2 blocks of
 ``K``; the coefficient of dof ``a`` of ``p`` on dof ``b`` of ``p + dj*stride + di`` is the sum, over the
 (up to four) elements holding both nodes, of the element stiffness entries
-(:func:`fivid.fe.assembly.element_stiffness_q4`). Three storage kinds, all without per-node index arrays
+(:func:`fivid.fe.assembly.element_stiffness_q4`). Four storage kinds, all without per-node index arrays
 except the last:
 
 - uniform blocks (every element the same: rectangles, parallelograms of equal size): the interior and the
   four edges (corners excluded) each share one coefficient set (``c_uni``);
-- mapped blocks (annular sectors, profiled or general quadrilaterals): per-node coefficients ``c_map`` in
-  component-major layout ``(36, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch
-  covering the whole block (neighbours outside it have zero coefficients; the padding keeps their indices
-  in bounds); on a periodic ring the patch covers columns 1..nx-2;
-- listed nodes with explicit neighbour indices: the corners of uniform blocks and the two seam columns of
-  a periodic ring (whose neighbours across the seam are ``nx - 1`` columns away).
+- rotated patches (rings and arcs): every row is one stencil seen from each node's column frame (a radial
+  layer's elements are rotations of one element), stored once per row in ``c_uni`` with the columns' angles in
+  ``rot``; the kernel turns the displacements into the column frames, applies the row's stencil and turns the
+  forces back. The end (arc) or seam (ring) columns are listed;
+- mapped blocks (profiled or general quadrilaterals): per-node coefficients ``c_map`` in component-major layout
+  ``(36, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch covering the whole block
+  (neighbours outside it have zero coefficients; the padding keeps their indices in bounds); on a periodic ring
+  the patch covers columns 1..nx-2;
+- listed nodes with explicit neighbour indices: the corners of uniform blocks and the end or seam columns of
+  rotated patches and periodic rings.
 
 Speed of mapped patches (issue 30 item 5; bench_solver ``curved_fraction_of_bare_stencil`` and
-``*_stencil_fraction_of_bare_stencil``, measured on a loaded 2-core EPYC, AVX-512): the row loop is vectorised
-(8 lanes of 18 FMAs per force component), but a mapped node streams its 36 coefficients (288 B) from L3 every
-step (the ring's 2.2 MB do not fit the 1 MB L2), about 470 B per node and step with the update pass's arrays,
-which the stream evicts: the step is bound by L3 bandwidth. A one-pass variant ran at 3.2 ns/node on a
-cache-resident part of the ring against 4.4 ns/node on the whole ring; main's kernel takes ~5 ns/node, the bare
-rectangular stencil (13 terms, no coefficient stream) ~1.4 ns/node. Two layouts were measured and not kept
-(branches ``speed-tiled-experiment``, ``speed-symmetric-experiment``): tiles of 16 nodes with both components in
-one pass (fewer loads, bit for bit, but no faster on the ring: 0.89x, 1.2x on the rough pair) and the 19
-independent coefficients of a symmetric stencil (half the bytes, +5-10 %, results change at 1e-16). Closing the
-gap to half the bare stencil's speed needs fewer bytes per node: coefficients generated on the fly from a
-block's structure (a ring's rows are rotations of one stencil) or the stencil fused with the update pass.
+``*_stencil_fraction_of_bare_stencil``, measured on a loaded 2-core EPYC, AVX-512): the per-node row loop is
+vectorised (8 lanes of 18 FMAs per force component), but a mapped node streams its 36 coefficients (288 B) from
+L3 every step (the ring's 2.2 MB do not fit the L2), about 470 B per node and step with the update pass's
+arrays: the step is bound by L3 bandwidth (main's kernel ~5 ns/node idle, the bare rectangular stencil ~1.4).
+Deduplicating the coefficient table does not apply: no two nodes of the ring or of the rough pair have equal
+coefficients in x, y (a ring's nodes differ by their rotation; a profiled block's heights enter every row, the
+straight edge's excepted). The ring's rows are rotations of one stencil, hence the rotated patches: 36
+coefficients per row instead of per node, +8 multiply-adds per node for the two rotations, cache-resident
+(:func:`block_stencils` for the tolerance). Profiled blocks keep the coefficient stream; earlier layouts measured
+and not kept (branches ``speed-tiled-experiment``, ``speed-symmetric-experiment``): tiles of 16 nodes with both
+components in one pass (no faster on the ring, 1.2x on the rough pair) and the 19 independent coefficients of a
+symmetric stencil (+5-10 %, results change at 1e-16).
 """
 
 from __future__ import annotations
