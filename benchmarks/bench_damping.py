@@ -13,7 +13,7 @@ Prints one JSON line: per scheme the time step, steps/s and wall time of the run
 sensor PSDs, steady part, 200 Hz - 10 kHz) and the same over the scored band 800 Hz - 5 kHz
 (``fast_scored_band_lsd_db``), the sensor RMS ratio, the step ratio against the undamped Courant step, and
 ``damping_ratio_1khz`` / ``damping_ratio_10khz``: the effective modal damping ratios of the band-limited scheme
-there (its curve, which tests/test_solver_damping.py checks against measured free decays).
+there (its curve, which tests/solver/test_solver_damping.py checks against measured free decays).
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ For every (sliding velocity, roughness) of the ground truth:
    and ``twin_daq/T0k_v<V>_ra<Ra>.csv`` in the LabDAQ export format of ``configs/rigs/labdaq.yaml``
    (semicolons, decimal commas, accelerometer in mV at 100 mV/g, velocity and Ra only in the name).
 
-``twin.sha256`` registers the sha256 of every file; tests/test_pipeline_sample.py checks it. The
+``twin.sha256`` registers the sha256 of every file; tests/pipeline/test_pipeline_sample.py checks it. The
 generation is deterministic (seeded synthesis, serial kernels) for a given version of fivid's solver;
 the files were written with the solver of this commit's history (a later solver change that moves
 the results by round-off changes the bytes, not the statistics: checked 2 % RMS, 0.002 dB band power).

@@ -112,7 +112,7 @@ def project_on_modes(K, M, C, K_f, n_basis: int | None = None, *, static_loads=N
         augmentation, Dickens et al. 1997). Friction acts through point forces at the contact nodes, which a
         truncated set of global modes represents poorly (the local flexibility is in the discarded modes); with
         the contact nodes' unit normal and tangential loads the reduced eigenvalues converge to the full-order
-        ones far faster (see tests/test_fe_cea.py). The enriched basis is M-orthonormalised and re-diagonalised
+        ones far faster (see tests/fe/test_fe_cea.py). The enriched basis is M-orthonormalised and re-diagonalised
         on ``K``, so the reduced stiffness stays diagonal.
     sigma : float, optional
         Shift of the modal solver and of the static solves (default: small negative).

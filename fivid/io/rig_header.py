@@ -125,7 +125,7 @@ def _delimiter_hint(header: str, delimiter: str) -> str:
 def _split(text: str, delimiter: str, path=None, line=None) -> list[str]:
     try:
         row = next(csv.reader([text], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
-    except csv.Error as exc:  # e.g. a lone carriage return inside a line (found by tests/test_io_fuzz.py)
+    except csv.Error as exc:  # e.g. a lone carriage return inside a line (found by tests/io/test_io_fuzz.py)
         raise SchemaError(f"the header line cannot be split into fields ({exc}); a lone carriage return or a "
                           "broken quote? Save the file with one line ending per line", file=path, line=line) from None
     return [f.strip().strip("\ufeff").strip() for f in row]

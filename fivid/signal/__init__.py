@@ -4,7 +4,7 @@ Welch PSD and cross-spectra with χ² bounds (:func:`welch_psd`, :func:`csd`), F
 coherence, band RMS, IEC 61260-1 1/3-octave levels, the vibration level Lv(dB), the steady-sliding
 window and resampling to a common rate; the comparison of two spectra (log-spectral distance, level
 difference, band levels: :mod:`fivid.signal.compare`) and their peaks (:mod:`fivid.signal.peaks`). It is the one
-home of spectra: no other package calls scipy.signal.welch/csd (tests/test_architecture.py). The pure numpy computations live in
+home of spectra: no other package calls scipy.signal.welch/csd (tests/project/test_architecture.py). The pure numpy computations live in
 :mod:`fivid.signal.spectral` (and :mod:`fivid.signal.fft` for the planned FFTs); the functions here
 wrap DataArrays/Datasets and record units and settings in attrs.
 """

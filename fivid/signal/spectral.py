@@ -220,7 +220,7 @@ def welch_density(x, fs: float, *, nperseg: int, noverlap: int | None = None, wi
     over ``x`` with ``fs = 1 / dx`` [m-1]): :func:`scipy.signal.welch` with every setting explicit
     (``scaling="density"``, ``average="mean"``, one-sided, no padding). The DataArray entry with units, χ² bounds
     and recorded settings is :func:`fivid.signal.welch_psd` (:func:`averaged_spectra`, pyfftw), which agrees with
-    it to round-off (tests/test_signal_compare.py).
+    it to round-off (tests/signal/test_signal_compare.py).
 
     Parameters
     ----------

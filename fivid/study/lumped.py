@@ -5,7 +5,7 @@ the belt by a contact spring ``k3`` preloaded to the normal force ``N0``. Spring
 ``k [[c², cs], [cs, s²]]``, so ``k11 = k22 = (k1 + k2)/2`` and ``k12 = (k1 − k2)/2``; mass-proportional damping
 ``c``. Linearised about steady sliding, friction ``mu N = mu k3 (d0 − y)`` couples the normal displacement into
 the tangential equation (the non-symmetric ``mu K_f``): for ``k12 < 0`` two modes coalesce and one turns
-unstable above (DESIGN §9, tests/test_fe_cea.py)
+unstable above (DESIGN §9, tests/fe/test_fe_cea.py)
 
 ``mu_c = −[(k11 − k22')² + 4 k12² + 2 c² (k11 + k22')/m] / (4 k3 k12)``,  ``k22' = k22 + k3``.
 

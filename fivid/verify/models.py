@@ -1,6 +1,6 @@
 """The verification cases' models (mappings for :func:`fivid.fe.load_model`). Synthetic geometry.
 
-The tests build the same models from here (tests/solver_models.py, tests/contact_models.py re-export them):
+The tests build the same models from here (tests/helpers/solver_models.py, tests/helpers/contact_models.py re-export them):
 one home for each benchmark's model.
 """
 

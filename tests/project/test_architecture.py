@@ -1,0 +1,231 @@
+"""Imports flow down the layers of DESIGN §1; kernels import nothing from fivid; import fivid is light."""
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[2] / "fivid"
+
+# DESIGN §1. A module may import from its own layer or below.
+LAYERS = {
+    "cli": 5,
+    "pipeline": 4, "study": 4, "verify": 4,
+    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3, "ema": 3, "updating": 3,
+    "io": 2, "signal": 2, "friction": 2, "fe": 2, "surface": 2, "contact": 2,
+    "schema": 1, "units": 1, "errors": 1, "storage": 1, "builtin": 1, "config_layer": 1,
+    "__init__": 1, "__main__": 5,
+}
+
+
+def _layer(module_parts: tuple[str, ...]) -> int:
+    if module_parts[-1] == "_kernels" or module_parts[-1].endswith("_kernels"):
+        return 0
+    top = module_parts[0]
+    if top not in LAYERS:
+        raise AssertionError(f"fivid.{top} has no layer in tests/project/test_architecture.py: add it (DESIGN §1)")
+    return LAYERS[top]
+
+
+def _modules():
+    for path in sorted(PKG.rglob("*.py")):
+        rel = path.relative_to(PKG).with_suffix("")
+        parts = rel.parts
+        if parts[-1] == "__init__" and len(parts) > 1:
+            parts = parts[:-1]
+        yield path, parts
+
+
+def _fivid_imports(path: Path, parts: tuple[str, ...]):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name == "fivid" or alias.name.startswith("fivid."):
+                    yield node.lineno, tuple(alias.name.split(".")[1:])
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                raise AssertionError(f"{path}:{node.lineno}: relative import; use absolute imports (STYLE)")
+            mod = node.module or ""
+            if mod == "fivid":
+                for alias in node.names:
+                    yield node.lineno, (alias.name,)
+            elif mod.startswith("fivid."):
+                base = tuple(mod.split(".")[1:])
+                # ``from fivid.solver import _kernels``: the module imported is the kernel module itself
+                kernels = [a.name for a in node.names if a.name.endswith("_kernels")]
+                for name in kernels:
+                    yield node.lineno, base + (name,)
+                if len(kernels) < len(node.names):
+                    yield node.lineno, base
+
+
+def test_imports_flow_down_the_layers():
+    bad = []
+    for path, parts in _modules():
+        own = _layer(parts)
+        for lineno, target in _fivid_imports(path, parts):
+            if not target:
+                continue
+            if own == 0 and not target[-1].endswith("_kernels"):  # kernels may call other kernels only
+                bad.append(f"{path.relative_to(PKG.parent)}:{lineno}: a kernel module imports fivid.{'.'.join(target)}")
+                continue
+            if target[0] == "__version__":
+                continue
+            if target[0] == parts[0]:
+                continue  # same package
+            their = _layer(target)
+            if their > own:
+                bad.append(
+                    f"{path.relative_to(PKG.parent)}:{lineno}: fivid.{'.'.join(parts)} (L{own}) imports "
+                    f"fivid.{'.'.join(target)} (L{their})"
+                )
+    assert not bad, "imports against the layers of DESIGN §1:\n" + "\n".join(bad)
+
+
+def _kernel_modules():
+    return [(path, parts) for path, parts in _modules() if _layer(parts) == 0]
+
+
+def test_kernel_modules_are_found():
+    """The kernel checks below see the solver's kernel modules (one per concern): a rename cannot empty them."""
+    names = {".".join(parts) for _, parts in _kernel_modules()}
+    assert {"solver._kernels", "solver._stencil_kernels", "solver._contact_kernels", "solver._loop_kernels",
+            "solver._reduced_kernels", "contact._kernels"} <= names, names
+
+
+def test_kernels_import_only_numpy_and_numba():
+    """Kernel modules (``_kernels.py``, ``_*_kernels.py``) import numpy, numba, math and, for the kernels' argument
+    groups, collections (namedtuple); from fivid only other kernel modules."""
+    bad = []
+    for path, parts in _kernel_modules():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [node.module or ""]
+            for n in names:
+                if n.split(".")[0] not in {"numpy", "numba", "math", "collections", "__future__"} and not (
+                        n.startswith("fivid.") and n.endswith("_kernels")):
+                    bad.append(f"{path}:{node.lineno}: imports {n}")
+    assert not bad, "\n".join(bad)
+
+
+#: kernel modules passing their own fastmath/parallel options (none: every kernel uses the shared decorators)
+_OWN_JIT_OPTIONS: set[str] = set()
+
+
+def test_kernel_compilation_setting_is_defined_once():
+    """fastmath and parallel are chosen once, by the decorators of fivid/solver/_kernels.py; no other kernel module
+    passes them to numba itself (STYLE: no fastmath flags scattered per function)."""
+    bad = []
+    for path, parts in _kernel_modules():
+        name = ".".join(parts)
+        if name == "solver._kernels" or name in _OWN_JIT_OPTIONS:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call):
+                for kw in node.keywords:
+                    if kw.arg in {"fastmath", "parallel"}:
+                        bad.append(f"{path}:{node.lineno}: {kw.arg}= (use the decorators of fivid.solver._kernels)")
+    assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize("heavy", ["numba", "dask", "distributed", "matplotlib", "pyfftw"])
+def test_import_fivid_is_light(heavy):
+    code = f"import sys, fivid, fivid.cli; fivid.cli.build_parser(); print({heavy!r} in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False", f"import fivid / fivid --help imports {heavy}"
+
+
+def test_docs_layer_table_matches_the_code():
+    """docs/architecture.md's layer table is the layer map above, and its L0 row names exactly the kernel modules
+    that exist -- so the documented architecture cannot drift from the code."""
+    import re
+
+    text = (PKG.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    rows = dict(re.findall(r"^\| L(\d) \| (.+) \|$", text, flags=re.M))
+    documented = {name: int(layer) for layer, cells in rows.items() if layer != "0"
+                  for name in re.findall(r"`([\w]+)`", cells)}
+    assert documented == LAYERS
+    kernels = set(re.findall(r"`([\w/]+\.py)`", rows["0"]))
+    actual = {str(p.relative_to(PKG)) for p in PKG.rglob("*_kernels.py")}
+    assert kernels == actual
+
+
+#: the Welch estimators of scipy.signal that fivid.signal wraps (one home for spectra: issue 29 item 1)
+_SPECTRAL = {"welch", "csd"}
+_SCIPY_SIGNAL = {"scipy.signal", "scipy.signal.spectral", "scipy.signal._spectral_py"}
+
+
+def _scipy_welch_uses(source: str) -> list[tuple[int, str]]:
+    """Lines of ``source`` that import or call ``scipy.signal.welch``/``csd`` in any spelling (module level and
+    function bodies): ``from scipy.signal import welch [as w]``, ``scipy.signal.welch(...)``,
+    ``import scipy.signal as ss; ss.csd(...)``, ``from scipy import signal; signal.welch(...)``, or the
+    function fetched with ``getattr(module, "welch")``."""
+    tree = ast.parse(source)
+    modules = set()  # names bound to scipy.signal
+    roots = set()  # names bound to scipy
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name in _SCIPY_SIGNAL and a.asname:
+                    modules.add(a.asname)
+                elif a.name == "scipy" or a.name.startswith("scipy."):
+                    roots.add(a.asname or "scipy")
+        elif isinstance(node, ast.ImportFrom) and node.module == "scipy":
+            modules.update(a.asname or a.name for a in node.names if a.name == "signal")
+
+    def is_scipy_signal(expr) -> bool:
+        if isinstance(expr, ast.Name):
+            return expr.id in modules
+        return (isinstance(expr, ast.Attribute) and expr.attr in {"signal", "spectral", "_spectral_py"}
+                and (is_scipy_signal(expr.value) or isinstance(expr.value, ast.Name) and expr.value.id in roots))
+
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module in _SCIPY_SIGNAL:
+            found += [(node.lineno, f"from {node.module} import {a.name}") for a in node.names
+                      if a.name in _SPECTRAL or a.name == "*"]
+        elif isinstance(node, ast.Attribute) and node.attr in _SPECTRAL and is_scipy_signal(node.value):
+            found.append((node.lineno, f"{ast.unparse(node)}"))
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "getattr"
+              and len(node.args) >= 2 and is_scipy_signal(node.args[0]) and isinstance(node.args[1], ast.Constant)
+              and node.args[1].value in _SPECTRAL):
+            found.append((node.lineno, ast.unparse(node)))
+    return found
+
+
+@pytest.mark.parametrize("source, n", [
+    ("def f(x):\n    from scipy.signal import welch\n    return welch(x)\n", 1),
+    ("import scipy.signal\ndef f(x):\n    return scipy.signal.csd(x, x)\n", 1),
+    ("import scipy.signal as ss\nclass A:\n    def f(self, x):\n        return ss.welch(x)\n", 1),
+    ("from scipy import signal as sig\nf = lambda x: sig.welch(x)\n", 1),
+    ("import scipy\ny = scipy.signal.welch\n", 1),
+    ("from scipy.signal import csd as c, welch\n", 2),
+    ("import scipy.signal\nw = getattr(scipy.signal, 'welch')\n", 1),
+    ("from scipy.signal import find_peaks, get_window\nimport scipy.signal\nscipy.signal.spectrogram\n", 0),
+    ("from fivid.signal import csd, welch_psd\ncsd(a, b)\n", 0),
+])
+def test_the_welch_detector_sees_every_spelling(source, n):
+    """The checker below is an oracle only if it finds the call however it is written (and nothing else)."""
+    assert len(_scipy_welch_uses(source)) == n, _scipy_welch_uses(source)
+
+
+def test_spectra_have_one_home():
+    """No scipy.signal.welch/csd call or import outside fivid/signal/ (module level or in a function body): every
+    PSD and cross-spectrum goes through fivid.signal (welch_psd, csd, welch_density), so its settings are the ones
+    recorded and one estimator serves the scores, the studies, the solver checks and the surface statistics."""
+    bad = []
+    for path, parts in _modules():
+        if parts[0] == "signal":
+            continue
+        if parts[:3] == ("verify", "cases", "signal_welch"):  # the case comparing fivid.signal with scipy's welch
+            continue
+        for lineno, what in _scipy_welch_uses(path.read_text(encoding="utf-8")):
+            bad.append(f"{path.relative_to(PKG.parent)}:{lineno}: {what} (use fivid.signal)")
+    assert not bad, "spectral estimators outside fivid/signal/:\n" + "\n".join(bad)

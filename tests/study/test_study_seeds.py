@@ -1,0 +1,106 @@
+"""The seed studies: weak/strong contact over load (seed 001) and the ring's instability regimes (seed 002)
+(issue 14), and the pieces they need: axis replacement in --quick, growth after a wind-up stick phase, the GW
+surface following a point's roughness."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fivid.cli import main
+from fivid.study import load_study
+from fivid.study.analysis import analyse_transient
+
+STUDIES = Path(__file__).resolve().parents[2] / "configs" / "studies"
+MODELS = Path(__file__).resolve().parents[2] / "configs" / "models"
+
+
+def test_quick_replaces_a_sweep_axis_whole():
+    """weak_strong's quick sweep gives normal_load as values where the full study gives start/stop/num."""
+    full, quick = load_study(STUDIES / "weak_strong.yaml"), load_study(STUDIES / "weak_strong.yaml", quick=True)
+    assert full.axes["normal_load"].size == 7 and np.isclose(full.axes["normal_load"][[0, -1]], [0.2, 50]).all()
+    assert quick.axes["normal_load"].tolist() == [0.2, 5.0, 50.0]
+    ring = load_study(STUDIES / "ring_mu_sweep.yaml")
+    assert ring.cea is not None and "normal_load" not in ring.cea  # pressed by its loads: no clamp load needed
+
+
+def test_growth_rate_after_a_wind_up_stick_phase():
+    """A contact that sticks as a whole while the drive winds it up (stick share 1), then slides with a shrinking
+    stick zone (share 0.4) while a mode grows at sigma and saturates: the growth is fitted in the sliding part
+    (the synthetic envelope is exact: 1 % covers the band-pass's edge effects), the regime is mode coupling,
+    not stick-slip (no stick phase of the whole contact after the wind-up)."""
+    fs, f0, sigma = 200e3, 12e3, 600.0
+    t = np.arange(int(0.04 * fs)) / fs
+    t_slide, t_sat = 0.01, 0.025
+    amp = np.where(t < t_slide, 1e-6, 1e-6 * np.exp(sigma * np.clip(t - t_slide, 0, t_sat - t_slide)))
+    x = amp * np.sin(2 * np.pi * f0 * t)
+    stick = np.where(t < t_slide, 1.0, 0.4)
+    out = analyse_transient(t, x, sliding=stick < 0.5, stick=stick)
+    assert out["regime"] == "mode_coupling"
+    assert out["growth_rate"] == pytest.approx(sigma, rel=0.01)
+    assert out["frequency"] == pytest.approx(f0, abs=fs / 4096)
+    whole = analyse_transient(t, x, sliding=stick < 0.5, stick=np.where(t < 0.03, stick, 1.0))
+    assert whole["regime"] == "stick_slip"  # the whole contact sticks again in the second half
+
+
+def test_gw_surface_follows_the_points_roughness():
+    """refined_model(..., roughness_ra) sets the GW summit-height deviation to sqrt(pi/2) Ra (Gaussian Rq/Ra):
+    a rougher surface is more compliant, so the preloaded contact is softer and the coupled modes lower."""
+    from fivid.fe.static import preload_state
+    from fivid.study.tasks import refined_model
+
+    k = []
+    for ra in (0.8e-6, 3.2e-6):
+        model = refined_model(MODELS / "triboair_rough.yaml", 0.25, ra)
+        assert f"sigma {np.sqrt(np.pi / 2) * ra:.4g} m" in model.contacts[0].law.source
+        k.append(preload_state(model, 5.0).summary(model)[0]["normal_stiffness_n_per_m"])
+    assert k[1] < k[0]
+
+
+@pytest.mark.slow
+def test_weak_strong_study_quick(tmp_path, capsys):
+    """Seed 001's study from the CLI (--quick: 3 loads): weak at 0.2 N, strong at 50 N, the transition load
+    bracketed between loads, the response's power law over load, and the perturbed law vs Coulomb mu0."""
+    assert main(["study", str(STUDIES / "weak_strong.yaml"), "-o", str(tmp_path / "ws"), "--quick", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    pts = sorted(s["points"], key=lambda p: p["normal_load"])
+    assert [p["status"] for p in pts] == ["done"] * 3
+    assert pts[0]["coupling"] == "weak" and pts[-1]["coupling"] == "strong"
+    kappa = [p["coupling_indicator"] for p in pts]
+    assert kappa == sorted(kappa)
+    lo, hi = s["transition_load"]["bracket"]
+    assert lo < s["transition_load"]["value"] < hi
+    assert "normal_load" in s["fits"]["rms"]["exponents"]
+    assert all(np.isfinite(p["perturbation_gain_db"]) for p in pts)
+
+
+@pytest.mark.slow
+def test_ring_study_quick(tmp_path, capsys):
+    """Seed 002's mu sweep (--quick: 126 x 7 mesh): stable at 0.01, mode coupling at 0.3 (growth, onset, limit
+    cycle), stick-slip at 1; the CEA's critical mu lies below 0.3, and the stable point decays at the CEA's rate
+    (transient -102 vs CEA -108 1/s on this mesh: within 15 %, the envelope fit's spread over 40 ms)."""
+    assert main(["study", str(STUDIES / "ring_mu_sweep.yaml"), "-o", str(tmp_path / "ring"), "--quick",
+                 "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    by_mu = {p["mu"]: p for p in s["points"]}
+    assert [by_mu[m]["regime"] for m in (0.01, 0.3, 1.0)] == ["stable", "mode_coupling", "stick_slip"]
+    assert by_mu[0.3]["growth_rate"] > 0 and by_mu[0.3]["onset_time"] > 0
+    assert s["critical_mu"]["value"] < 0.3
+    assert by_mu[0.01]["growth_rate"] == pytest.approx(by_mu[0.01]["cea_growth_rate"], rel=0.15)
+
+
+def test_transition_load_per_roughness():
+    """With roughness swept too, summary.json gives the transition per roughness (a rougher surface is more
+    compliant: it couples the beams at a higher load), besides the first group's."""
+    from fivid.study.kinds.weak_strong import transitions as _transitions
+
+    pts = [{"normal_load": f, "roughness_ra": ra, "coupling_indicator": k}
+           for ra, ks in ((0.4e-6, (0.3, 0.6, 0.8)), (1.6e-6, (0.1, 0.3, 0.9)))
+           for f, k in zip((1.0, 10.0, 100.0), ks)]
+    out = _transitions(pts)
+    assert out["transition_load"]["bracket"] == [1.0, 10.0]
+    assert out["transition_load"]["value"] == pytest.approx(10 ** (2 / 3))
+    smooth, rough = out["transition_loads"]
+    assert smooth["roughness_ra"] == 0.4e-6 and smooth["value"] == pytest.approx(10 ** (2 / 3))
+    assert rough["roughness_ra"] == 1.6e-6 and rough["value"] == pytest.approx(10 ** (4 / 3))
