@@ -302,10 +302,13 @@ def _mapped_blocks(kw, duration, rounds, c_rect, bare):
     from fivid.fe import load_model
 
     out = {}
-    for key, path, extra in (("curved", "configs/models/ring_pressure.yaml", {"sliding_velocity": None}),
-                             ("rough", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03}),
-                             ("rough_no_contact", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03})):
-        mkw = dict(kw, normal_load=None, mu=None, **extra)
+    from fivid.solver import FrictionInput, OperatingCondition
+
+    for key, path, velocity in (("curved", "configs/models/ring_pressure.yaml", None),
+                                ("rough", "configs/models/rough_pair.yaml", 0.03),
+                                ("rough_no_contact", "configs/models/rough_pair.yaml", 0.03)):
+        # no target load, the models' own friction coefficients
+        mkw = dict(kw, condition=OperatingCondition(sliding_velocity=velocity), friction=FrictionInput())
         model = load_model(ROOT / path)
         if key == "rough_no_contact":  # the same mapped mesh without its contact pair: the stencil's own cost
             model = dataclasses.replace(model, contacts=())
