@@ -27,15 +27,18 @@ column               meaning
                      (counter-clockwise positive) and unused
 ``SURFACE_START``,   surface motion start time and ramp time [s] (smooth ramp ``r(s) = s - sin(2 pi s)/(2 pi)``)
 ``SURFACE_RAMP``
+``EXPANSION``        circle: radial displacement ``delta`` [m] its radius grows by (the preload; 0 for a line)
+``EXPANSION_START``, start and ramp time of the expansion [s] (the same smooth ramp: radius
+``EXPANSION_RAMP``   ``a + delta r(t)``, :func:`fivid.contact._kernels.circle_radius`)
 ==================== ====================================================================================
 
 The friction curve's three columns are contiguous (:data:`FRICTION_FIRST` .. :data:`FRICTION_FIRST` + 2), as
-are the rigid surface's nine (:data:`MASTER` .. :data:`SURFACE_RAMP`).
+are the rigid surface's twelve (:data:`MASTER` .. :data:`EXPANSION_RAMP`).
 """
 
 __all__ = ["NPAR", "LAW", "LAW_COEFFICIENT", "LAW_EXPONENT", "MU_STATIC_EXCESS", "STRIBECK_VELOCITY", "VISCOUS",
            "FRICTION_FIRST", "MASTER", "SURFACE_X", "SURFACE_Y", "SURFACE_A", "SURFACE_B", "SURFACE_SX", "SURFACE_SY",
-           "SURFACE_START", "SURFACE_RAMP", "LAW_RIGID", "LAW_LINEAR", "LAW_POWER", "LAW_TABLE", "MASTER_EDGE",
+           "SURFACE_START", "SURFACE_RAMP", "EXPANSION", "EXPANSION_START", "EXPANSION_RAMP", "LAW_RIGID", "LAW_LINEAR", "LAW_POWER", "LAW_TABLE", "MASTER_EDGE",
            "MASTER_LINE", "MASTER_CIRCLE"]
 
 # normal law
@@ -57,8 +60,11 @@ SURFACE_SX = 11
 SURFACE_SY = 12
 SURFACE_START = 13
 SURFACE_RAMP = 14
+EXPANSION = 15
+EXPANSION_START = 16
+EXPANSION_RAMP = 17
 #: columns of a row
-NPAR = 15
+NPAR = 18
 
 # codes of the LAW column
 LAW_RIGID = 0

@@ -10,13 +10,17 @@ laws and rigid surfaces are those of :mod:`fivid.contact._kernels`, the friction
 
 import math
 
-from fivid.contact._kernels import normal_energy, normal_pressure, rigid_geometry, surface_ramp
+from fivid.contact._kernels import circle_radius, normal_energy, normal_pressure, rigid_geometry, surface_ramp
 from fivid.contact._layout_kernels import (
+    EXPANSION,
+    EXPANSION_RAMP,
+    EXPANSION_START,
     LAW,
     LAW_COEFFICIENT,
     LAW_EXPONENT,
     LAW_RIGID,
     MASTER,
+    MASTER_CIRCLE,
     MASTER_EDGE,
     MU_STATIC_EXCESS,
     STRIBECK_VELOCITY,
@@ -171,6 +175,15 @@ def _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt):
 
 
 @kernel
+def _rigid_a(par_p, t):
+    """A rigid master's ``SURFACE_A`` column at time ``t`` [s]: a line's normal x-component, a circle's radius
+    after its expansion ramp (:func:`fivid.contact._kernels.circle_radius`)."""
+    if int(par_p[MASTER]) == MASTER_CIRCLE:
+        return circle_radius(par_p[SURFACE_A], par_p[EXPANSION], par_p[EXPANSION_START], par_p[EXPANSION_RAMP], t)
+    return par_p[SURFACE_A]
+
+
+@kernel
 def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master_nodes, pair_sign, pair_par, seg, geo):
     """Master segment ``seg[k]`` and geometry ``geo[k]`` of every slave in the predicted configuration ``u`` (see
     :func:`contact_solve`); a rigid master's surface velocity at ``t_new`` [s]."""
@@ -190,7 +203,7 @@ def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master
         else:
             sn = slave_node[k]
             g, nx, ny, tx, ty, vt = rigid_geometry(mk, pair_par[p, SURFACE_X], pair_par[p, SURFACE_Y],
-                                                   pair_par[p, SURFACE_A], pair_par[p, SURFACE_B],
+                                                   _rigid_a(pair_par[p], t_new), pair_par[p, SURFACE_B],
                                                    pair_par[p, SURFACE_SX], pair_par[p, SURFACE_SY], X[sn],
                                                    X[sn + npd], X[sn] + u[sn], X[sn + npd] + u[sn + npd])
             inside = math.isfinite(g)
@@ -227,11 +240,11 @@ def _warm_start(u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr,
 
 
 @kernel
-def _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes, pair_par,
-                        law_tab, s_area, seg, geo, lam, cstate, mu):
-    """One projected Gauss-Seidel sweep over the slaves facing their master (see :func:`contact_solve`): update
-    each multiplier pair and apply its increment at once. Returns the largest displacement [m] an increment
-    moved a node pair by."""
+def _gauss_seidel_sweep(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                        pair_par, law_tab, s_area, seg, geo, lam, cstate, mu):
+    """One projected Gauss-Seidel sweep over the slaves facing their master (see :func:`contact_solve`; a rigid
+    circle at its radius at ``t_new`` [s]): update each multiplier pair and apply its increment at once. Returns
+    the largest displacement [m] an increment moved a node pair by."""
     ns = slave_node.shape[0]
     dt2 = dt * dt
     change = 0.0
@@ -256,7 +269,7 @@ def _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, 
             g = gx * nx + gy * ny
         else:
             g = rigid_geometry(int(pair_par[p, MASTER]), pair_par[p, SURFACE_X], pair_par[p, SURFACE_Y],
-                               pair_par[p, SURFACE_A], pair_par[p, SURFACE_B], 0.0, 0.0, X[sn], X[sn + npd],
+                               _rigid_a(pair_par[p], t_new), pair_par[p, SURFACE_B], 0.0, 0.0, X[sn], X[sn + npd],
                                X[sn] + u[sn], X[sn + npd] + u[sn + npd])[0]
         wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
         ln = lam[k, 0]
@@ -302,7 +315,9 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair,
     largest correction of a sweep moves no node pair by more than ``tol`` [m]. ``mu[k]`` is the kinetic
     coefficient of slave ``k`` now (``mu0 + mu_p(t)``); ``pair_par`` the pairs' law rows and ``law_tab`` their
     tables (:mod:`fivid.contact._kernels`); a rigid master (line, circle) moves its surface at the ramped speed at
-    ``t_new`` [s], the end of the step. ``wmat`` empty: lumped inverse mass ``minv_c``; else the dense inverse
+    ``t_new`` [s], the end of the step, and a rigid circle has its radius at ``t_new`` (a radial expansion: the
+    gap closes by the radius' growth over the step, which the normal multiplier enforces like any predicted
+    penetration; during the expansion the normal work ``W_CN`` contains the expanding master's work). ``wmat`` empty: lumped inverse mass ``minv_c``; else the dense inverse
     mass of the contact dofs of a reduced system (:func:`_apply_contact_force`).
 
     Nodes are given by their x-index (y-index = x-index + ``npd``). ``lam[k] = (lam_n, lam_t)`` [N] is the
@@ -319,8 +334,8 @@ def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair,
     sweeps = 0
     for it in range(max_iter):
         sweeps = it + 1
-        change = _gauss_seidel_sweep(X, u, v, npd, dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
-                                     pair_par, law_tab, s_area, seg, geo, lam, cstate, mu)
+        change = _gauss_seidel_sweep(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr,
+                                     master_nodes, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu)
         if change <= tol:
             break
     return sweeps

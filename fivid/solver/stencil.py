@@ -206,8 +206,13 @@ def _rotated_rows(block, c: np.ndarray, i0: int, i1: int, tol: float):
     return ref.reshape(ny1, 36), np.stack([cs, sn])
 
 
-def block_stencils(model, *, rotated: bool = True) -> BlockStencils:
+def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStencils:
     """Stencil coefficients of every block of ``model`` (springs and constraints not included).
+
+    ``prestress`` (n_dofs,), optional: a static state [m] whose initial-stress stiffness
+    (:func:`fivid.fe.prestress.block_geometric_stiffness`) is added to each element's elastic stiffness, so the
+    stencil applies ``K + K_sigma`` (folded into the coefficients: no cost per step; a block whose stress varies
+    is not uniform, nor rotated unless the stress is, and takes the mapped path).
 
     A block is uniform when all its element stiffnesses agree to :data:`SAME_STENCIL_RTOL` of their largest
     entry (float resolution of the element integration): its interior nodes then share one coefficient set, and
@@ -217,6 +222,7 @@ def block_stencils(model, *, rotated: bool = True) -> BlockStencils:
     coefficients; periodic rings list their two seam columns with explicit neighbours.
     """
     from fivid.fe.assembly import block_element_stiffness
+    from fivid.fe.prestress import block_geometric_stiffness
 
     pad = max(b.n_cols for b in model.blocks) + 1
     npd = model.n_nodes + 2 * pad
@@ -224,6 +230,8 @@ def block_stencils(model, *, rotated: bool = True) -> BlockStencils:
     lst_idx, lst_nbr, lst_coef = [], [], []
     for block in model.blocks:
         ke = block_element_stiffness(block)
+        if prestress is not None:
+            ke = ke + block_geometric_stiffness(block, prestress)
         uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=SAME_STENCIL_RTOL * np.abs(ke[0, 0]).max()))
         uniform = uniform and block.nx >= 2 and block.ny >= 2 and not block.periodic
         c = _block_coefficients(block, ke)

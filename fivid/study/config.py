@@ -404,7 +404,7 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
             cea["normal_load"] = cfg.cea.normal_load
         if model_path is not None and "normal_load" not in cea and not _pressed_by_loads(model_path):
             raise src.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N), "
-                                   "unless the model's pressure loads press the contact")
+                                   "unless the model's pressure loads or an expanding rigid circle press the contact")
     points = _points(src, cfg.points, base)
     if kind.section is not None and kind.section[0] == "points":
         points[kind.section[1]] = settings
@@ -414,8 +414,12 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
 
 
 def _pressed_by_loads(model_path) -> bool:
-    """True when the model config has pressure loads (its contact state under them needs no clamp load)."""
-    return bool(read_yaml(model_path, "model config").data.get("loads"))
+    """True when the model config has pressure loads or an expanding rigid circle (its contact state under them
+    needs no clamp load; :func:`fivid.fe.static.pressed_by_itself` of the built model)."""
+    data = read_yaml(model_path, "model config").data
+    expanding = any(isinstance(c, dict) and isinstance(c.get("rigid"), dict) and c["rigid"].get("expansion")
+                    for c in data.get("contacts") or ())
+    return bool(data.get("loads")) or expanding
 
 
 def _points(src, spec: _Points, base: Path) -> dict:
