@@ -26,7 +26,7 @@ import numpy as np
 from fivid.errors import ConfigError
 
 __all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "complex_eigenvalue_analysis",
-           "cea_to_json"]
+           "cea_mode_shapes", "cea_to_json"]
 
 log = logging.getLogger("fivid")
 
@@ -280,6 +280,21 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         ``frequency(mu, mode)`` [Hz], ``real_part(mu, mode)`` [s-1], ``damping_ratio(mu, mode)`` [1],
         ``critical_mu(mode)`` [1] (NaN when stable over the range), ``partner(mode)`` (-1 if none).
     """
+    proj, contact, state, n_basis = _linearised_projection(model, normal_load, n_modes, n_basis, damping, augment,
+                                                           velocities, prestress)
+    from threadpoolctl import threadpool_limits
+
+    # Many dense eigen problems of size 2 n_basis: one BLAS thread each is faster than a threaded BLAS fighting
+    # over the cores for such small matrices (measured 10-25x slower on a loaded 2-core machine).
+    with threadpool_limits(limits=1, user_api="blas"):
+        res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine, progress=progress)
+    return _cea_dataset(model, res, proj.n, contact, state, normal_load=normal_load, n_modes=n_modes, damping=damping,
+                        augment=augment, refine=refine, prestress=prestress)
+
+
+def _linearised_projection(model, normal_load, n_modes, n_basis, damping, augment, velocities, prestress):
+    """The model linearised about its preload and projected on its (augmented) modal basis: ``(projection,
+    contact, state, n_basis)`` (see :func:`complex_eigenvalue_analysis` for the arguments)."""
     import scipy.sparse as sp
 
     from fivid.fe.assembly import damping_matrix, stiffness_matrix
@@ -309,14 +324,39 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         raise ConfigError(f"n_basis ({n_basis}) must be >= n_modes ({n_modes})", key="n_basis")
     loads = sp.hstack([contact.G_n, contact.G_t]).T.tocsr()[free] if augment else None
     proj = project_on_modes(K, M, C, Kf, n_basis, static_loads=loads)
-    from threadpoolctl import threadpool_limits
+    return proj, contact, state, n_basis
 
-    # Many dense eigen problems of size 2 n_basis: one BLAS thread each is faster than a threaded BLAS fighting
-    # over the cores for such small matrices (measured 10-25x slower on a loaded 2-core machine).
-    with threadpool_limits(limits=1, user_api="blas"):
-        res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine, progress=progress)
-    return _cea_dataset(model, res, proj.n, contact, state, normal_load=normal_load, n_modes=n_modes, damping=damping,
-                        augment=augment, refine=refine, prestress=prestress)
+
+def cea_mode_shapes(model, mu: float, *, normal_load: float | None = None, n_modes: int = 20,
+                    n_basis: int | None = None, damping: bool = True, prestress: bool = False):
+    """Complex eigenvalues and mode shapes of the linearised system at one friction coefficient.
+
+    The same linearisation and (augmented) modal projection as :func:`complex_eigenvalue_analysis`; the reduced
+    eigenvectors are expanded on the basis to the model's dofs.
+
+    Parameters
+    ----------
+    model : Model
+    mu : float
+        Friction coefficient [-].
+    normal_load, n_modes, n_basis, damping, prestress
+        As :func:`complex_eigenvalue_analysis`.
+
+    Returns
+    -------
+    eigenvalues : ndarray of complex, shape (n_modes,)
+        ``lambda`` [s-1] (upper half plane), by increasing frequency.
+    shapes : ndarray of complex, shape (n_modes, n_nodes, 2)
+        Displacement shapes at every node (x, y), constrained dofs zero; arbitrary complex scale.
+    """
+    proj, contact, state, _ = _linearised_projection(model, normal_load, n_modes, n_basis, damping, True, None,
+                                                     prestress)
+    free = model.free_dofs
+    lam, q = proj.eigen(float(mu))
+    order = np.lexsort((lam.imag, lam.imag == 0))[:n_modes]
+    full = np.zeros((order.size, model.n_dofs), dtype=complex)
+    full[:, free] = (proj.basis @ q[:, order]).T
+    return lam[order], full.reshape(order.size, -1, 2)
 
 
 def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, damping, augment, refine,

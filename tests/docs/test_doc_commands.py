@@ -110,6 +110,9 @@ DECISIONS: dict[str, Decision] = {
     "fivid study configs/studies/ring_mu_sweep.yaml -o out/ring": slow(
         "the full seed-002 study is 25 min on 2 workers (docs/studies.md); the slow test runs its --quick "
         "variant (README: about a minute)", run="fivid study configs/studies/ring_mu_sweep.yaml -o out/ring --quick"),
+    "fivid update configs/models/ring.yaml --targets configs/models/targets/ring_seed002.yaml -o ring-fitted.yaml "
+    "--json": slow("the seed-002 ring fit: about 20 model evaluations, each a prestressed modal analysis and a "
+                   "21-value CEA (8 min on a loaded 2-core machine)"),
     "{ command -v chromium >/dev/null && ldconfig -p | grep -q libudunits2 || { apt-get update -qq && apt-get "
     "install -y -qq chromium libudunits2-0; }; } && python -m pip install -q -e \".[all,test]\" -c constraints.txt "
     "&& python -m pytest -q": skip("apt-get (root, network), pip (network), and it runs this very test suite"),
