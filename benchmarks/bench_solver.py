@@ -15,7 +15,8 @@ rectangular-element sparsity (13 terms per force), unsigned indices, no contact 
 Also the wall time to simulate 0.1 s of the coarse and of the default rig: measured (coarse, full mode) or
 projected from the measured step rate (``*_projected``).
 
-Mapped blocks (per-node stencil patches, DESIGN §7/§11): the same ``fraction_of_bare_stencil`` for a curved model
+Mapped blocks (DESIGN §7/§11: rotated patches for rings, per-node stencils for profiled blocks,
+``fivid.solver.stencil``): the same ``fraction_of_bare_stencil`` for a curved model
 (``configs/models/ring_pressure.yaml``: a periodic annular ring under pressure, no contact) as
 ``curved_fraction_of_bare_stencil``, and for a rough-edged model (``configs/models/rough_pair.yaml``: two
 profiled, graded blocks in sliding contact) as ``rough_fraction_of_bare_stencil``; each against the bare
@@ -154,7 +155,7 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
         t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
         t_st = min(t_st, _time(fivid_stencil, steps, w_st, f_st, st.kernel_args, repeat=1) / steps)
         t_bare_st = min(t_bare_st, _time(bare_stencil, steps, npd, blocks, c_uni, w_bare, f_bare, repeat=1) / steps)
-    mapped = int(st.blocks[st.blocks[:, 4] == 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)
+    mapped = int(st.blocks[st.blocks[:, 4] >= 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)  # per-node, rotated
     return (t_bare / t_run, model.n_dofs / t_run, mapped / model.n_nodes, ds.attrs.get("contact_gs_mean_sweeps"),
             t_bare_st / t_st)
 
@@ -299,13 +300,14 @@ def _mapped_blocks(kw, duration, rounds, c_rect, bare):
     """Mapped blocks: a curved (annular, periodic) and a rough-edged (profiled, graded, contact) model, and the rough
     one without its contact pair, each against the bare rectangular stencil (:func:`_mapped_fraction`)."""
     from fivid.fe import load_model
-    from fivid.solver import FrictionInput, OperatingCondition
 
     out = {}
+    from fivid.solver import FrictionInput, OperatingCondition
+
     for key, path, velocity in (("curved", "configs/models/ring_pressure.yaml", None),
                                 ("rough", "configs/models/rough_pair.yaml", 0.03),
                                 ("rough_no_contact", "configs/models/rough_pair.yaml", 0.03)):
-        # the model's own load and friction coefficient
+        # no target load, the models' own friction coefficients
         mkw = dict(kw, condition=OperatingCondition(sliding_velocity=velocity), friction=FrictionInput())
         model = load_model(ROOT / path)
         if key == "rough_no_contact":  # the same mapped mesh without its contact pair: the stencil's own cost
@@ -385,8 +387,7 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
         "reduced_full_wall_s": walls["full"],
         "reduced_setup_s": t_setup,
         "reduced_plain_setup_s": t_plain_setup,
-        "reduced_simulated_s": float(full.settings.n_intervals
-                                     / (full.settings.oversample * kw["schedule"].sample_rate)),
+        "reduced_simulated_s": float(full.settings.n_intervals / (full.settings.oversample * kw["schedule"].sample_rate)),
         "reduced_size": a["reduced_size"],
         "reduced_plain_size": runs["plain"].attrs["reduced_size"],
         "reduced_boundary_nodes": a["reduced_boundary_nodes"],

@@ -262,6 +262,11 @@ class _Transient(ConfigModel):
     perturbation: Quantity("m", bare_is_si=True) | None = None
     law: str | None = Field(None, description="friction law file (netCDF), relative to the study file")
     coulomb_reference: bool = False
+    solver: Literal["auto", "full", "reduced"] = Field(
+        "auto", description="solver path: auto (reduced when its error estimate is within reduced_tolerance, as "
+                            "fivid simulate), full or reduced")
+    reduced_tolerance: Annotated[float, Field(ge=0.0)] = Field(
+        0.5, description="largest estimated in-band error [dB] of the reduced path that solver: auto accepts")
 
 
 class _Psd(ConfigModel):
@@ -434,6 +439,10 @@ def _points(src, spec: _Points, base: Path) -> dict:
             tr["law"] = str(law)
         if t.coulomb_reference:
             tr["coulomb_reference"] = True
+        if "solver" in t.model_fields_set:
+            tr["solver"] = t.solver
+        if "reduced_tolerance" in t.model_fields_set:
+            tr["reduced_tolerance"] = float(t.reduced_tolerance)
         out["transient"] = tr
     if spec.psd is not None:
         out["psd"] = {"nperseg": spec.psd.nperseg}
