@@ -296,6 +296,7 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         ``frequency(mu, mode)`` [Hz], ``real_part(mu, mode)`` [s-1], ``damping_ratio(mu, mode)`` [1],
         ``critical_mu(mode)`` [1] (NaN when stable over the range), ``partner(mode)`` (-1 if none).
     """
+    damping, prestress, augment = linearisation.damping, linearisation.prestress, linearisation.augment
     proj, contact, state, n_basis = _linearised_projection(model, normal_load, n_modes, n_basis, damping, augment,
                                                            velocities, prestress)
     from threadpoolctl import threadpool_limits
@@ -318,7 +319,6 @@ def _linearised_projection(model, normal_load, n_modes, n_basis, damping, augmen
     from fivid.fe.modal import constrained_matrices
     from fivid.fe.prestress import geometric_stiffness_matrix
 
-    damping, prestress, augment = linearisation.damping, linearisation.prestress, linearisation.augment
     if not model.contacts:
         raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
     contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)
