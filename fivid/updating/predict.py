@@ -19,7 +19,7 @@ from fivid.damper.model import damper_model_from_dict
 from fivid.damper.peaks import frf_peak
 from fivid.errors import ConfigError
 from fivid.fe.modal import modal_analysis
-from fivid.fe.model import load_model
+from fivid.fe.build import load_model
 
 __all__ = ["Prediction", "FEModes", "DamperPeaks", "mac", "is_damper_config", "predictor_for"]
 

@@ -36,7 +36,7 @@ def test_run_config_dump_has_no_serializer_warning(tmp_path, root, capsys):
 
 
 def test_local_cluster_with_port_8787_taken_does_not_warn():
-    from fivid.pipeline.sweep import dask_client
+    from fivid.execution.cluster import dask_client
 
     sock = socket.socket()
     try:

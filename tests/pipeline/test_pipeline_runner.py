@@ -140,7 +140,7 @@ def test_bad_csv_gives_exit_2_naming_the_file_and_line(setup, capsys):
 
 _HOLDER = """
 import sys, time
-from fivid.pipeline.lock import OutputLock
+from fivid.execution.lock import OutputLock
 lock = OutputLock(sys.argv[1]).acquire()
 print("locked", flush=True)
 time.sleep(60)

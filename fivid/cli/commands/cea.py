@@ -63,7 +63,7 @@ def run(args) -> int:
     from fivid.errors import ConfigError
     from fivid.fe import load_model
     from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
-    from fivid.pipeline.resources import check_modal_memory
+    from fivid.execution.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
     mu = _mu_grid(args.mu)
