@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["spectral_peaks", "match_peaks", "refine_peak", "parabolic_peaks", "track_peaks"]
+__all__ = ["spectral_peaks", "match_peaks", "refine_peak", "parabolic_peaks", "track_peaks", "strongest_peaks",
+           "near_frequencies"]
 
 
 def spectral_peaks(log_psd: np.ndarray, *, prominence_db: float, max_peaks: int | None = None) -> np.ndarray:
@@ -157,3 +158,47 @@ def track_peaks(f, psds, reference: int, *, prominence_db: float, match_prominen
         if np.all(np.isfinite(track)):
             out.append((float(f_ref), np.array(track)))
     return out
+
+
+def strongest_peaks(f, p, *, prominence_db: float, max_peaks: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``max_peaks`` highest peaks of a PSD ``p(f)`` with at least ``prominence_db`` prominence, strongest first.
+
+    Returns ``(frequency [Hz], power)``: each frequency refined by the parabola through the log PSD at the peak bin
+    and its neighbours (as :func:`parabolic_peaks`), the power the PSD integrated over the peak bin and two bins
+    either side (a Hann-window Welch line spans about four bins); ordered by that power, descending.
+
+    >>> f = np.arange(0.0, 4000.0, 25.0)
+    >>> p = 1e-6 + np.exp(-0.5 * ((f - 1010.0) / 30.0) ** 2) + 4 * np.exp(-0.5 * ((f - 3000.0) / 30.0) ** 2)
+    >>> [round(float(x), 3) for x in strongest_peaks(f, p, prominence_db=20.0, max_peaks=5)[0]]
+    [3000.0, 1010.0]
+    """
+    f, p = np.asarray(f, float), np.asarray(p, float)
+    ok = p > 0
+    level = np.full(p.shape, -np.inf)
+    level[ok] = 10.0 * np.log10(p[ok])
+    level[~ok] = level[ok].min() if ok.any() else 0.0
+    idx = spectral_peaks(level, prominence_db=prominence_db)
+    df = float(np.median(np.diff(f)))
+    freq, power = [], []
+    for k in idx:
+        if 0 < k < f.size - 1:
+            a, b, c = level[k - 1], level[k], level[k + 1]
+            den = a - 2.0 * b + c
+            freq.append(f[k] + (0.5 * (a - c) / den * df if den < 0 else 0.0))
+        else:
+            freq.append(f[k])
+        power.append(float(np.sum(p[max(0, k - 2):k + 3])) * df)
+    order = np.argsort(-np.asarray(power), kind="stable")[:max_peaks]
+    return np.asarray(freq)[order], np.asarray(power)[order]
+
+
+def near_frequencies(f, centres, relative_width: float) -> np.ndarray:
+    """Bool mask of the bins of ``f`` [Hz] within ``relative_width x centre`` of any of ``centres`` [Hz] (the band
+    of a set of modes; a PSD's power splits into that band and the rest).
+
+    >>> near_frequencies(np.array([90.0, 100.0, 104.0, 110.0]), [100.0], 0.05).tolist()
+    [False, True, True, False]
+    """
+    f = np.asarray(f, float)[:, None]
+    c = np.asarray(centres, float)[None, :]
+    return np.any(np.abs(f - c) <= relative_width * c, axis=1)

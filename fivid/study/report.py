@@ -72,7 +72,7 @@ def _transition_paragraph(page: Page, summary: dict) -> None:
             return x.get("note", "no transition in the swept loads")
         return f"at {x['value']:.3g} N (between the swept loads {x['bracket'][0]:g} and {x['bracket'][1]:g} N)"
 
-    text = f"Weak/strong contact transition (coupling indicator κ = {t['threshold']:g}): {one(t)}"
+    text = f"Weak/strong contact transition ({t.get('criterion_label', 'coupling indicator κ')} = {t['threshold']:g}): {one(t)}"
     groups = summary.get("transition_loads", [])
     if groups:
         text += "; per condition: " + "; ".join(

@@ -7,13 +7,15 @@ record's analyses, any kind with a transient) take plain data (picklable): ``sys
 (SI), ``conditions`` the point's ``{axis: value}``. Variables (each only when its task ran):
 
 - ``modes``: ``mode_frequency(mode)`` [Hz], preloaded at the point's normal load (FE); with a contact, the
-  coupling indicator ``coupling_indicator`` and ``coupling`` (weak/strong, :mod:`fivid.study.coupling`);
+  modal coupling indicator ``coupling_modal`` (kappa, :mod:`fivid.study.coupling`; the weak/strong label of a
+  point is the response's, :mod:`fivid.study.kinds.weak_strong`);
 - ``transient``: ``regime``, ``growth_rate`` [s-1], ``growth_rate_stderr``, ``onset_time`` [s], ``response_frequency`` [Hz],
   ``amplitude`` (limit-cycle RMS), ``stick_fraction``, ``rms`` and ``level_db`` (of the second half of the
   response's steady part: the start-up ring-down excluded),
   ``narrowband_fraction`` (share of its power in prominent peaks: tonal vs broadband); with
   ``coulomb_reference: true`` (and a law) also ``rms_coulomb`` and ``perturbation_gain_db``, the same point
-  simulated with the law's mu0 alone (what the perturbation adds);
+  simulated with the law's mu0 alone (what the perturbation adds), ``coulomb_decay_db`` (its ring-down), and
+  with ``psd`` its ``psd_coulomb`` and ``psd_perturbation`` (of the law's response minus Coulomb's);
 - ``psd``: ``psd(frequency)`` of the second half of the response's steady part (Welch, Hann, half overlap).
 
 The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``); a
@@ -35,7 +37,7 @@ from fivid.signal.steady import steady_part
 from fivid.signal.transient import narrowband_fraction
 from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.study.analysis import analyse_transient
-from fivid.study.coupling import WEAK_STRONG_THRESHOLD, coupling_bounds, coupling_indicator
+from fivid.study.coupling import coupling_bounds, coupling_indicator
 from fivid.surface.rough_pair import RQ_PER_RA
 
 __all__ = ["REGIMES", "TRANSIENT_KEYS", "COUPLING_KEYS", "element_size", "fe_point", "coupling_system", "transient_variables", "refined_model"]
@@ -46,8 +48,8 @@ TRANSIENT_KEYS = (("regime", "regime"), ("growth_rate", "growth_rate"), ("respon
                   ("onset_time", "onset_time"), ("rms", "rms"), ("level_db", "level_db"),
                   ("stick_fraction", "stick_fraction"), ("narrowband_fraction", "narrowband_fraction"),
                   ("perturbation_gain_db", "perturbation_gain_db"))
-#: (point variable, summary.json key) of the weak/strong coupling indicator
-COUPLING_KEYS = (("coupling_indicator", "coupling_indicator"), ("coupling", "coupling"))
+#: (point variable, summary.json key) of the modal coupling indicator kappa
+COUPLING_KEYS = (("coupling_modal", "coupling_modal"),)
 
 
 def fe_point(system: dict, tasks: dict, conditions: dict):
@@ -56,7 +58,9 @@ def fe_point(system: dict, tasks: dict, conditions: dict):
     import xarray as xr
 
     data, coords = {}, {}
-    model = refined_model(system["model_path"], conditions.get("mesh", 1.0), conditions.get("roughness_ra"))
+    ra = conditions.get("roughness_ra")
+    model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra,
+                          surface=None if ra is None else system.get("surfaces", {}).get(repr(float(ra))))
     if "transient" in tasks:  # its size before any work (the modes first), as fivid simulate and fivid run do
         check_simulation_memory(simulation_memory(model, duration=tasks["transient"]["duration"],
                                                   sample_rate=tasks["transient"]["sample_rate"]),
@@ -72,10 +76,8 @@ def fe_point(system: dict, tasks: dict, conditions: dict):
         if "coupling_bounds" in system:
             kappa = coupling_indicator(ds["frequency"].values,
                                        *system["coupling_bounds"][repr(float(conditions.get("mesh", 1.0)))])
-            data["coupling_indicator"] = ((), kappa, {"units": "1", "long_name": "coupling indicator kappa "
-                                                      "(0 uncoupled, 1 interface tied)"})
-            data["coupling"] = ((), np.array("weak" if kappa < WEAK_STRONG_THRESHOLD else "strong", dtype=object),
-                                {"long_name": "weak or strong contact (kappa < 0.5: weak)"})
+            data["coupling_modal"] = ((), kappa, {"units": "1", "long_name": "modal coupling indicator kappa "
+                                                  "(0 uncoupled, 1 interface tied)"})
     if "transient" in tasks:
         t, x, units, state = _fe_transient(model, tasks, conditions)
 
@@ -133,24 +135,41 @@ def transient_variables(t, x, units: str, state: dict, tasks: dict, data: dict, 
         data["rms_coulomb"] = ((), rms_c, {"units": units, "long_name": "RMS with Coulomb friction mu0 only"})
         data["perturbation_gain_db"] = ((), 20 * np.log10(rms / rms_c) if rms_c > 0 else np.inf, {
             "units": "dB", "long_name": "response level with the law minus with Coulomb mu0"})
+        q = xc.size // 2  # the Coulomb record's second half: its last two quarters
+        r3, r4 = (float(np.sqrt(np.mean((y - y.mean()) ** 2))) for y in (xc[:q], xc[q:]))
+        data["coulomb_decay_db"] = ((), 20 * np.log10(r3 / r4) if r3 > 0 and r4 > 0 else np.nan, {
+            "units": "dB", "long_name": "Coulomb response, level of the third quarter minus the fourth "
+                                        "(> 0: a ring-down of the start-up, not a steady vibration)"})
+        if "psd" in tasks:
+            _psd_variable("psd_coulomb", xc, fs, tasks, units, data, coords, "Welch PSD of the response, Coulomb mu0")
+            if xc.size == late.size:  # same start-up in both runs: the difference is what the perturbation drives
+                _psd_variable("psd_perturbation", late - xc, fs, tasks, units, data, coords,
+                              "Welch PSD of the response with the law minus with Coulomb mu0 (the perturbation's)")
     if units == "m s-2":  # level re 1e-6 m s-2 (ISO 1683 acceleration reference)
         data["level_db"] = ((), 20.0 * np.log10(rms / 1e-6) if rms > 0 else -np.inf,
                             {"units": "dB", "long_name": "acceleration level re 1e-6 m s-2"})
     if "psd" in tasks:
-        n = min(tasks["psd"]["nperseg"], late.size)
-        f, p = welch_density(late, fs, nperseg=n)
-        if "band" in tasks["psd"]:
-            sel = (f >= tasks["psd"]["band"][0]) & (f <= tasks["psd"]["band"][1])
-            f, p = f[sel], p[sel]
-        data["psd"] = (("frequency",), p, {"units": f"({units})^2 Hz-1", "long_name": "Welch PSD of the response",
-                                            "nperseg": n, "window": "hann", "noverlap": n // 2})
-        coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
+        _psd_variable("psd", late, fs, tasks, units, data, coords, "Welch PSD of the response")
 
 
-def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None):
+def _psd_variable(name, x, fs, tasks, units, data, coords, long_name):
+    """``data[name]``: the Welch PSD of ``x`` over ``tasks["psd"]``'s band (and the ``frequency`` coordinate)."""
+    n = min(tasks["psd"]["nperseg"], x.size)
+    f, p = welch_density(x, fs, nperseg=n)
+    if "band" in tasks["psd"]:
+        sel = (f >= tasks["psd"]["band"][0]) & (f <= tasks["psd"]["band"][1])
+        f, p = f[sel], p[sel]
+    data[name] = (("frequency",), p, {"units": f"({units})^2 Hz-1", "long_name": long_name,
+                                      "nperseg": n, "window": "hann", "noverlap": n // 2})
+    coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
+
+
+def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None, *, surface: dict | None = None):
     """The FE model of ``path`` with every body's divisions multiplied by ``factor`` (rounded, at least 1; a full
     ring keeps at least 3 around); ``factor`` 1 is the model as configured. With ``roughness_ra`` [m], every
-    Greenwood-Williamson contact gets the summit-height deviation of a Gaussian surface of that Ra,
+    Greenwood-Williamson contact gets the surface of that Ra: ``surface`` (``sigma``, ``asperity_radius``,
+    ``asperity_density`` in SI, e.g. :func:`fivid.surface.contact_law.gw_parameters` of a profile, with its
+    ``source``) when given, else the summit-height deviation of a Gaussian surface of that Ra,
     ``sigma = sqrt(pi/2) Ra`` (the rest of its surface parameters as configured)."""
     gw = False
     if roughness_ra is not None:
@@ -167,8 +186,14 @@ def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None):
     if gw:
         for c in data.get("contacts") or []:
             if isinstance(c.get("normal"), dict) and c["normal"].get("law") == "greenwood-williamson":
-                c["normal"]["sigma"] = f"{RQ_PER_RA * float(roughness_ra)!r} m"
-        name += f", GW sigma from Ra {roughness_ra:g} m"
+                if surface is not None:
+                    c["normal"].update(sigma=f"{float(surface['sigma'])!r} m",
+                                       asperity_radius=f"{float(surface['asperity_radius'])!r} m",
+                                       asperity_density=f"{float(surface['asperity_density'])!r} m^-2")
+                else:
+                    c["normal"]["sigma"] = f"{RQ_PER_RA * float(roughness_ra)!r} m"
+        name += (f", GW surface of Ra {roughness_ra:g} m: {surface.get('source', 'given')}" if surface is not None
+                 else f", GW sigma from Ra {roughness_ra:g} m")
     data["name"] = name + ")"
     return load_model(data)
 

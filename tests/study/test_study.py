@@ -231,9 +231,9 @@ def test_coupling_indicator_spans_uncoupled_to_tied():
 def test_transition_load_is_bracketed():
     from fivid.study.kinds.weak_strong import _transition_load
 
-    pts = [{"normal_load": f, "coupling_indicator": k} for f, k in ((0.5, 0.1), (2.0, 0.3), (8.0, 0.7), (32.0, 0.9))]
+    pts = [{"normal_load": f, "coupling_response": k} for f, k in ((0.5, 0.1), (2.0, 0.3), (8.0, 0.7), (32.0, 0.9))]
     t = _transition_load(pts)
-    assert t["bracket"] == [2.0, 8.0]
+    assert t["bracket"] == [2.0, 8.0] and t["criterion"].startswith("response")
     assert t["value"] == pytest.approx(np.exp(np.log(2.0) + 0.5 * np.log(4.0)))  # halfway in log load
     assert _transition_load(pts[2:])["value"] is None
 
@@ -261,7 +261,7 @@ def test_power_law_fit_recovers_known_exponents_with_honest_intervals():
 @pytest.mark.slow
 def test_fe_load_sweep_with_a_law_and_its_coulomb_reference(tmp_path):
     """The coarse rig over two loads with the sample twin's ground-truth law (synthetic): preloaded modes and the
-    coupling indicator per point, and the law's response against Coulomb mu0 alone at the same point: steady
+    modal coupling index per point, and the law's response against Coulomb mu0 alone at the same point: steady
     Coulomb sliding of this model excites almost nothing, the perturbation does (gain > 20 dB)."""
     sys.path.insert(0, str(ROOT / "sample_data"))
     import yaml
@@ -283,7 +283,7 @@ def test_fe_load_sweep_with_a_law_and_its_coulomb_reference(tmp_path):
     summary = run_study(load_study(path), tmp_path / "out", workers=0, progress=False)
     assert summary["n_done"] == 2
     for p in summary["points"]:
-        assert 0 < p["coupling_indicator"] < 1 and p["coupling"] in ("weak", "strong")
+        assert 0 < p["coupling_modal"] < 1
         assert p["perturbation_gain_db"] > 20, p
     ds = open_study(tmp_path / "out" / "study.nc")
     assert ds.sel(normal_load=5.0)["mode_frequency"].sizes["mode"] == 6

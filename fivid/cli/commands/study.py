@@ -79,8 +79,8 @@ def _transition_lines(summary: dict) -> list[str]:
         if t.get("value") is None:
             return t.get("note", "no transition in the swept loads")
         lo, hi = t["bracket"]
-        return (f"at normal_load {t['value']:.3g} N (between the swept {lo:g} and {hi:g} N; coupling indicator "
-                f"kappa = {t['threshold']:g})")
+        return (f"at normal_load {t['value']:.3g} N (between the swept {lo:g} and {hi:g} N; "
+                f"{t.get('criterion_label', 'coupling indicator kappa').replace('κ', 'kappa')} = {t['threshold']:g})")
 
     t = summary.get("transition_load")
     if not t:
