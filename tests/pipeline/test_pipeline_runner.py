@@ -15,6 +15,7 @@ import time
 import pytest
 
 from fivid.cli import main
+from tests.helpers.cli import pipeline_process
 
 ROOT_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -141,7 +142,6 @@ def test_bad_csv_gives_exit_2_naming_the_file_and_line(setup, capsys):
 _HOLDER = """
 import sys, time
 from fivid.execution.lock import OutputLock
-from tests.helpers.cli import pipeline_process
 lock = OutputLock(sys.argv[1]).acquire()
 print("locked", flush=True)
 time.sleep(60)
