@@ -14,6 +14,18 @@ record, or the quick study's 1.2 ms, over that step) and ``rough_point_projected
 rate: the simulation time of one study point; ``rough_point_projected_cpu_s`` the same from the process's CPU
 time, which a shared machine's load does not inflate, as are the ``*_cpu_dof_updates_per_s`` and
 ``rough_over_default_cpu``), with the contact's mean Gauss-Seidel sweeps per step.
+
+The contact at the paper's size (issue 26 item 5): ``full_scale_*``, the two 120 x 8 mm blocks of
+``configs/models/rough_pair.yaml`` with the surface spacing at Rsm/8 of Table 1's finest surface (Ra 1 um, Rsm
+92 um: 10 435 divisions along x, the base config's 12 graded layers through the depth) and synthetic Gaussian
+profiles of that Ra and Rsm (:func:`fivid.surface.rough_pair.synthetic_rough_profiles`, seeds 3 and 4; the upper
+body lifted to first touch by :func:`fivid.fe.rough_pair.rough_pair_config`), built here until the study's own
+full-scale model config exists: ``full_scale_slave_nodes``, ``full_scale_dofs``,
+``full_scale_fraction_of_bare_stencil`` (its full step against the bare rectangular stencil + update on the same
+node count, measured in this run, as ``bench_solver.py``'s ``rough_fraction_of_bare_stencil``), the same without its
+contact pair (``full_scale_no_contact_fraction_of_bare_stencil``: the mapped stencil's own cost), the contact's
+share of the step ``full_scale_contact_share`` and ``full_scale_steps`` of a short preload-and-slide record
+(30 mm/s).
 """
 
 from __future__ import annotations
@@ -31,7 +43,14 @@ ROOT = Path(__file__).resolve().parents[1]
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="the quick study's model and shorter runs (noisier)")
+    ap.add_argument("--full-scale-only", action="store_true", help="only the full-scale contact figures")
     args, load = parse_guarded(ap, argv)
+    out = {"benchmark": "rough", "quick": bool(args.quick)}
+    out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300))
+    if args.full_scale_only:
+        out["load_average_1min"] = load
+        print(json.dumps(out))
+        return 0
 
     from fivid.fe import load_model
     from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, RunSchedule
@@ -74,9 +93,7 @@ def main(argv=None) -> int:
     rough_rate = rough.n_dofs * rough_steps / t_rough
     default_rate = default.n_dofs * default_steps / t_default
     point_steps = int(round(study.points["transient"]["duration"] / rs.time_step))
-    out = {
-        "benchmark": "rough",
-        "quick": bool(args.quick),
+    out.update({
         "rough_model": str(Path(study.model_path).relative_to(ROOT)),
         "rough_conditions": conditions,
         "rough_dofs": int(rough.n_dofs),
@@ -97,9 +114,62 @@ def main(argv=None) -> int:
         "default_cpu_dof_updates_per_s": default.n_dofs * default_steps / c_default,
         "rough_over_default_cpu": (rough.n_dofs * rough_steps / c_rough) / (default.n_dofs * default_steps / c_default),
         "load_average_1min": load,
-    }
+    })
     print(json.dumps(out))
     return 0
+
+
+def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8):
+    """The full-scale rough pair (see the module docstring): ``configs/models/rough_pair.yaml`` with
+    ``ceil(120 mm / (rsm / per_rsm))`` divisions along x and Gaussian profiles of ``ra``, ``rsm`` [m]."""
+    import math
+
+    import yaml
+
+    from fivid.fe import load_model
+    from fivid.fe.rough_pair import rough_pair_config
+    from fivid.surface.rough_pair import RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
+
+    data = yaml.safe_load((ROOT / "configs/models/rough_pair.yaml").read_text())
+    length = 0.12
+    nx = math.ceil(length / (rsm / per_rsm))
+    for body in data["bodies"].values():
+        body["divisions"] = [nx, body["divisions"][1]]
+    lower, upper = synthetic_rough_profiles(ra, length, correlation_length=rsm / RSM_PER_CORRELATION_LENGTH,
+                                            step=rsm / (2 * per_rsm), seeds=(3, 4))
+    cfg, _ = rough_pair_config(data, lower, upper, sensor_every=64)
+    return load_model(cfg)
+
+
+def _full_scale(rounds, steps):
+    """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run, best of ``rounds``."""
+    import dataclasses
+
+    import numpy as np
+    from bench_solver import _bare_kernels, _mapped_fraction  # benchmarks/, this script's folder
+
+    from fivid.fe import load_model
+    from fivid.solver import OperatingCondition, RunSchedule
+    from fivid.solver.stencil import block_stencils
+    from fivid.solver.timestep import stable_step
+
+    model = _full_scale_pair()
+    st = block_stencils(load_model(ROOT / "configs/models/triboair.yaml"))
+    c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
+    bare = _bare_kernels()[0]
+    dt = 0.9 * stable_step(model).critical_time_step
+    kw = dict(condition=OperatingCondition(sliding_velocity=0.03),
+              schedule=RunSchedule(duration=steps * dt, sample_rate=1.0 / (16 * dt), preload_time=2 * dt,
+                                   settle_time=0.0, base_ramp_time=2 * dt))
+    out = {"full_scale_model": "configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um)",
+           "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
+           "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt}
+    frac, _, _, sweeps, _ = _mapped_fraction(model, c_rect, bare, kw, steps * dt, rounds)
+    frac0, _, _, _, _ = _mapped_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, steps * dt, rounds)
+    out.update({"full_scale_fraction_of_bare_stencil": frac, "full_scale_no_contact_fraction_of_bare_stencil": frac0,
+                "full_scale_contact_share": 1.0 - frac / frac0, "full_scale_contact_gs_mean_sweeps": sweeps,
+                "full_scale_steps": steps})
+    return out
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ rectangular-element sparsity (13 terms per force), unsigned indices, no contact 
 Also the wall time to simulate 0.1 s of the coarse and of the default rig: measured (coarse, full mode) or
 projected from the measured step rate (``*_projected``).
 
-Mapped blocks (per-node stencil patches, DESIGN §7/§11): the same ``fraction_of_bare_stencil`` for a curved model
+Mapped blocks (DESIGN §7/§11: rotated patches for rings, per-node stencils for profiled blocks,
+``fivid.solver.stencil``): the same ``fraction_of_bare_stencil`` for a curved model
 (``configs/models/ring_pressure.yaml``: a periodic annular ring under pressure, no contact) as
 ``curved_fraction_of_bare_stencil``, and for a rough-edged model (``configs/models/rough_pair.yaml``: two
 profiled, graded blocks in sliding contact) as ``rough_fraction_of_bare_stencil``; each against the bare
@@ -154,7 +155,7 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
         t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
         t_st = min(t_st, _time(fivid_stencil, steps, w_st, f_st, st.kernel_args, repeat=1) / steps)
         t_bare_st = min(t_bare_st, _time(bare_stencil, steps, npd, blocks, c_uni, w_bare, f_bare, repeat=1) / steps)
-    mapped = int(st.blocks[st.blocks[:, 4] == 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)
+    mapped = int(st.blocks[st.blocks[:, 4] >= 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)  # per-node, rotated
     return (t_bare / t_run, model.n_dofs / t_run, mapped / model.n_nodes, ds.attrs.get("contact_gs_mean_sweeps"),
             t_bare_st / t_st)
 
@@ -301,10 +302,13 @@ def _mapped_blocks(kw, duration, rounds, c_rect, bare):
     from fivid.fe import load_model
 
     out = {}
-    for key, path, extra in (("curved", "configs/models/ring_pressure.yaml", {"sliding_velocity": None}),
-                             ("rough", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03}),
-                             ("rough_no_contact", "configs/models/rough_pair.yaml", {"sliding_velocity": 0.03})):
-        mkw = dict(kw, normal_load=None, mu=None, **extra)
+    from fivid.solver import FrictionInput, OperatingCondition
+
+    for key, path, velocity in (("curved", "configs/models/ring_pressure.yaml", None),
+                                ("rough", "configs/models/rough_pair.yaml", 0.03),
+                                ("rough_no_contact", "configs/models/rough_pair.yaml", 0.03)):
+        # no target load, the models' own friction coefficients
+        mkw = dict(kw, condition=OperatingCondition(sliding_velocity=velocity), friction=FrictionInput())
         model = load_model(ROOT / path)
         if key == "rough_no_contact":  # the same mapped mesh without its contact pair: the stencil's own cost
             model = dataclasses.replace(model, contacts=())

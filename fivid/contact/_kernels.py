@@ -17,7 +17,7 @@ from numba import njit
 
 from fivid.contact._layout_kernels import LAW_LINEAR, LAW_POWER, LAW_RIGID, MASTER_LINE
 
-__all__ = ["normal_pressure", "normal_energy", "surface_ramp", "rigid_geometry"]
+__all__ = ["normal_pressure", "normal_energy", "surface_ramp", "circle_radius", "rigid_geometry"]
 
 
 @njit(cache=True)
@@ -65,6 +65,17 @@ def surface_ramp(t, t0, tr):
         return 1.0
     s = (t - t0) / tr
     return s - math.sin(2.0 * math.pi * s) / (2.0 * math.pi)
+
+
+@njit(cache=True)
+def circle_radius(a, delta, t0, tr, t):
+    """Radius [m] at time ``t`` [s] of a rigid circle of initial radius ``a`` [m] expanding radially by ``delta``
+    [m] over the smooth ramp (start ``t0``, ramp time ``tr``) of :func:`surface_ramp`: ``a + delta r(t)``. The one
+    definition of an expanding master's radius history (explicit solver, static preload, linearisation); ``t``
+    inf: the final radius ``a + delta``."""
+    if delta == 0.0:
+        return a
+    return a + delta * surface_ramp(t, t0, tr)
 
 
 @njit(cache=True)

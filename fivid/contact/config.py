@@ -11,6 +11,7 @@ Units: SI after validation (quantities may carry units, a bare number is SI).
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 import numpy as np
@@ -21,7 +22,7 @@ from fivid.config_layer import ConfigModel, Quantity, QuantityText, Vector, eith
 from fivid.contact.laws import GreenwoodWilliamson, NormalLaw, RigidSurface, composite_modulus
 from fivid.friction.curve import FrictionCurve
 
-__all__ = ["NormalLawConfig", "RigidLineConfig", "RigidCircleConfig", "RigidSurfaceConfig", "FrictionKeys",
+__all__ = ["NormalLawConfig", "RigidLineConfig", "RigidCircleConfig", "RigidExpansionConfig", "RigidSurfaceConfig", "FrictionKeys",
            "NormalLawField", "NORMAL_LAWS", "normal_law", "rigid_surface"]
 
 #: normal law name -> the keys it needs
@@ -105,11 +106,30 @@ class RigidCircleConfig(ConfigModel):
     side: Literal["outside", "inside"] = "outside"
 
 
+class RigidExpansionConfig(ConfigModel):
+    """``expansion: {mean_pressure | displacement, start, ramp_time}``: a rigid circle's radius grows by a radial
+    ``displacement`` [m], or by the one that gives the contact the ``mean_pressure`` [Pa] (solved by the static
+    preload, :func:`fivid.fe.static.resolve_expansions`), over a smooth ramp."""
+
+    mean_pressure: Quantity("Pa", positive=True, bare_is_si=True) | None = None
+    displacement: Quantity("m", bare_is_si=True) | None = None
+    start: Quantity("s", nonnegative=True, bare_is_si=True) = 0.0
+    ramp_time: Quantity("s", nonnegative=True, bare_is_si=True) = 0.0
+
+    @model_validator(mode="after")
+    def _one_target(self):
+        if (self.mean_pressure is None) == (self.displacement is None):
+            raise fail("give either 'mean_pressure' (fivid solves the radial displacement that gives it, e.g. "
+                       "40 MPa) or 'displacement' (the radial displacement itself, e.g. 20 um)")
+        return self
+
+
 class RigidSurfaceConfig(ConfigModel):
-    """``rigid: {line | circle, velocity | speed, start, ramp_time}``: a rigid master surface."""
+    """``rigid: {line | circle, velocity | speed, start, ramp_time, expansion}``: a rigid master surface."""
 
     line: RigidLineConfig | None = None
     circle: RigidCircleConfig | None = None
+    expansion: RigidExpansionConfig | None = None
     velocity: Vector("m s-1") | None = None
     speed: Quantity("rad s-1", bare_is_si=True) | None = None
     start: Quantity("s", nonnegative=True, bare_is_si=True) = 0.0
@@ -120,6 +140,9 @@ class RigidSurfaceConfig(ConfigModel):
         if (self.line is None) == (self.circle is None):
             raise fail("give either 'line: {point, normal}' or 'circle: {center, radius, side}'")
         if self.line is not None:
+            if self.expansion is not None:
+                raise fail("only a rigid circle expands (its radius grows); a rigid line cannot move along its "
+                           "normal", at=("expansion",))
             if self.speed is not None:
                 raise fail("a rigid line moves with 'velocity: [vx, vy]' (along itself); 'speed' is a circle's "
                            "rotation (e.g. 10 rpm)", at=("speed",))
@@ -202,5 +225,11 @@ def rigid_surface(spec: RigidSurfaceConfig) -> RigidSurface:
         return RigidSurface("line", np.array(spec.line.point), normal=spec.line.unit_normal,
                             velocity=np.array(spec.velocity or (0.0, 0.0)), start=spec.start,
                             ramp_time=spec.ramp_time)
+    grow = {}
+    if spec.expansion is not None:
+        e = spec.expansion
+        grow = dict(expansion=math.nan if e.displacement is None else e.displacement, expansion_start=e.start,
+                    expansion_ramp_time=e.ramp_time,
+                    target_mean_pressure=math.nan if e.mean_pressure is None else e.mean_pressure)
     return RigidSurface("circle", np.array(spec.circle.center), radius=spec.circle.radius, side=spec.circle.side,
-                        angular_velocity=spec.speed or 0.0, start=spec.start, ramp_time=spec.ramp_time)
+                        angular_velocity=spec.speed or 0.0, start=spec.start, ramp_time=spec.ramp_time, **grow)

@@ -262,11 +262,16 @@ class GreenwoodWilliamson:
 
 @dataclass(frozen=True)
 class RigidSurface:
-    """A rigid contact master: a line or a circle, fixed in space, whose surface may move along itself.
+    """A rigid contact master: a line or a circle, fixed in space, whose surface may move along itself; a circle
+    may also expand radially (the preload of seed 002: the steel cylinder's radius grows until the contact
+    pressure is reached, then it turns).
 
     The motions that leave the surface in place are the ones a rig imposes: a belt or plate sliding along its
     own line, a cylinder turning about its axis. Its surface speed ramps from 0 at ``start`` to full over
-    ``ramp_time`` (the smooth ramp of the solver's motions).
+    ``ramp_time`` (the smooth ramp of the solver's motions). A circle's radius is ``radius + expansion r(t)``
+    with the same smooth ramp ``r`` from ``expansion_start`` over ``expansion_ramp_time``
+    (:func:`fivid.contact._kernels.circle_radius`, the one definition the explicit solver, the static preload
+    and the linearisation for modes/CEA evaluate; the static analyses take the final radius).
 
     Attributes
     ----------
@@ -285,6 +290,14 @@ class RigidSurface:
         Circle: counter-clockwise angular velocity [rad s-1].
     start, ramp_time : float
         Ramp of the surface motion [s].
+    expansion : float
+        Circle: radial displacement of its surface [m] (> 0 grows the radius; 0: fixed radius).
+    expansion_start, expansion_ramp_time : float
+        Ramp of the expansion [s].
+    target_mean_pressure : float
+        Circle: the mean contact pressure [Pa] the expansion was solved for
+        (:func:`fivid.fe.static.resolve_expansions`; NaN: the expansion was given, or not yet solved while
+        ``expansion`` is NaN).
     """
 
     kind: str
@@ -296,6 +309,10 @@ class RigidSurface:
     angular_velocity: float = 0.0
     start: float = 0.0
     ramp_time: float = 0.0
+    expansion: float = 0.0
+    expansion_start: float = 0.0
+    expansion_ramp_time: float = 0.0
+    target_mean_pressure: float = math.nan
 
     @property
     def code(self) -> int:
@@ -303,8 +320,11 @@ class RigidSurface:
         return layout.MASTER_LINE if self.kind == "line" else layout.MASTER_CIRCLE
 
     def columns(self) -> list[float]:
-        """Its record columns, :data:`~fivid.contact._layout_kernels.MASTER` to :data:`~fivid.contact._layout_kernels.SURFACE_RAMP`
-        in that order."""
+        """Its record columns, :data:`~fivid.contact._layout_kernels.MASTER` to
+        :data:`~fivid.contact._layout_kernels.EXPANSION_RAMP` in that order."""
+        if not math.isfinite(self.expansion):
+            raise ConfigError("the rigid circle's expansion is not solved yet (a target mean pressure): build the "
+                              "model with fivid.fe.load_model, which solves it (fivid.fe.static.resolve_expansions)")
         if self.kind == "line":
             a, b = (float(x) for x in self.normal)
             sx, sy = (float(x) for x in self.velocity)
@@ -312,15 +332,26 @@ class RigidSurface:
             a, b = float(self.radius), (1.0 if self.side == "outside" else -1.0)
             sx, sy = float(self.angular_velocity), 0.0
         return [float(self.code), float(self.point[0]), float(self.point[1]), a, b, sx, sy,
-                float(self.start), float(self.ramp_time)]
+                float(self.start), float(self.ramp_time), float(self.expansion), float(self.expansion_start),
+                float(self.expansion_ramp_time)]
+
+    def radius_at(self, t=math.inf) -> float:
+        """A circle's radius [m] at time ``t`` [s] (default: after the expansion), ``radius + expansion r(t)``."""
+        from fivid.contact._kernels import circle_radius
+
+        delta = self.expansion if math.isfinite(self.expansion) else 0.0
+        return float(circle_radius(self.radius, delta, self.expansion_start, self.expansion_ramp_time, float(t)))
 
     def geometry(self, xy, t=math.inf, *, reference=None):
         """Gap [m], normal (n, 2), tangent (n, 2) and surface velocity along the tangent [m s-1] at time ``t``
         [s] (default: full speed) of slave positions ``xy`` (n, 2) whose reference positions are ``reference``
-        (default ``xy``; a circle's normal is radial through the reference position)."""
+        (default ``xy``; a circle's normal is radial through the reference position, its radius
+        :meth:`radius_at` ``t``)."""
         from fivid.contact._kernels import rigid_geometry, surface_ramp
 
         cols = self.columns()
+        if self.kind == "circle":
+            cols[3] = self.radius_at(t)
         xy = np.asarray(xy, dtype=float).reshape(-1, 2)
         ref = xy if reference is None else np.asarray(reference, dtype=float).reshape(-1, 2)
         out = np.array([rigid_geometry(int(cols[0]), *cols[1:7], float(x0), float(y0), float(x), float(y))
@@ -333,8 +364,14 @@ class RigidSurface:
         if self.kind == "line":
             return (f"rigid line through {np.round(self.point, 9).tolist()} m, normal {np.round(self.normal, 6).tolist()}"
                     f", surface velocity {np.round(self.velocity, 9).tolist()} m/s")
+        grow = ""
+        if self.expansion != 0.0:
+            grow = (f", expanding by {self.expansion:.6g} m over {self.expansion_ramp_time:.6g} s from "
+                    f"{self.expansion_start:.6g} s")
+            if math.isfinite(self.target_mean_pressure):
+                grow += f" (solved for a mean contact pressure of {self.target_mean_pressure:.6g} Pa)"
         return (f"rigid circle centre {np.round(self.point, 9).tolist()} m, radius {self.radius:.6g} m, slave "
-                f"{self.side}, angular velocity {self.angular_velocity:.6g} rad/s")
+                f"{self.side}, angular velocity {self.angular_velocity:.6g} rad/s{grow}")
 
 
 def kernel_tables(laws) -> np.ndarray:

@@ -25,6 +25,7 @@ from fivid.errors import ConfigError
 from fivid.fe.config import COMPONENTS, ContactConfig, DampingConfig, EdgeRefConfig, ModelConfig, read_config
 from fivid.fe.damping import rayleigh_through_two_ratios
 from fivid.fe.geometry import block_coords
+from fivid.fe.static import resolve_expansions
 
 __all__ = ["build_model", "load_model"]
 
@@ -83,11 +84,16 @@ def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
                                      p.start))
 
     alpha, beta, cutoff = _damping(ctx, cfg.damping)
-    return fm.Model(plane=cfg.plane, blocks=blocks, n_nodes=sum(b.n_nodes for b in blocks),
+    model = fm.Model(plane=cfg.plane, blocks=blocks, n_nodes=sum(b.n_nodes for b in blocks),
                     coords=np.concatenate([b.coords.reshape(-1, 2) for b in blocks]), fixed_dofs=fixed_dofs,
                     motions=tuple(motions), point_masses=point_masses, springs=tuple(springs), contacts=contacts,
                     sensors=sensors, reactions=tuple(reactions), loads=tuple(loads), rayleigh_alpha=alpha,
-                    rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data)
+                    rayleigh_beta=beta, damping_cutoff=cutoff, source=origin, config=data,
+                    prestress=bool(cfg.prestress))
+    try:  # a rigid circle expanding to a target mean pressure: its radial displacement from the static preload
+        return resolve_expansions(model)
+    except ConfigError as exc:
+        raise ctx.error(exc.key or "contacts", str(exc)) from None
 
 
 def _blocks(ctx: ConfigSource, cfg: ModelConfig, materials: dict):

@@ -26,7 +26,7 @@ import numpy as np
 from fivid.errors import ConfigError
 
 __all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "complex_eigenvalue_analysis",
-           "cea_to_json"]
+           "cea_mode_shapes", "cea_to_json"]
 
 log = logging.getLogger("fivid")
 
@@ -239,7 +239,7 @@ def _refine_critical(projection, a, b, lam_a, lam_b, tol, rtol: float = 1e-12) -
 def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, n_modes: int = 20,
                                 n_basis: int | None = None, damping: bool = True, augment: bool = True,
                                 velocities: dict | None = None, refine: bool = True, progress=None,
-                                prestress: bool = False):
+                                prestress: bool | None = None):
     """CEA of ``model`` over the friction coefficients ``mu``.
 
     Parameters
@@ -268,10 +268,11 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         Refine each critical μ by root finding (otherwise linear interpolation on the sweep).
     progress : callable, optional
         Called with 1 after each μ point (e.g. ``tqdm.update``).
-    prestress : bool
-        Linearise about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the preload
-        solve's static state to ``K`` (:mod:`fivid.fe.prestress`: small-strain, reference-configuration form;
-        the Rayleigh ``beta K`` damping keeps the elastic ``K``).
+    prestress : bool, optional
+        (None: the model's ``prestress`` key.) Linearise about the prestressed state: add the initial-stress
+        stiffness ``K_sigma`` of the preload solve's static state to ``K`` (:mod:`fivid.fe.prestress`:
+        small-strain, reference-configuration form); the Rayleigh damping is then ``alpha M + beta (K + K_sigma)``,
+        the explicit solver's (its stiffness-proportional term acts on the stencil's ``K + K_sigma``).
 
     Returns
     -------
@@ -279,30 +280,8 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         ``frequency(mu, mode)`` [Hz], ``real_part(mu, mode)`` [s-1], ``damping_ratio(mu, mode)`` [1],
         ``critical_mu(mode)`` [1] (NaN when stable over the range), ``partner(mode)`` (-1 if none).
     """
-    import scipy.sparse as sp
-
-    from fivid.fe.assembly import damping_matrix, stiffness_matrix
-    from fivid.fe.contact import linearise_preloaded_contact
-    from fivid.fe.modal import constrained_matrices
-
-    if not model.contacts:
-        raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
-    contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)
-    if not np.any(contact.direction):
-        raise ConfigError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
-                          "motion with role 'base' to the config)", key="motions")
-    K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact,
-                                      prestress=state.u if prestress else None)
-    Kf = contact.friction_stiffness_matrix()[free][:, free]
-    if damping:
-        C = damping_matrix(model, mass="consistent", stiffness=stiffness_matrix(model))[free][:, free]
-    else:
-        C = sp.csr_matrix(K.shape)
-    n_basis = max(3 * n_modes, 40) if n_basis is None else int(n_basis)
-    if n_basis < n_modes:
-        raise ConfigError(f"n_basis ({n_basis}) must be >= n_modes ({n_modes})", key="n_basis")
-    loads = sp.hstack([contact.G_n, contact.G_t]).T.tocsr()[free] if augment else None
-    proj = project_on_modes(K, M, C, Kf, n_basis, static_loads=loads)
+    proj, contact, state, n_basis = _linearised_projection(model, normal_load, n_modes, n_basis, damping, augment,
+                                                           velocities, prestress)
     from threadpoolctl import threadpool_limits
 
     # Many dense eigen problems of size 2 n_basis: one BLAS thread each is faster than a threaded BLAS fighting
@@ -311,6 +290,73 @@ def complex_eigenvalue_analysis(model, mu, *, normal_load: float | None = None, 
         res = complex_eigenvalue_sweep(proj, mu, n_report=n_modes, refine=refine, progress=progress)
     return _cea_dataset(model, res, proj.n, contact, state, normal_load=normal_load, n_modes=n_modes, damping=damping,
                         augment=augment, refine=refine, prestress=prestress)
+
+
+def _linearised_projection(model, normal_load, n_modes, n_basis, damping, augment, velocities, prestress):
+    """The model linearised about its preload and projected on its (augmented) modal basis: ``(projection,
+    contact, state, n_basis)`` (see :func:`complex_eigenvalue_analysis` for the arguments)."""
+    import scipy.sparse as sp
+
+    from fivid.fe.assembly import damping_matrix, stiffness_matrix
+    from fivid.fe.contact import linearise_preloaded_contact
+    from fivid.fe.modal import constrained_matrices
+    from fivid.fe.prestress import geometric_stiffness_matrix
+
+    if not model.contacts:
+        raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
+    contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)
+    if not np.any(contact.direction):
+        raise ConfigError("CEA needs a sliding direction: no body slides relative to another (add a velocity "
+                          "motion with role 'base' to the config)", key="motions")
+    prestress = model.prestress if prestress is None else bool(prestress)
+    K, M, free = constrained_matrices(model, mass="consistent", include_contact=True, contact=contact,
+                                      prestress=state.u if prestress else None)
+    Kf = contact.friction_stiffness_matrix()[free][:, free]
+    if damping:
+        K_damp = stiffness_matrix(model)
+        if prestress:
+            K_damp = K_damp + geometric_stiffness_matrix(model, state.u)
+        C = damping_matrix(model, mass="consistent", stiffness=K_damp)[free][:, free]
+    else:
+        C = sp.csr_matrix(K.shape)
+    n_basis = max(3 * n_modes, 40) if n_basis is None else int(n_basis)
+    if n_basis < n_modes:
+        raise ConfigError(f"n_basis ({n_basis}) must be >= n_modes ({n_modes})", key="n_basis")
+    loads = sp.hstack([contact.G_n, contact.G_t]).T.tocsr()[free] if augment else None
+    proj = project_on_modes(K, M, C, Kf, n_basis, static_loads=loads)
+    return proj, contact, state, n_basis
+
+
+def cea_mode_shapes(model, mu: float, *, normal_load: float | None = None, n_modes: int = 20,
+                    n_basis: int | None = None, damping: bool = True, prestress: bool = False):
+    """Complex eigenvalues and mode shapes of the linearised system at one friction coefficient.
+
+    The same linearisation and (augmented) modal projection as :func:`complex_eigenvalue_analysis`; the reduced
+    eigenvectors are expanded on the basis to the model's dofs.
+
+    Parameters
+    ----------
+    model : Model
+    mu : float
+        Friction coefficient [-].
+    normal_load, n_modes, n_basis, damping, prestress
+        As :func:`complex_eigenvalue_analysis`.
+
+    Returns
+    -------
+    eigenvalues : ndarray of complex, shape (n_modes,)
+        ``lambda`` [s-1] (upper half plane), by increasing frequency.
+    shapes : ndarray of complex, shape (n_modes, n_nodes, 2)
+        Displacement shapes at every node (x, y), constrained dofs zero; arbitrary complex scale.
+    """
+    proj, contact, state, _ = _linearised_projection(model, normal_load, n_modes, n_basis, damping, True, None,
+                                                     prestress)
+    free = model.free_dofs
+    lam, q = proj.eigen(float(mu))
+    order = np.lexsort((lam.imag, lam.imag == 0))[:n_modes]
+    full = np.zeros((order.size, model.n_dofs), dtype=complex)
+    full[:, free] = (proj.basis @ q[:, order]).T
+    return lam[order], full.reshape(order.size, -1, 2)
 
 
 def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, damping, augment, refine,

@@ -461,6 +461,7 @@ class ModelConfig(ConfigModel):
     sensors: _items(SensorConfig) = []
     reactions: _items(ReactionConfig) = []
     loads: _items(LoadConfig) = []
+    prestress: bool = False
 
     @model_validator(mode="after")
     def _references(self):

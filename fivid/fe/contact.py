@@ -172,9 +172,9 @@ def linearise_preloaded_contact(model, normal_load: float | None, *, velocities:
         ``normal_load`` is None, or the model cannot be preloaded (no load motion or reaction).
     """
     from fivid.errors import ConfigError
-    from fivid.fe.static import preload_state
+    from fivid.fe.static import preload_state, pressed_by_itself
 
-    if normal_load is None and not model.loads:
+    if normal_load is None and not pressed_by_itself(model):
         raise ConfigError("linearising the contact needs the normal load: only the slave nodes closed under it "
                           "carry contact springs (give normal_load [N], e.g. --load '5 N')", key="normal_load")
     state = preload_state(model, normal_load, mu=mu)

@@ -143,7 +143,7 @@ def _eigen_pairs(K, M, k, sigma):
 
 
 def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", include_contact: bool = False,
-                   normal_load: float | None = None, sigma: float | None = None, prestress: bool = False):
+                   normal_load: float | None = None, sigma: float | None = None, prestress: bool | None = None):
     """Natural frequencies and mass-normalised mode shapes of ``model`` with its constraints.
 
     Parameters
@@ -162,8 +162,9 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
         unless the model's pressure loads press the contact (then None: the state under those loads).
     sigma : float, optional
         Shift [s-2] of the shift-invert solver (default: small negative).
-    prestress : bool
-        Vibrations about the prestressed state: add the initial-stress stiffness ``K_sigma`` of the static state
+    prestress : bool, optional
+        (None: the model's ``prestress`` key.) Vibrations about the prestressed state: add the initial-stress
+        stiffness ``K_sigma`` of the static state
         (with ``include_contact`` on a model with contacts the preload solve's state, otherwise the linear
         static response to the pressure loads and the displacement motions, :func:`fivid.fe.prestress.static_state`);
         small-strain,
@@ -188,6 +189,7 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
 
         contact, state = linearise_preloaded_contact(model, normal_load)
     u0 = None
+    prestress = model.prestress if prestress is None else bool(prestress)
     if prestress:
         u0 = state.u if state is not None else static_state(model)
     K, M, free = constrained_matrices(model, mass=mass, include_contact=include_contact, contact=contact,

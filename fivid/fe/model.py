@@ -441,6 +441,10 @@ class Model:
         ``"<path> sha256:<hex>"`` of the config (or of its canonical JSON for a mapping).
     config : dict
         The validated configuration mapping.
+    prestress : bool
+        Vibrations about the prestressed state: the initial-stress stiffness of the static preload
+        (:mod:`fivid.fe.prestress`) in the explicit internal force, modes and CEA alike (config key
+        ``prestress: true``).
     """
 
     plane: str
@@ -460,6 +464,7 @@ class Model:
     damping_cutoff: float = math.inf
     source: str = ""
     config: dict = field(default_factory=dict)
+    prestress: bool = False
 
     @property
     def n_dofs(self) -> int:

@@ -23,8 +23,11 @@ Assumptions and their limit (the "small vibration about the prestressed state" f
   one of order ``p t`` per unit length, which matters for a pressurised ring's breathing modes.
 * plane strain: the out-of-plane stress ``s_zz = nu (s_xx + s_yy)`` exists but does no work on in-plane
   perturbations, so only the in-plane stress enters (the same operator serves both plane states).
-* the explicit solver does not (yet) carry this term: transient runs and modes/CEA with ``prestress=True``
-  describe the same system only when the prestress is negligible.
+* a model with ``prestress: true`` carries the term everywhere: modes and CEA add ``K_sigma`` (and the Rayleigh
+  ``beta`` acts on ``K + K_sigma``), the explicit solver folds it into its stencil and adds the reference force
+  ``K_sigma u0`` as a load ramped with the preload, so its internal force is ``K w + K_sigma (w - r(t) u0)``
+  (:func:`fivid.solver.stencil.block_stencils`, :func:`fivid.solver.setup.kernel_arrays`): the same linear
+  system about the same static state ``u0`` (:func:`prestress_state`).
 """
 
 from __future__ import annotations
@@ -34,9 +37,11 @@ import numpy as np
 from fivid.errors import ConfigError
 from fivid.fe.assembly import GAUSS_POINTS_2X2, _assemble, shape_gradients_q4, stiffness_matrix, strain_displacement_q4
 from fivid.fe.loads import static_response
+from fivid.fe.static import preload_state, pressed_by_itself
 
 __all__ = ["gauss_point_stress_q4", "block_gauss_point_stress", "element_geometric_stiffness_q4",
-           "geometric_stiffness_matrix", "buckling_load_factors", "static_state"]
+           "block_geometric_stiffness", "geometric_stiffness_matrix", "buckling_load_factors", "static_state",
+           "prestress_state", "preload_ramp_end"]
 
 
 def gauss_point_stress_q4(xy: np.ndarray, u_e: np.ndarray, D: np.ndarray) -> np.ndarray:
@@ -105,6 +110,14 @@ def element_geometric_stiffness_q4(xy: np.ndarray, stress: np.ndarray, thickness
     return thickness * K
 
 
+def block_geometric_stiffness(block, u: np.ndarray) -> np.ndarray:
+    """Initial-stress stiffness of every element of a block under the static state ``u`` [m] (global dofs),
+    shape (ny, nx, 8, 8) [N m-1], the layout of :func:`fivid.fe.assembly.block_element_stiffness` (the explicit
+    solver adds it to the elastic element stiffness, :func:`fivid.solver.stencil.block_stencils`)."""
+    return element_geometric_stiffness_q4(block.element_corners(), block_gauss_point_stress(block, u),
+                                          block.thickness)
+
+
 def geometric_stiffness_matrix(model, u: np.ndarray):
     """Global initial-stress stiffness ``K_sigma`` [N m-1] of the static state ``u`` (scipy.sparse CSR,
     ``n_dofs x n_dofs``, constraints not applied); see the module docstring for the assumptions.
@@ -121,11 +134,7 @@ def geometric_stiffness_matrix(model, u: np.ndarray):
         raise ConfigError(f"the prestress state must be a finite displacement of shape ({model.n_dofs},), "
                           f"got shape {u.shape}", key="prestress")
 
-    def element_matrices(block):
-        return element_geometric_stiffness_q4(block.element_corners(), block_gauss_point_stress(block, u),
-                                              block.thickness)
-
-    return _assemble(model, element_matrices)
+    return _assemble(model, lambda block: block_geometric_stiffness(block, u))
 
 
 def static_state(model) -> np.ndarray:
@@ -138,6 +147,27 @@ def static_state(model) -> np.ndarray:
         if m.kind == "displacement":
             imposed[m.dofs] = m.amplitude
     return static_response(model, imposed=imposed)
+
+
+def prestress_state(model, normal_load: float | None = None) -> np.ndarray:
+    """The static state [m] (n_dofs,) whose stress the prestress stiffness takes, the same for the explicit
+    solver, modes and CEA: the contact preload (:func:`fivid.fe.static.preload_state` under ``normal_load`` [N],
+    or under the model's own loading -- pressure loads, expanding rigid circles -- when it is None) for a model
+    with contacts that something presses, else :func:`static_state`."""
+    if model.contacts and (normal_load is not None or pressed_by_itself(model)):
+        return preload_state(model, normal_load).u
+    return static_state(model)
+
+
+def preload_ramp_end(model) -> float:
+    """End [s] of the preload's ramps (pressure loads, expanding rigid circles, the loading clamp's motion): the
+    explicit solver ramps the prestress term's reference state ``r(t) u_0`` over ``[0, preload_ramp_end]``
+    with the solver's smooth ramp (0: a step at t = 0)."""
+    ends = [float(ld.start + ld.ramp_time) for ld in model.loads]
+    ends += [float(c.rigid.expansion_start + c.rigid.expansion_ramp_time) for c in model.contacts
+             if c.rigid is not None and c.rigid.kind == "circle" and c.rigid.expansion != 0.0]
+    ends += [float(m.ramp_time) for m in model.motions if m.kind == "displacement"]
+    return max(ends, default=0.0)
 
 
 def buckling_load_factors(model, u: np.ndarray, n: int = 1) -> np.ndarray:

@@ -27,7 +27,8 @@ import numpy as np
 from fivid.errors import ConfigError
 from fivid.friction.curve import slave_coefficients
 
-__all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement", "preload_state"]
+__all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement", "preload_state",
+           "expanding_circles", "pressed_by_itself", "resolve_expansions"]
 
 
 @dataclass(frozen=True)
@@ -418,8 +419,9 @@ def preload_state(model, normal_load: float | None, *, mu=None) -> Preload:
 
     The model's motion with role "load" is the clamp (its amplitude's sign gives the pressing direction), its
     first reaction the transducer (the normal component's reaction, signed like the clamp, is the normal force).
-    ``normal_load`` None: the state under the model's pressure loads alone (the clamp, if any, stays at 0), e.g.
-    a ring pressed on a cylinder; its ``normal_load`` is then the sum of the contact normal forces.
+    ``normal_load`` None: the state under the model's pressure loads and rigid-circle expansions alone (the clamp,
+    if any, stays at 0), e.g. a ring pressed on an expanded cylinder; its ``normal_load`` is then the sum of the
+    contact normal forces.
 
     Parameters
     ----------
@@ -436,9 +438,10 @@ def preload_state(model, normal_load: float | None, *, mu=None) -> Preload:
     """
     mu_slave = mu if (mu is not None and np.ndim(mu) == 1) else slave_coefficients(model, mu)
     if normal_load is None:
-        if not model.loads:
-            raise ConfigError("the contact state needs a normal load (e.g. --load '5 N') or pressure loads in the "
-                              "model ('loads:') that press the contact")
+        if not pressed_by_itself(model):
+            raise ConfigError("the contact state needs a normal load (e.g. --load '5 N'), pressure loads in the "
+                              "model ('loads:') or an expanding rigid circle ('rigid: {expansion: ...}') that "
+                              "press the contact")
         return preload_displacement(model, None, normal_weights=None, load_dofs=np.zeros(0, dtype=np.int64),
                                     direction=1.0, mu=mu_slave)
     if not (np.isfinite(normal_load) and normal_load > 0):
@@ -456,3 +459,84 @@ def preload_state(model, normal_load: float | None, *, mu=None) -> Preload:
     weights[2 * np.asarray(r.nodes) + r.normal_component] = direction
     return preload_displacement(model, float(normal_load), normal_weights=weights, load_dofs=load.dofs,
                                 direction=direction, mu=mu_slave)
+
+
+def expanding_circles(model) -> list[int]:
+    """Indices of the contact pairs whose rigid master is a circle with a radial expansion (given or to solve)."""
+    return [p for p, c in enumerate(model.contacts)
+            if c.rigid is not None and c.rigid.kind == "circle"
+            and (c.rigid.expansion != 0.0 or np.isfinite(c.rigid.target_mean_pressure))]
+
+
+def pressed_by_itself(model) -> bool:
+    """True when the model's own loading presses its contacts without a normal load: pressure loads, or a rigid
+    circle that expands."""
+    return bool(model.loads) or bool(expanding_circles(model))
+
+
+def _with_expansion(model, p: int, delta: float):
+    """The model with pair ``p``'s rigid circle expanded by ``delta`` [m] (a copy; the model is immutable)."""
+    from dataclasses import replace
+
+    contacts = list(model.contacts)
+    contacts[p] = replace(contacts[p], rigid=replace(contacts[p].rigid, expansion=float(delta)))
+    return replace(model, contacts=tuple(contacts))
+
+
+def resolve_expansions(model, *, rtol: float = 1e-9, max_iterations: int = 30):
+    """The model with every rigid circle that states a target ``mean_pressure`` expanded by the radial
+    displacement ``delta`` [m] that gives it (the static preload of seed 002: the steel cylinder grows until the
+    mean contact pressure is reached). Models without such a circle are returned unchanged.
+
+    The mean pressure is :meth:`Preload.summary`'s ``mean_pressure_pa`` (the pair's resultant normal force over
+    its closed length x thickness) of :func:`preload_state` with the model's loads and expansions (friction tied
+    during the preload, each pair's ``mu``). For a fixed active set and the rigid or a linear law it is affine
+    in ``delta``; secant iteration from ``delta_0 = p a / E`` (the bore of a thin-walled ring) converges in two
+    or three solves, a power law in a few more. Several such circles are solved one after another, repeated until
+    all agree (they interact only through the bodies).
+
+    Raises
+    ------
+    ConfigError
+        The expansion does not press the contact (the pressure does not grow with ``delta``) or the iteration
+        does not settle within ``max_iterations`` solves (``rtol`` relative on the pressure).
+    """
+    todo = [p for p in expanding_circles(model) if np.isfinite(model.contacts[p].rigid.target_mean_pressure)]
+    for p in todo:  # start: the bore of a thin-walled ring, delta = p a / E
+        rigid = model.contacts[p].rigid
+        if not np.isfinite(rigid.expansion):
+            E = model.block(model.contacts[p].slave_block).material.E
+            model = _with_expansion(model, p, rigid.target_mean_pressure * rigid.radius / E)
+
+    def pressure(m, p):
+        return float(preload_state(m, None).summary(m)[p]["mean_pressure_pa"])
+
+    for _round in range(max_iterations):
+        settled = True
+        for p in todo:
+            name = model.contacts[p].name
+            target = model.contacts[p].rigid.target_mean_pressure
+            d1 = model.contacts[p].rigid.expansion
+            p1 = pressure(model, p)
+            if abs(p1 - target) <= rtol * target:
+                continue
+            settled = False
+            d0, p0, d1 = d1, p1, 1.01 * d1
+            for _it in range(max_iterations):
+                p1 = pressure(_with_expansion(model, p, d1), p)
+                if abs(p1 - target) <= rtol * target:
+                    break
+                if not p1 > p0 if d1 > d0 else not p1 < p0:
+                    raise ConfigError(f"contact {name!r}: expanding the rigid circle does not raise the mean contact "
+                                      f"pressure ({p0:.6g} Pa at {d0:.6g} m, {p1:.6g} Pa at {d1:.6g} m); check its "
+                                      f"side and radius", key=f"contacts[{p}].rigid.expansion")
+                d0, p0, d1 = d1, p1, d1 + (target - p1) * (d1 - d0) / (p1 - p0)
+            else:
+                raise ConfigError(f"contact {name!r}: the expansion for a mean contact pressure of {target:.6g} Pa "
+                                  f"did not settle in {max_iterations} static solves",
+                                  key=f"contacts[{p}].rigid.expansion.mean_pressure")
+            model = _with_expansion(model, p, d1)
+        if settled or len(todo) == 1:
+            return model
+    raise ConfigError(f"the expansions of the rigid circles {[model.contacts[p].name for p in todo]} did not settle "
+                      f"together in {max_iterations} rounds")

@@ -3,7 +3,14 @@
 * ``vibration_level`` Lv [dB] = 20 log10(V_RMS / 1e-9 m s-1), V_RMS the RMS over time and back-face nodes of the
   normal velocity (each node's mean removed) -- seed 003's definition;
 * shocks (:func:`detect_shocks`): closing events of the contact, with rate [s-1] and mean impulse [N s];
-* ``dissipated_power`` [W]: slope of ``friction_dissipation`` (least squares) over the steady part;
+* ``friction_power`` [W]: slope of ``friction_dissipation`` (least squares) over the steady part, mu Fn V on
+  average (until 2026-11 called ``dissipated_power``: it is not seed 003's vibratory power);
+* ``vibratory_power`` [W] (seed 003's Fig. 7, the vibratory power dissipated by the N shocks): slope of
+  ``damping_dissipation`` over the steady part -- the power the blocks' structural damping dissipates, which in
+  steady sliding is the power fed into vibration (stiffness-proportional damping does no work on the rigid
+  sliding); ``shock_energy`` [J] = vibratory power / shock rate, the paper's ``P = n_c E``;
+* ``impact_power`` [W]: slope of ``impact_dissipation`` (the kinetic energy the rigid contact removes at
+  closing nodes);
 * the friction coefficient the force transducer reads (:func:`friction_coefficient_statistics`).
 """
 
@@ -15,7 +22,8 @@ from fivid.signal.levels import VELOCITY_REFERENCE
 from fivid.signal.steady import steady_part
 
 __all__ = ["LV_REFERENCE", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level", "detect_shocks",
-           "dissipated_power", "roughness_metrics", "friction_coefficient_statistics", "steady_record"]
+           "friction_power", "vibratory_power", "impact_power", "dissipation_rate", "roughness_metrics",
+           "friction_coefficient_statistics", "steady_record"]
 
 #: seed 003's velocity reference of the vibration level [m s-1] (ISO 1683's, :data:`fivid.signal.levels.VELOCITY_REFERENCE`)
 LV_REFERENCE = VELOCITY_REFERENCE
@@ -86,21 +94,41 @@ def detect_shocks(time, contact_normal_force, open_fraction, n_slave: int, *, mi
             "impulses": imp, "min_closing": float(min_closing), "baseline_time": float(baseline_time)}
 
 
-def dissipated_power(ds, *, start=None) -> float:
-    """Mean friction power [W]: least-squares slope of ``friction_dissipation`` over the steady part."""
+def dissipation_rate(ds, name: str, *, start=None) -> float:
+    """Mean rate [W] of the cumulative energy record ``name`` [J]: least-squares slope over the steady part."""
     part = steady_record(ds, start)
-    t, e = part["time"].values, part["friction_dissipation"].values
+    t, e = part["time"].values, part[name].values
     return float(np.polyfit(t - t[0], e, 1)[0]) if t.size > 1 else np.nan
 
 
+def friction_power(ds, *, start=None) -> float:
+    """Mean friction power [W]: slope of ``friction_dissipation`` over the steady part (:func:`dissipation_rate`)."""
+    return dissipation_rate(ds, "friction_dissipation", start=start)
+
+
+def vibratory_power(ds, *, start=None) -> float:
+    """Seed 003's vibratory power [W]: slope of ``damping_dissipation`` over the steady part, the power the
+    structural damping dissipates, equal in steady sliding to the vibratory power the shocks inject."""
+    return dissipation_rate(ds, "damping_dissipation", start=start)
+
+
+def impact_power(ds, *, start=None) -> float:
+    """Mean impact dissipation [W]: slope of ``impact_dissipation`` over the steady part."""
+    return dissipation_rate(ds, "impact_dissipation", start=start)
+
+
 def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
-    """Lv, V_RMS, shocks, dissipated power and mean forces of a rough-pair run (steady part)."""
+    """Lv, V_RMS, shocks (rate, impulse, vibratory energy per shock), friction, vibratory and impact power and mean
+    forces of a rough-pair run (steady part)."""
     part = steady_record(ds, start)
     lv, vrms = vibration_level(ds, start=start)
     sh = detect_shocks(part["time"].values, part["contact_normal_force"].values, part["open_fraction"].values,
                        n_slave, **shock_options)
+    pv = vibratory_power(ds, start=start)
     return {"vibration_level": lv, "velocity_rms": vrms, "shock_rate": sh["rate"], "shock_impulse": sh["mean_impulse"],
-            "shock_count": sh["count"], "dissipated_power": dissipated_power(ds, start=start),
+            "shock_count": sh["count"], "friction_power": friction_power(ds, start=start), "vibratory_power": pv,
+            "shock_energy": pv / sh["rate"] if sh["rate"] > 0 else np.nan,
+            "impact_power": impact_power(ds, start=start),
             "mean_normal_force": float(np.mean(part["contact_normal_force"].values)),
             "mean_friction_force": float(np.mean(part["friction_force"].values)),
             "open_fraction": float(np.mean(part["open_fraction"].values)), "shocks": sh,

@@ -18,9 +18,11 @@ Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / i
   ``f = K (u + beta v)`` (stiffness-proportional damping folded in).
 - Stencil coefficient ``((dj+1)*3 + (di+1))*4 + 2*a + b`` couples dof ``a`` of node ``p`` with dof ``b`` of
   node ``p + dj*stride + di``; in a uniform block the interior nodes share one set and so do the nodes of
-  each edge (corners excluded): five patches; a mapped block is one patch with per-node coefficients
-  (component-major, ``c_map[k, node]``); block corners and the seam columns of periodic rings are listed
-  node by node with explicit neighbour indices.
+  each edge (corners excluded): five patches; a ring or arc is one patch with one stencil per row in the
+  columns' frames (``rot``: the columns' angles; the displacements turned into those frames in the scratch
+  ``wr``); another mapped block is one patch with per-node coefficients (component-major, ``c_map[k, node]``);
+  block corners and the end or seam columns of rings and arcs are listed node by node with explicit
+  neighbour indices.
 - pressure loads: dofs ``ld_dof`` carry the full nodal forces ``ld_force``, ramped per load
   ``ld_grp`` with ``ld_par[g] = (t_start, ramp_time)`` by the smooth ramp, evaluated at the step start.
 - Hot loops index with unsigned integers: numba then emits no negative-index wraparound, which

@@ -11,6 +11,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from fivid.contact._layout_kernels import CNODE_V_PREDICTED, CNODE_V_STEP
 from fivid.solver._contact_kernels import contact_step, contact_work, finish_contact_record
 from fivid.solver._kernels import (
     D_ALPHA,
@@ -264,19 +265,19 @@ def _contact_correction(t, dt, npd, structure, contact, friction, cs, state, rec
     mass, alpha, beta, a_filt = structure.mass, structure.alpha, structure.beta, structure.a_filt
     cnodes = contact.cnodes
     vold_c = cs.vold_c
-    _keep_contact_velocities(v, npd, cnodes, vold_c, 2)
+    _keep_contact_velocities(v, npd, cnodes, vold_c, CNODE_V_PREDICTED)
     contact_step(contact.X, u, v, npd, dt, t + dt, contact.minv_c, no_wmat, contact.slave_node, contact.slave_pair,
                  contact.master_ptr, contact.master_nodes, contact.pair_sign, contact.pair_par, contact.law_tab,
                  contact.s_area, cs.seg, cs.geo, cs.lam, cs.cstate, friction.mu_tab, friction.mu_rate, cs.mu_now,
-                 contact.gs_max_iter, contact.gs_tol, state.acc)
+                 contact.gs_max_iter, contact.gs_tol, state.acc, contact.cnode_slot, vold_c)
     # the contact correction changed the mid-step velocity of the contact nodes: complete the
     # internal-force and alpha-damping work with it (f and alpha m v_old times the velocity change)
     for q in range(cnodes.shape[0]):
         nd = cnodes[q]
-        dvx = v[nd] - vold_c[q, 2]
-        dvy = v[nd + npd] - vold_c[q, 3]
+        dvx = v[nd] - vold_c[q, CNODE_V_PREDICTED]
+        dvy = v[nd + npd] - vold_c[q, CNODE_V_PREDICTED + 1]
         wint += 0.5 * (f[nd] * dvx + f[nd + npd] * dvy)
-        dal += 0.5 * alpha * (mass[nd] * vold_c[q, 0] * dvx + mass[nd + npd] * vold_c[q, 1] * dvy)
+        dal += 0.5 * alpha * (mass[nd] * vold_c[q, CNODE_V_STEP] * dvx + mass[nd + npd] * vold_c[q, CNODE_V_STEP + 1] * dvy)
     wcn, wct, wdr = contact_work(v, npd, contact.slave_node, contact.slave_pair, contact.master_ptr,
                                  contact.master_nodes, cs.seg, contact.pair_par, cs.geo, cs.lam, cs.cstate,
                                  contact.cnode_slot, vold_c, rec_contact_r)
@@ -287,8 +288,8 @@ def _contact_correction(t, dt, npd, structure, contact, friction, cs, state, rec
             w[d] = u[d] + beta * v[d]
             w[d + npd] = u[d + npd] + beta * v[d + npd]
         else:
-            vf[d] += a_filt * (v[d] - vold_c[q, 2])
-            vf[d + npd] += a_filt * (v[d + npd] - vold_c[q, 3])
+            vf[d] += a_filt * (v[d] - vold_c[q, CNODE_V_PREDICTED])
+            vf[d + npd] += a_filt * (v[d + npd] - vold_c[q, CNODE_V_PREDICTED + 1])
             w[d] = u[d] + beta * vf[d]
             w[d + npd] = u[d + npd] + beta * vf[d + npd]
     return wint, dal, wcn, wct, wdr
@@ -306,7 +307,7 @@ def _step(t, dt, stencil, structure, motions, loads, contact, friction, cs, stat
     spring_forces(u, v, f, structure.spr_dof, structure.spr_kc, True)
     _apply_loads(t, loads, v, f)
     # ---- old velocities of contact nodes (exact contact work)
-    _keep_contact_velocities(v, npd, contact.cnodes, cs.vold_c, 0)
+    _keep_contact_velocities(v, npd, contact.cnodes, cs.vold_c, CNODE_V_STEP)
     # ---- predictor over all dofs, fused with the energy increments and w = u + beta v
     wint, dal = _predictor(u, v, state.w, state.vf, f, structure.mass, structure.minv, dt, structure.alpha,
                            structure.beta, structure.a_filt)

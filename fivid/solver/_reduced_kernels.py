@@ -17,6 +17,7 @@ Nothing is allocated inside the time loop.
 
 import numpy as np
 
+from fivid.contact._layout_kernels import CNODE_V_STEP, GEO_N0, GEO_N1, GEO_NX, GEO_NY, GEO_TX, GEO_TY
 from fivid.solver._contact_kernels import _segment_nodes, contact_step, contact_work
 from fivid.solver._kernels import OK, kernel, reassociating_kernel
 from fivid.solver._loop_kernels import add_step_work, finish_record, group_velocities, start_record
@@ -108,23 +109,23 @@ def run_reduced_steps(
             if ns > 0:
                 for c in range(cnodes.shape[0]):
                     nd = cnodes[c]
-                    vold_c[c, 0] = vold[nd]
-                    vold_c[c, 1] = vold[nd + nb]
+                    vold_c[c, CNODE_V_STEP] = vold[nd]
+                    vold_c[c, CNODE_V_STEP + 1] = vold[nd + nb]
                 contact_step(X, q, qd, nb, dt, t + dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
                              pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_tab, mu_rate, mu_now,
-                             gs_max_iter, gs_tol, acc)
+                             gs_max_iter, gs_tol, acc, cnode_slot, vold_c)
                 for k in range(ns):
                     if cstate[k] == 0:
                         continue
                     sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
-                    fx = lam[k, 0] * geo[k, 2] + lam[k, 1] * geo[k, 4]
-                    fy = lam[k, 0] * geo[k, 3] + lam[k, 1] * geo[k, 5]
+                    fx = lam[k, 0] * geo[k, GEO_NX] + lam[k, 1] * geo[k, GEO_TX]
+                    fy = lam[k, 0] * geo[k, GEO_NY] + lam[k, 1] * geo[k, GEO_TY]
                     cimp[sn] += fx
                     cimp[sn + nb] += fy
-                    cimp[a] -= geo[k, 0] * fx
-                    cimp[a + nb] -= geo[k, 0] * fy
-                    cimp[b] -= geo[k, 1] * fx
-                    cimp[b + nb] -= geo[k, 1] * fy
+                    cimp[a] -= geo[k, GEO_N0] * fx
+                    cimp[a + nb] -= geo[k, GEO_N0] * fy
+                    cimp[b] -= geo[k, GEO_N1] * fx
+                    cimp[b + nb] -= geo[k, GEO_N1] * fy
                 _matvec(minv_ff, cimp, scratch, nbd, nf, nbd)
                 for i in range(nbd, nf):
                     qd[i] += dt * scratch[i]

@@ -11,7 +11,8 @@ __all__ = ["StencilArrays", "block_forces", "spring_forces"]
 
 #: the stencil argument of :func:`block_forces` (``block_forces(w, f, stencil)``), built by
 #: :attr:`fivid.solver.stencil.BlockStencils.kernel_args`
-StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "lst_idx", "lst_nbr", "lst_coef"])
+StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "rot", "wr", "lst_idx", "lst_nbr",
+                                             "lst_coef"])
 
 
 @fma_kernel
@@ -133,6 +134,68 @@ def _mapped_component(wx, wy, fo, cm, col0, a, first, ncols, nrows, stride):
 
 
 @fma_kernel
+def _rotate(wx, wy, rx, ry, rot, t0, first, ncols, nrows):
+    """``(rx, ry) = R_k^T (wx, wy)`` on a block of ``nrows`` rows of ``ncols`` nodes (row stride ``ncols``) from
+    x-index ``first``: each node's components in its column's frame, ``R_k`` the rotation by column ``k``'s
+    angle, cosine ``rot[0, t0 + k]`` and sine ``rot[1, t0 + k]``."""
+    cs = rot[0, t0:t0 + ncols]
+    sn = rot[1, t0:t0 + ncols]
+    for j in range(nrows):
+        b = uint64(first + j * ncols)
+        for k in range(ncols):
+            m = b + uint64(k)
+            x = wx[m]
+            y = wy[m]
+            rx[m] = cs[k] * x + sn[k] * y
+            ry[m] = cs[k] * y - sn[k] * x
+
+
+@fma_kernel
+def _rotated_row(rx, ry, fx, fy, c, cs, sn, first, ncols, stride):
+    """Both force components of a row of ``ncols`` nodes from x-index ``first`` with one stencil ``c`` in the
+    column frames (displacements ``rx, ry`` in those frames), turned back to x, y by the columns' cosines ``cs``
+    and sines ``sn``: one pass, the 18 neighbour values loaded once for both components."""
+    st = uint64(stride)
+    one = uint64(1)
+    b = uint64(first)
+    for i in range(ncols):
+        m = b + uint64(i)
+        s = m - st
+        n = m + st
+        # both components from the same 18 neighbour values (LLVM loads each once)
+        gx = (c[0] * rx[s - one] + c[1] * ry[s - one] + c[4] * rx[s] + c[5] * ry[s] + c[8] * rx[s + one]
+              + c[9] * ry[s + one] + c[12] * rx[m - one] + c[13] * ry[m - one] + c[16] * rx[m] + c[17] * ry[m]
+              + c[20] * rx[m + one] + c[21] * ry[m + one] + c[24] * rx[n - one] + c[25] * ry[n - one]
+              + c[28] * rx[n] + c[29] * ry[n] + c[32] * rx[n + one] + c[33] * ry[n + one])
+        gy = (c[2] * rx[s - one] + c[3] * ry[s - one] + c[6] * rx[s] + c[7] * ry[s] + c[10] * rx[s + one]
+              + c[11] * ry[s + one] + c[14] * rx[m - one] + c[15] * ry[m - one] + c[18] * rx[m] + c[19] * ry[m]
+              + c[22] * rx[m + one] + c[23] * ry[m + one] + c[26] * rx[n - one] + c[27] * ry[n - one]
+              + c[30] * rx[n] + c[31] * ry[n] + c[34] * rx[n + one] + c[35] * ry[n + one])
+        fx[m] = cs[i] * gx - sn[i] * gy
+        fy[m] = sn[i] * gx + cs[i] * gy
+
+
+@fma_kernel
+def _rotated_patch(wx, wy, fx, fy, rx, ry, c_uni, rot, blk):
+    """Forces on a patch whose rows are rotations of one stencil (a ring's or an arc's radial layers): the
+    displacements turned into each column's frame (:func:`_rotate` over the whole block, the patch's
+    neighbours included), then per row its stencil ``c_uni[blk[5] + row]`` in those frames and the turn back
+    (:func:`_rotated_row`). ``blk``: the patch's row of ``blocks``."""
+    first = blk[0]
+    ncols = blk[1]
+    nrows = blk[2]
+    stride = blk[3]
+    start = blk[6]
+    t0 = blk[7]
+    _rotate(wx, wy, rx, ry, rot, t0, start, stride, nrows)
+    t1 = t0 + first - start
+    cs = rot[0, t1:t1 + ncols]
+    sn = rot[1, t1:t1 + ncols]
+    for j in range(nrows):
+        _rotated_row(rx, ry, fx, fy, c_uni[blk[5] + j], cs, sn, first + j * stride, ncols, stride)
+
+
+@fma_kernel
 def block_forces(w, f, stencil):
     """``f = K_blocks w`` by the per-block 3x3 stencils (every node of every block is written).
 
@@ -143,20 +206,26 @@ def block_forces(w, f, stencil):
     f : ndarray (2*npd,)
         Output forces [N] (same layout).
     stencil : StencilArrays
-        ``(npd, blocks, c_uni, c_map, lst_idx, lst_nbr, lst_coef)``:
+        ``(npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef)``:
 
     npd : int
         Length of one component (nodes plus padding on both sides).
-    blocks : int64 ndarray (n_patch, 6)
-        Patches: ``first x-index, columns, rows, row stride, kind, coefficients``; kind 0: one shared stencil
-        ``c_uni[coefficients]`` (18 terms per force), 1: the same for rectangular elements (the xy couplings
-        with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
-        ``c_map[:, coefficients + row*columns + column]``. Neighbours outside a block have zero coefficients
-        (the padding keeps their indices in bounds).
+    blocks : int64 ndarray (n_patch, 8)
+        Patches: ``first x-index, columns, rows, row stride, kind, coefficients, block start, angles``; kind 0:
+        one shared stencil ``c_uni[coefficients]`` (18 terms per force), 1: the same for rectangular elements
+        (the xy couplings with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
+        ``c_map[:, coefficients + row*columns + column]``, 3: rows that are rotations of one stencil, in the
+        column frames ``c_uni[coefficients + row]``, the block's column angles at ``rot[:, angles + column]``
+        from its first x-index ``block start`` (:func:`_rotated_patch`). Neighbours outside a block have zero
+        coefficients (the padding keeps their indices in bounds).
     c_uni : ndarray (n_uniform, 36)
         Shared stencils [N m-1].
     c_map : ndarray (36, n_mapped)
         Per-node stencils of mapped patches [N m-1].
+    rot : ndarray (2, n_angles)
+        Cosine and sine of the column angles of rotated patches' blocks.
+    wr : ndarray (2*npd,)
+        Scratch: the displacements of rotated blocks in their column frames [m].
     lst_idx : int64 ndarray (n_list,)
         Listed nodes (block corners, seam columns of periodic rings): x-index.
     lst_nbr : int64 ndarray (n_list, 9)
@@ -164,13 +233,16 @@ def block_forces(w, f, stencil):
     lst_coef : ndarray (n_list, 36)
         Their stencils [N m-1].
     """
-    npd, blocks, c_uni, c_map, lst_idx, lst_nbr, lst_coef = stencil
+    npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef = stencil
     wx = w[:npd]
     wy = w[npd:]
     fx = f[:npd]
     fy = f[npd:]
     for b in range(blocks.shape[0]):
         kind = blocks[b, 4]
+        if kind == 3:
+            _rotated_patch(wx, wy, fx, fy, wr[:npd], wr[npd:], c_uni, rot, blocks[b])
+            continue
         if kind == 2:
             _mapped_component(wx, wy, fx, c_map, blocks[b, 5], 0, blocks[b, 0], blocks[b, 1], blocks[b, 2],
                               blocks[b, 3])

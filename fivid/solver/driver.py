@@ -16,6 +16,7 @@ import numpy as np
 from fivid.errors import ConfigError, SimulationDiverged
 from fivid.fe.build import load_model
 from fivid.fe.model import Model
+from fivid.fe.prestress import preload_ramp_end, prestress_state
 from fivid.fe.static import Preload, preload_state
 from fivid.friction.curve import slave_coefficients
 from fivid.friction.injection import FrictionTable, friction_table
@@ -225,8 +226,12 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
     total = loading.transient_end + duration
     n_out = max(1, math.ceil(total * sample_rate - 1e-9))
     n_int = n_out * oversample
-    st = block_stencils(model)
-    ka = kernel_arrays(model, st, loading, tangential_sign=signs[0], normal_sign=signs[1])
+    prestress = None
+    if model.prestress:  # vibrations about the prestressed state: K_sigma of the same static state as modes/CEA
+        u0 = preload.u if preload is not None else prestress_state(model)
+        prestress = (u0, max(preload_ramp_end(model), loading.load_ramp if preload is not None else 0.0))
+    st = block_stencils(model, prestress=None if prestress is None else prestress[0])
+    ka = kernel_arrays(model, st, loading, tangential_sign=signs[0], normal_sign=signs[1], prestress=prestress)
     base = model.motion("base")
     v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
     rs, choice = _choose_path(model, ka, integration, sliding_distance=v_max * total, sample_rate=sample_rate)
@@ -311,6 +316,12 @@ def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance
         raise ConfigError(f"error_band must be (low, high) [Hz] with 0 <= low < high, got {error_band!r}")
     n_modes, cutoff, scaling = _reduced_options(reduced, reduced_mass_scaling, sample_rate)
     auto = reduced == "auto"
+    if model.prestress:  # the reduced basis is built from the elastic K alone
+        if not auto:
+            raise ConfigError("the reduced path does not carry the prestress stiffness (model 'prestress: true'); "
+                              "run the full model (IntegrationOptions(reduced=None), --full)")
+        return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
+                      "reason": "the model is prestressed ('prestress: true'), which the reduced basis does not carry"}
     compliant = [c.name for c in model.contacts if getattr(c.law, "is_penalty", False)]
     if auto and compliant:
         # the estimate ties the contact rigidly; a compliant normal law's contact springs act on the mass-scaled

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fivid.contact._layout_kernels import N_CNODE, N_GEO
+
 __all__ = ["RawRecords", "integrate", "loop_arguments", "loop_state", "velocity_filter_gain", "chunked",
            "shortest_master_segment", "RUNAWAY_FACTOR"]
 
@@ -69,8 +71,8 @@ def loop_state(st, ka, u, v, beta: float):
     from fivid.solver import _loop_kernels as L
 
     ns = ka.slave_node.size
-    cs = L.ContactState(ka.seg.copy(), np.zeros((ns, 9)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
-                        np.zeros(ns), np.zeros((ka.cnodes.size, 4)))
+    cs = L.ContactState(ka.seg.copy(), np.zeros((ns, N_GEO)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
+                        np.zeros(ns), np.zeros((ka.cnodes.size, N_CNODE)))
     # the filtered velocity of band-limited damping starts at the initial velocity
     state = L.State(u, v, u + beta * v, v.copy(), np.zeros_like(u), np.zeros_like(u), np.zeros(K.N_ACC), np.zeros(2))
     return cs, state

@@ -41,6 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fivid.contact._layout_kernels import N_CNODE, N_GEO
+
 from fivid.errors import ConfigError
 
 __all__ = ["ReducedSystem", "MassScaling", "reduced_system", "scale_high_modes", "prepare_reduced", "integrate_reduced"]
@@ -544,8 +546,8 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
     p_mom = rs.M @ qd
     ns = a["slave_node"].size
     n_pairs = a["master_ptr"].size - 1
-    state = dict(geo=np.zeros((ns, 9)), lam=np.zeros((ns, 2)), cstate=np.zeros(ns, dtype=np.int64),
-                 mu_now=np.zeros(ns), vold_c=np.zeros((a["cnodes"].size, 4)), seg=a["seg"].copy())
+    state = dict(geo=np.zeros((ns, N_GEO)), lam=np.zeros((ns, 2)), cstate=np.zeros(ns, dtype=np.int64),
+                 mu_now=np.zeros(ns), vold_c=np.zeros((a["cnodes"].size, N_CNODE)), seg=a["seg"].copy())
     rec = np.full((n_int, K.N_REC), np.nan)
     sens_v = np.full((n_int, a["sens_node"].size, 2), np.nan)
     contact = np.full((n_int, n_pairs, 5), np.nan)

@@ -99,11 +99,15 @@ def _idx(a, dtype=np.int64):
 
 
 def kernel_arrays(model, st: BlockStencils, loading: LoadingSequence, *, tangential_sign: float,
-                  normal_sign: float) -> KernelArrays:
+                  normal_sign: float, prestress=None) -> KernelArrays:
     """Assemble the kernel arrays of ``model`` in the layout of ``st`` with the ``loading`` sequence.
 
     ``tangential_sign``/``normal_sign`` orient the transducer: ``friction_force = tangential_sign * sum R_t``,
     ``normal_force = normal_sign * sum R_n`` over the reaction nodes of the first Reaction.
+    ``prestress`` ``(u0, ramp_end)``, optional: the static state [m] whose initial-stress stiffness ``st``
+    carries (:func:`fivid.solver.stencil.block_stencils`) and the end of its ramp [s]; its reference force
+    ``K_sigma u0`` becomes one more load, ramped over ``[0, ramp_end]``, so the internal force is
+    ``K w + K_sigma (w - r(t) u0)``.
     """
     from fivid.fe.assembly import lumped_mass
 
@@ -134,7 +138,7 @@ def kernel_arrays(model, st: BlockStencils, loading: LoadingSequence, *, tangent
         con_dof=_idx(st.dof_index(con_global)), con_grp=_idx(grp), grp_par=np.ascontiguousarray(grp_par),
         con_react=con_react, con_global=con_global,
         sens_node=sens_node, sens_dir=np.ascontiguousarray(sens_dir),
-        **_contact_arrays(model, st), **_load_arrays(model, st),
+        **_contact_arrays(model, st), **_load_arrays(model, st, prestress),
     )
 
 
@@ -220,18 +224,26 @@ def _contact_arrays(model, st: BlockStencils) -> dict:
     )
 
 
-def _load_arrays(model, st: BlockStencils) -> dict:
-    """The pressure-load fields of :class:`KernelArrays`: the non-zero nodal forces of each load and its ramp."""
+def _load_arrays(model, st: BlockStencils, prestress=None) -> dict:
+    """The pressure-load fields of :class:`KernelArrays`: the non-zero nodal forces of each load and its ramp;
+    with ``prestress`` ``(u0, ramp_end)`` one more group, the prestress term's reference force ``K_sigma u0``
+    (see :func:`kernel_arrays`)."""
     from fivid.fe.loads import pressure_forces
+    from fivid.fe.prestress import geometric_stiffness_matrix
 
+    forces = [pressure_forces(model, load) for load in model.loads]
+    par = [[float(ld.start), float(ld.ramp_time)] for ld in model.loads]
+    if prestress is not None:
+        u0, ramp_end = prestress
+        forces.append(geometric_stiffness_matrix(model, u0) @ np.asarray(u0, dtype=float))
+        par.append([0.0, float(ramp_end)])
     ld_dof, ld_force, ld_grp = [], [], []
-    for g, load in enumerate(model.loads):
-        fl = pressure_forces(model, load)
+    for g, fl in enumerate(forces):
         nz = np.flatnonzero(fl)
         ld_dof.append(st.dof_index(nz))
         ld_force.append(fl[nz])
         ld_grp.append(np.full(nz.size, g))
-    ld_par = np.array([[float(ld.start), float(ld.ramp_time)] for ld in model.loads]).reshape(-1, 2)
+    ld_par = np.array(par).reshape(-1, 2)
     return dict(
         ld_dof=_idx(np.concatenate(ld_dof) if ld_dof else []),
         ld_force=np.ascontiguousarray(np.concatenate(ld_force) if ld_force else np.zeros(0)),

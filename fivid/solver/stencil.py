@@ -3,30 +3,35 @@
 Node ``p = (i, j)`` of a structured block couples with its 3x3 neighbourhood through 2x2 blocks of
 ``K``; the coefficient of dof ``a`` of ``p`` on dof ``b`` of ``p + dj*stride + di`` is the sum, over the
 (up to four) elements holding both nodes, of the element stiffness entries
-(:func:`fivid.fe.assembly.element_stiffness_q4`). Three storage kinds, all without per-node index arrays
+(:func:`fivid.fe.assembly.element_stiffness_q4`). Four storage kinds, all without per-node index arrays
 except the last:
 
 - uniform blocks (every element the same: rectangles, parallelograms of equal size): the interior and the
   four edges (corners excluded) each share one coefficient set (``c_uni``);
-- mapped blocks (annular sectors, profiled or general quadrilaterals): per-node coefficients ``c_map`` in
-  component-major layout ``(36, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch
-  covering the whole block (neighbours outside it have zero coefficients; the padding keeps their indices
-  in bounds); on a periodic ring the patch covers columns 1..nx-2;
-- listed nodes with explicit neighbour indices: the corners of uniform blocks and the two seam columns of
-  a periodic ring (whose neighbours across the seam are ``nx - 1`` columns away).
+- rotated patches (rings and arcs): every row is one stencil seen from each node's column frame (a radial
+  layer's elements are rotations of one element), stored once per row in ``c_uni`` with the columns' angles in
+  ``rot``; the kernel turns the displacements into the column frames, applies the row's stencil and turns the
+  forces back. The end (arc) or seam (ring) columns are listed;
+- mapped blocks (profiled or general quadrilaterals): per-node coefficients ``c_map`` in component-major layout
+  ``(36, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch covering the whole block
+  (neighbours outside it have zero coefficients; the padding keeps their indices in bounds); on a periodic ring
+  the patch covers columns 1..nx-2;
+- listed nodes with explicit neighbour indices: the corners of uniform blocks and the end or seam columns of
+  rotated patches and periodic rings.
 
 Speed of mapped patches (issue 30 item 5; bench_solver ``curved_fraction_of_bare_stencil`` and
-``*_stencil_fraction_of_bare_stencil``, measured on a loaded 2-core EPYC, AVX-512): the row loop is vectorised
-(8 lanes of 18 FMAs per force component), but a mapped node streams its 36 coefficients (288 B) from L3 every
-step (the ring's 2.2 MB do not fit the 1 MB L2), about 470 B per node and step with the update pass's arrays,
-which the stream evicts: the step is bound by L3 bandwidth. A one-pass variant ran at 3.2 ns/node on a
-cache-resident part of the ring against 4.4 ns/node on the whole ring; main's kernel takes ~5 ns/node, the bare
-rectangular stencil (13 terms, no coefficient stream) ~1.4 ns/node. Two layouts were measured and not kept
-(branches ``speed-tiled-experiment``, ``speed-symmetric-experiment``): tiles of 16 nodes with both components in
-one pass (fewer loads, bit for bit, but no faster on the ring: 0.89x, 1.2x on the rough pair) and the 19
-independent coefficients of a symmetric stencil (half the bytes, +5-10 %, results change at 1e-16). Closing the
-gap to half the bare stencil's speed needs fewer bytes per node: coefficients generated on the fly from a
-block's structure (a ring's rows are rotations of one stencil) or the stencil fused with the update pass.
+``*_stencil_fraction_of_bare_stencil``, measured on a loaded 2-core EPYC, AVX-512): the per-node row loop is
+vectorised (8 lanes of 18 FMAs per force component), but a mapped node streams its 36 coefficients (288 B) from
+L3 every step (the ring's 2.2 MB do not fit the L2), about 470 B per node and step with the update pass's
+arrays: the step is bound by L3 bandwidth (main's kernel ~5 ns/node idle, the bare rectangular stencil ~1.4).
+Deduplicating the coefficient table does not apply: no two nodes of the ring or of the rough pair have equal
+coefficients in x, y (a ring's nodes differ by their rotation; a profiled block's heights enter every row, the
+straight edge's excepted). The ring's rows are rotations of one stencil, hence the rotated patches: 36
+coefficients per row instead of per node, +8 multiply-adds per node for the two rotations, cache-resident
+(:func:`block_stencils` for the tolerance). Profiled blocks keep the coefficient stream; earlier layouts measured
+and not kept (branches ``speed-tiled-experiment``, ``speed-symmetric-experiment``): tiles of 16 nodes with both
+components in one pass (no faster on the ring, 1.2x on the rough pair) and the 19 independent coefficients of a
+symmetric stencil (+5-10 %, results change at 1e-16).
 """
 
 from __future__ import annotations
@@ -50,6 +55,7 @@ def stencil_index(dj: int, di: int, a: int, b: int) -> int:
 PATCH_UNIFORM = 0
 PATCH_RECT = 1
 PATCH_MAPPED = 2
+PATCH_ROTATED = 3
 
 
 @dataclass(frozen=True)
@@ -63,15 +69,20 @@ class BlockStencils:
         Zero entries before node 0 (and after the last node) in each component half.
     npd : int
         Length of one component half, ``n_nodes + 2*pad``.
-    blocks : ndarray of int64, shape (n_patch, 6)
-        Patches of nodes, ``first x-index, columns, rows, row stride, kind, coefficients``: kind
-        ``PATCH_UNIFORM``/``PATCH_RECT`` share the stencil ``c_uni[coefficients]`` (rect: the xy couplings with
-        the axis neighbours vanish, 13 terms per force instead of 18); ``PATCH_MAPPED`` has per-node stencils
-        in ``c_map[:, coefficients + row*columns + column]``.
+    blocks : ndarray of int64, shape (n_patch, 8)
+        Patches of nodes, ``first x-index, columns, rows, row stride, kind, coefficients, block start,
+        angles``: kind ``PATCH_UNIFORM``/``PATCH_RECT`` share the stencil ``c_uni[coefficients]`` (rect: the xy
+        couplings with the axis neighbours vanish, 13 terms per force instead of 18); ``PATCH_MAPPED`` has
+        per-node stencils in ``c_map[:, coefficients + row*columns + column]``; ``PATCH_ROTATED`` one stencil
+        per row in the column frames, ``c_uni[coefficients + row]``, with the angles of its block's columns
+        (from x-index ``block start``, ``row stride`` columns) at ``rot[:, angles + column]``. The last two
+        columns are 0 for the other kinds.
     c_uni : ndarray, shape (n_uniform, 36)
         Shared stencils [N m-1].
     c_map : ndarray, shape (36, n_mapped)
         Per-node stencils of mapped patches [N m-1], component-major.
+    rot : ndarray, shape (2, n_angles)
+        Cosine and sine of the column angles of the rotated patches' blocks.
     lst_idx : ndarray of int64, shape (n_list,)
         x-index of every listed node (corners of uniform blocks, seam columns of periodic rings).
     lst_nbr : ndarray of int64, shape (n_list, 9)
@@ -87,6 +98,7 @@ class BlockStencils:
     blocks: np.ndarray
     c_uni: np.ndarray
     c_map: np.ndarray
+    rot: np.ndarray
     lst_idx: np.ndarray
     lst_nbr: np.ndarray
     lst_coef: np.ndarray
@@ -94,10 +106,12 @@ class BlockStencils:
     @property
     def kernel_args(self):
         """The stencil argument of :func:`fivid.solver._stencil_kernels.block_forces` (a
-        :class:`fivid.solver._stencil_kernels.StencilArrays`)."""
+        :class:`fivid.solver._stencil_kernels.StencilArrays`), with its own scratch array (one per call: runs
+        sharing these stencils do not share scratch)."""
         from fivid.solver._stencil_kernels import StencilArrays
 
-        return StencilArrays(self.npd, self.blocks, self.c_uni, self.c_map, self.lst_idx, self.lst_nbr, self.lst_coef)
+        return StencilArrays(self.npd, self.blocks, self.c_uni, self.c_map, self.rot, np.zeros(2 * self.npd),
+                             self.lst_idx, self.lst_nbr, self.lst_coef)
 
     def dof_index(self, dof) -> np.ndarray:
         """Flat kernel index of global dof(s) ``2*node + c``."""
@@ -154,23 +168,71 @@ def _neighbours(block, pad: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     return out
 
 
-def block_stencils(model) -> BlockStencils:
+#: two stencils are one when they agree to this fraction of the block's largest coefficient: the float
+#: resolution of the element integration (coordinates rounded to ~eps of the block's size, differenced over an
+#: element: measured 3e-14 on the 360 x 20 ring of ``configs/models/ring_pressure.yaml``), ~10^4 below any
+#: geometric difference between rows
+SAME_STENCIL_RTOL = 1e-12
+
+
+def _column_angles(block) -> np.ndarray:
+    """Angle of every node column of ``block`` against its first [rad]: the direction from its row-0 node to its
+    last-row node (a ring's radial lines; 0 for the vertical columns of rectangles and profiled blocks)."""
+    d = block.coords[-1, :block.n_cols] - block.coords[0, :block.n_cols]
+    theta = np.arctan2(d[:, 1], d[:, 0])
+    return theta - theta[0]
+
+
+def _rotated_rows(block, c: np.ndarray, i0: int, i1: int, tol: float):
+    """``(row stencils (ny+1, 36), cos and sin of the column angles (2, n_cols))`` when every row of the patch
+    ``c[:, i0:i1]`` is one stencil seen from each node's column frame, else None.
+
+    With ``R_k`` the rotation by column ``k``'s angle (:func:`_column_angles`), node ``i``'s 2x2 coupling with
+    neighbour column ``i + di`` is ``C_i = R_i C' R_{i+di}^T``; the force is then ``R_i sum C' (R^T w)`` with one
+    ``C'`` per row. ``C'`` is the row's mean of ``R_i^T C_i R_{i+di}`` over its nodes, accepted when no node
+    differs from it by more than ``tol`` (so the forces change at the integration's round-off only)."""
+    ny1, ncols = c.shape[:2]
+    theta = _column_angles(block)
+    cs, sn = np.cos(theta), np.sin(theta)
+    r = np.stack([np.stack([cs, -sn], -1), np.stack([sn, cs], -1)], -2)  # (ncols, 2, 2)
+    cols = np.arange(i0, i1)
+    nb = cols[:, None] + np.array([-1, 0, 1])[None, :]
+    nb = nb % ncols if block.periodic else np.clip(nb, 0, ncols - 1)  # outside a block: zero coefficients
+    cc = c[:, i0:i1].reshape(ny1, i1 - i0, 3, 3, 2, 2)
+    local = np.einsum("ica,jiyxce,ixeb->jiyxab", r[cols], cc, r[nb])
+    ref = local.mean(axis=1)
+    if np.abs(local - ref[:, None]).max() > tol:
+        return None
+    return ref.reshape(ny1, 36), np.stack([cs, sn])
+
+
+def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStencils:
     """Stencil coefficients of every block of ``model`` (springs and constraints not included).
 
-    A block is uniform when all its element stiffnesses agree to ``1e-12`` of their largest entry
-    (float resolution of the element integration, ~10 ulp): its interior nodes then share one coefficient
-    set, and so do the nodes of each edge. Other blocks (and blocks with fewer than 3x3 nodes) are mapped
-    patches with per-node coefficients; periodic rings list their two seam columns with explicit neighbours.
+    ``prestress`` (n_dofs,), optional: a static state [m] whose initial-stress stiffness
+    (:func:`fivid.fe.prestress.block_geometric_stiffness`) is added to each element's elastic stiffness, so the
+    stencil applies ``K + K_sigma`` (folded into the coefficients: no cost per step; a block whose stress varies
+    is not uniform, nor rotated unless the stress is, and takes the mapped path).
+
+    A block is uniform when all its element stiffnesses agree to :data:`SAME_STENCIL_RTOL` of their largest
+    entry (float resolution of the element integration): its interior nodes then share one coefficient set, and
+    so do the nodes of each edge. Other blocks (and blocks with fewer than 3x3 nodes) are patches whose rows are
+    rotations of one stencil (an annular ring's or arc's radial layers, :func:`_rotated_rows`, unless
+    ``rotated`` is false; their first and last columns listed) or, failing that, mapped patches with per-node
+    coefficients; periodic rings list their two seam columns with explicit neighbours.
     """
     from fivid.fe.assembly import block_element_stiffness
+    from fivid.fe.prestress import block_geometric_stiffness
 
     pad = max(b.n_cols for b in model.blocks) + 1
     npd = model.n_nodes + 2 * pad
-    rows, uni_coef, map_coef, n_map = [], [], [], 0
+    rows, uni_coef, map_coef, n_map, rot, n_rot = [], [], [], 0, [], 0
     lst_idx, lst_nbr, lst_coef = [], [], []
     for block in model.blocks:
         ke = block_element_stiffness(block)
-        uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=1e-12 * np.abs(ke[0, 0]).max()))
+        if prestress is not None:
+            ke = ke + block_geometric_stiffness(block, prestress)
+        uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=SAME_STENCIL_RTOL * np.abs(ke[0, 0]).max()))
         uniform = uniform and block.nx >= 2 and block.ny >= 2 and not block.periodic
         c = _block_coefficients(block, ke)
         o = pad + block.node_offset
@@ -185,17 +247,28 @@ def block_stencils(model) -> BlockStencils:
                 # zero up to the Gauss-sum round-off, ~1e-18 of the diagonal), the kernel skips those terms
                 cross = np.abs(cc[[1, 3, 4, 5, 7]][:, [0, 1], [1, 0]])
                 kind = PATCH_RECT if cross.max() <= 1e-12 * np.abs(cc).max() else PATCH_UNIFORM
-                rows.append((o + j * stride + i, cols, nrows, stride, kind, len(uni_coef)))
+                rows.append((o + j * stride + i, cols, nrows, stride, kind, len(uni_coef), 0, 0))
                 uni_coef.append(c[j, i])
             listed[[0, 0, -1, -1], [0, -1, 0, -1]] = True
         else:
-            i0, i1 = (1, block.nx - 1) if block.periodic else (0, block.n_cols)
-            rows.append((o + i0, i1 - i0, block.ny + 1, stride, PATCH_MAPPED, n_map))
-            patch = c[:, i0:i1].reshape(-1, 36)
-            map_coef.append(patch.T)
-            n_map += patch.shape[0]
-            if block.periodic:
+            # rotated rows: the inner columns (an arc's end columns miss an element row, a ring's seam columns
+            # reach across the seam: both listed)
+            same_rows = (_rotated_rows(block, c, 1, stride - 1, SAME_STENCIL_RTOL * np.abs(c).max())
+                         if rotated and stride >= 3 else None)
+            if same_rows is not None:
+                rows.append((o + 1, stride - 2, block.ny + 1, stride, PATCH_ROTATED, len(uni_coef), o, n_rot))
+                uni_coef.extend(same_rows[0])
+                rot.append(same_rows[1])
+                n_rot += stride
                 listed[:, [0, -1]] = True
+            else:
+                i0, i1 = (1, block.nx - 1) if block.periodic else (0, block.n_cols)
+                rows.append((o + i0, i1 - i0, block.ny + 1, stride, PATCH_MAPPED, n_map, 0, 0))
+                patch = c[:, i0:i1].reshape(-1, 36)
+                map_coef.append(patch.T)
+                n_map += patch.shape[0]
+                if block.periodic:
+                    listed[:, [0, -1]] = True
         j, i = np.nonzero(listed)
         lst_idx.append(pad + block.node(i, j))
         lst_nbr.append(_neighbours(block, pad, i, j))
@@ -204,9 +277,10 @@ def block_stencils(model) -> BlockStencils:
         n_nodes=model.n_nodes,
         pad=pad,
         npd=npd,
-        blocks=np.array(rows, dtype=np.int64).reshape(-1, 6),
+        blocks=np.array(rows, dtype=np.int64).reshape(-1, 8),
         c_uni=np.array(uni_coef, dtype=float).reshape(-1, 36),
         c_map=np.ascontiguousarray(np.concatenate(map_coef, axis=1) if map_coef else np.zeros((36, 0))),
+        rot=np.ascontiguousarray(np.concatenate(rot, axis=1) if rot else np.zeros((2, 0))),
         lst_idx=np.concatenate(lst_idx).astype(np.int64),
         lst_nbr=np.ascontiguousarray(np.concatenate(lst_nbr), dtype=np.int64).reshape(-1, 9),
         lst_coef=np.ascontiguousarray(np.concatenate(lst_coef), dtype=float).reshape(-1, 36),

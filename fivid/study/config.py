@@ -262,6 +262,11 @@ class _Transient(ConfigModel):
     perturbation: Quantity("m", bare_is_si=True) | None = None
     law: str | None = Field(None, description="friction law file (netCDF), relative to the study file")
     coulomb_reference: bool = False
+    solver: Literal["auto", "full", "reduced"] = Field(
+        "auto", description="solver path: auto (reduced when its error estimate is within reduced_tolerance, as "
+                            "fivid simulate), full or reduced")
+    reduced_tolerance: Annotated[float, Field(ge=0.0)] = Field(
+        0.5, description="largest estimated in-band error [dB] of the reduced path that solver: auto accepts")
 
 
 class _Psd(ConfigModel):
@@ -399,7 +404,7 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
             cea["normal_load"] = cfg.cea.normal_load
         if model_path is not None and "normal_load" not in cea and not _pressed_by_loads(model_path):
             raise src.error("cea", "an FE model's CEA linearises about the preload: give cea.normal_load (e.g. 5 N), "
-                                   "unless the model's pressure loads press the contact")
+                                   "unless the model's pressure loads or an expanding rigid circle press the contact")
     points = _points(src, cfg.points, base)
     if kind.section is not None and kind.section[0] == "points":
         points[kind.section[1]] = settings
@@ -409,8 +414,12 @@ def load_study(source: str | PathLike | Mapping[str, Any], *, quick: bool = Fals
 
 
 def _pressed_by_loads(model_path) -> bool:
-    """True when the model config has pressure loads (its contact state under them needs no clamp load)."""
-    return bool(read_yaml(model_path, "model config").data.get("loads"))
+    """True when the model config has pressure loads or an expanding rigid circle (its contact state under them
+    needs no clamp load; :func:`fivid.fe.static.pressed_by_itself` of the built model)."""
+    data = read_yaml(model_path, "model config").data
+    expanding = any(isinstance(c, dict) and isinstance(c.get("rigid"), dict) and c["rigid"].get("expansion")
+                    for c in data.get("contacts") or ())
+    return bool(data.get("loads")) or expanding
 
 
 def _points(src, spec: _Points, base: Path) -> dict:
@@ -430,6 +439,10 @@ def _points(src, spec: _Points, base: Path) -> dict:
             tr["law"] = str(law)
         if t.coulomb_reference:
             tr["coulomb_reference"] = True
+        if "solver" in t.model_fields_set:
+            tr["solver"] = t.solver
+        if "reduced_tolerance" in t.model_fields_set:
+            tr["reduced_tolerance"] = float(t.reduced_tolerance)
         out["transient"] = tr
     if spec.psd is not None:
         out["psd"] = {"nperseg": spec.psd.nperseg}

@@ -28,7 +28,15 @@ from fivid.score.roughness import (
 from fivid.signal.steady import steady_part
 from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
 from fivid.surface import evaluate_profile
-from fivid.surface.rough_pair import RQ_PER_RA, RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
+from fivid.surface.rough_pair import (
+    RQ_PER_RA,
+    RSM_PER_CORRELATION_LENGTH,
+    iso_cutoff,
+    measured_rough_profiles,
+    synthetic_rough_profiles,
+    table1_profiles,
+    table1_row,
+)
 
 __all__ = ["identification_run", "build_point_model", "simulate_rough_run", "point_profiles_design",
            "evaluate_roughness_point", "roughness_settings", "RSM_LEVELS", "ROUGHNESS_TASK"]
@@ -84,7 +92,9 @@ RSM_LEVELS = (200e-6, 300e-6)
 #: study task defaults (``points: roughness:``; docs/roughness.md). ``correlation_length`` None: from the
 #: replicate's Rsm level (``rsm``, read with this default until the study config accepts the key)
 ROUGHNESS_TASK = {"correlation_length": None, "rsm": RSM_LEVELS, "profile_step": 5e-6, "seeds": (3, 4),
-                  "sensor_every": 4, "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.05e-3}
+                  "sensor_every": 4, "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.05e-3,
+                  "surfaces": "rsm_levels", "nodes_per_rsm": None, "sensor_spacing": None, "profile_files": None,
+                  "seat": False}
 
 
 def point_profiles_design(spec: dict, conditions: dict) -> dict:
@@ -101,18 +111,48 @@ def point_profiles_design(spec: dict, conditions: dict) -> dict:
             "correlation_length": xi, "seeds": tuple(int(v) + 100 * r for v in spec["seeds"])}
 
 
+def _point_profiles(spec: dict, conditions: dict, length: float, design: dict):
+    """The point's two profiles and their Rsm [m] (the mesh step's reference): ``surfaces`` "table1" (seed 003's
+    Table 1 surface of the point's Ra, :func:`fivid.surface.rough_pair.table1_profiles`), "measured"
+    (``profile_files``: lower, upper; their ISO Rsm) or "rsm_levels" (the replicate's Rsm level)."""
+    ra = float(conditions.get("roughness_ra", 0.0))
+    kind = spec.get("surfaces") or "rsm_levels"
+    if kind == "table1":
+        rsm = table1_row(ra)["Rsm"]
+        step = rsm / (2 * spec["nodes_per_rsm"]) if spec.get("nodes_per_rsm") else None
+        return table1_profiles(ra, length, seeds=design["seeds"], step=step), rsm
+    if kind == "measured":
+        lower, upper = measured_rough_profiles(*spec["profile_files"], length)
+        rsm = evaluate_profile(lower, form="line").parameters["Rsm"]
+        rsm = evaluate_profile(lower, form="line", cutoff=iso_cutoff(rsm)).parameters["Rsm"]
+        return (lower, upper), float(rsm)
+    profiles = synthetic_rough_profiles(ra, length, correlation_length=design["correlation_length"],
+                                        step=spec["profile_step"], seeds=design["seeds"])
+    return profiles, design["rsm"]
+
+
 def build_point_model(model_path, spec: dict, conditions: dict):
     """The rough pair of a study point: ``(model, lower profile, rough_pair_config record, profile design)``
     for ``conditions`` (``roughness_ra`` [m], ``seed`` (replicate), ``normal_load`` [N]) and the task settings
-    ``spec`` (:data:`ROUGHNESS_TASK` keys). The profiles cover the lower (top-profiled) body's length."""
+    ``spec`` (:data:`ROUGHNESS_TASK` keys). The profiles cover the lower (top-profiled) body's length.
+
+    With ``nodes_per_rsm`` both blocks are re-divided at ``Rsm / nodes_per_rsm`` (the point's surface Rsm:
+    :func:`fivid.fe.rough_pair.rough_pair_config`'s ``mesh_step``); with ``sensor_spacing`` [m] the back-face
+    sensors sit on every ``round(sensor_spacing / mesh step)``-th node (``sensor_every`` otherwise); with ``seat``
+    the upper block starts seated on its two supporting asperities (``rough_pair_config``'s ``seat``)."""
     spec = {**ROUGHNESS_TASK, **spec}
     length = profiled_length(model_path)
     design = point_profiles_design(spec, conditions)
-    lower, upper = synthetic_rough_profiles(float(conditions.get("roughness_ra", 0.0)), length,
-                                            correlation_length=design["correlation_length"],
-                                            step=spec["profile_step"], seeds=design["seeds"])
+    (lower, upper), rsm = _point_profiles(spec, conditions, length, design)
+    design = {**design, "rsm": rsm, "surfaces": spec.get("surfaces") or "rsm_levels"}
+    mesh_step = rsm / float(spec["nodes_per_rsm"]) if spec.get("nodes_per_rsm") else None
+    every = spec["sensor_every"]
+    if spec.get("sensor_spacing") and mesh_step:
+        every = max(1, int(round(float(spec["sensor_spacing"]) / mesh_step)))
+    design["mesh_step"] = mesh_step
     load = float(conditions["normal_load"]) if "normal_load" in conditions else None
-    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=spec["sensor_every"], normal_load=load)
+    cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=every, normal_load=load,
+                                  mesh_step=mesh_step, seat=bool(spec.get("seat")))
     return load_model(cfg), lower, info, design
 
 
@@ -161,14 +201,15 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
     ra = float(conditions.get("roughness_ra", 0.0))
     model, lower, info, design = build_point_model(model_path, spec, conditions)
     n_slave = int(sum(c.slave_nodes.size for c in model.contacts))
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     ds = simulate(model, _point_condition(conditions, ra),
                   schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"],
                                        settle_time=spec["settle_time"]),
                   integration=_contact_iterations(spec), output=OutputOptions(progress=False))
-    seconds = time.perf_counter() - t0
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     r = roughness_metrics(ds, n_slave)
-    ev = evaluate_profile(lower, form="line").parameters if ra > 0 else {}
+    cutoff = iso_cutoff(design["rsm"]) if design["surfaces"] != "rsm_levels" else None  # Table 1's ISO metrology
+    ev = evaluate_profile(lower, form="line", cutoff=cutoff).parameters if ra > 0 or cutoff else {}
     sh = r["shocks"]
     out = {
         "vibration_level": ((), r["vibration_level"], {"units": "dB", "long_name": "vibration level Lv re 1e-9 m s-1 "
@@ -178,8 +219,14 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
                                              "min_closing": sh["min_closing"], "baseline_time": sh["baseline_time"]}),
         "shock_impulse": ((), r["shock_impulse"], {"units": "N s", "long_name": "mean impulse per shock"}),
         "shock_count": ((), r["shock_count"], {"units": "1", "long_name": "shocks in the steady record"}),
-        "dissipated_power": ((), r["dissipated_power"], {"units": "W", "long_name": "friction power (slope of "
-                                                         "friction_dissipation)"}),
+        "friction_power": ((), r["friction_power"], {"units": "W", "long_name": "friction power (slope of "
+                                                     "friction_dissipation)"}),
+        "vibratory_power": ((), r["vibratory_power"], {"units": "W", "long_name": "vibratory power (slope of "
+                                                       "damping_dissipation: dissipated by the N shocks' vibration)"}),
+        "shock_energy": ((), r["shock_energy"], {"units": "J", "long_name": "shock intensity: vibratory energy "
+                                                 "per shock (vibratory power / shock rate)"}),
+        "impact_power": ((), r["impact_power"], {"units": "W", "long_name": "impact dissipation rate (slope of "
+                                                 "impact_dissipation)"}),
         "mean_normal_force": ((), r["mean_normal_force"], {"units": "N", "long_name": "mean contact normal force"}),
         "mean_friction_force": ((), r["mean_friction_force"], {"units": "N", "long_name": "mean friction force "
                                                                "(transducer)"}),
@@ -188,9 +235,12 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
                                                                  "|transducer force| / mean contact normal force"}),
         "friction_coefficient_rms": ((), r["friction_coefficient_rms"], {
             "units": "1", "long_name": "RMS fluctuation of mu(t) (the perturbation amplitude, all frequencies)"}),
-        "profile_rsm_target": ((), design["rsm"], {"units": "m", "long_name": "Rsm level of the point's profiles "
-                                                   "(replicate)", "replicate": design["replicate"]}),
+        "profile_rsm_target": ((), design["rsm"], {"units": "m", "long_name": "target Rsm of the point's profiles "
+                                                   f"({design['surfaces']})", "replicate": design["replicate"]}),
         "simulation_seconds": ((), seconds, {"units": "s", "long_name": "wall time of the simulation"}),
+        "simulation_cpu_seconds": ((), cpu, {"units": "s", "long_name": "CPU time of the simulation (process)"}),
+        "mesh_step": ((), design["mesh_step"] if design["mesh_step"] else np.nan,
+                      {"units": "m", "long_name": "element length along the contact (Rsm / nodes_per_rsm)"}),
         "dof_updates_per_second": ((), model.coords.size * ds.attrs["steps"] / seconds,
                                    {"units": "s-1", "long_name": "degrees of freedom x steps / wall time"}),
         "n_dof": ((), int(model.coords.size), {"units": "1", "long_name": "degrees of freedom"}),
@@ -200,7 +250,8 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
         if key in ev:
             out[f"profile_{key}"] = ((), float(ev[key]) if ev[key] is not None else np.nan,
                                      {"units": "m", "long_name": f"{key} of the lower body's profile (line removed, "
-                                                                 "no filter, whole length)"})
+                                                                 "whole length, filter: ISO 4288 cut-off for "
+                                                                 "Table 1 / measured surfaces, none otherwise)"})
     out["upper_lift"] = ((), info["lift"], {"units": "m", "long_name": "upper body lift to first touch",
                                             "back_face_sensors": info["back_face_sensors"],
                                             "sensor_every": info["sensor_every"],
@@ -218,6 +269,10 @@ def roughness_settings(study) -> dict:
         "model": origin,
         "mesh": {name: {"divisions": list(b["divisions"]), "grading": b.get("grading")}
                  for name, b in data["bodies"].items()},
+        "surfaces": spec.get("surfaces") or "rsm_levels",
+        "nodes_per_rsm": spec.get("nodes_per_rsm"), "sensor_spacing": spec.get("sensor_spacing"),
+        "seat": bool(spec.get("seat")),
+        "profile_files": spec.get("profile_files"),
         "profiles": {"generator": "fivid.surface.gaussian_random_profile", "acf": "gaussian",
                      "rq_per_ra": RQ_PER_RA,
                      "rsm_levels": list(spec["rsm"]) if not spec["correlation_length"] else None,

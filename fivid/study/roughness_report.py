@@ -83,8 +83,12 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
     if rz:
         rows.append(["Lv vs log10(Rz/Rsm): slope [dB/decade]", _fmt(rz["slope"]), _fmt(rz["ci"][0]), _fmt(rz["ci"][1]),
                      _fmt(rz["r2"]), rz["n"]])
-    for name, what in (("shock_rate", "shock rate"), ("shock_impulse", "impulse per shock"),
-                       ("dissipated_power", "friction power"), ("friction_coefficient_rms", "mu(t) RMS")):
+    for key, f in sorted((fits.get("vibration_level_vs_rz_rsm_per_speed") or {}).items()):
+        rows.append([f"Lv vs log10(Rz/Rsm) at {f['sliding_velocity'] * 100:g} cm/s: slope [dB/decade]",
+                     _fmt(f["slope"]), _fmt(f["ci"][0]), _fmt(f["ci"][1]), _fmt(f["r2"]), f["n"]])
+    for name, what in (("shock_rate", "shock frequency"), ("shock_impulse", "impulse per shock"),
+                       ("shock_energy", "vibratory energy per shock"), ("vibratory_power", "vibratory power"),
+                       ("friction_power", "friction power"), ("friction_coefficient_rms", "mu(t) RMS")):
         f = fits.get(name)
         for axis, sym in (("roughness_ra", "Ra"), ("sliding_velocity", "V")):
             if f and axis in f["exponents"]:
@@ -92,6 +96,13 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
                 rows.append([f"{what} ∝ {sym}^k: k", _fmt(e["value"]), _fmt(e["ci"][0]), _fmt(e["ci"][1]),
                              _fmt(f["r2"]), f["n"]])
     page.raw(table(["quantity", "value", "95 % CI low", "95 % CI high", "r²", "points"], rows))
+    design = summary.get("design") or {}
+    if design.get("sigma_db") is not None:
+        page.paragraph(f"Design: Lv scatters by {_fmt(design.get('replicate_sd_db'))} dB between replicates "
+                       f"({design.get('replicate_dof')} dof) and {_fmt(design.get('residual_sd_db'))} dB about the "
+                       f"plane ({design.get('residual_dof')} dof); with sigma = {_fmt(design['sigma_db'])} dB this "
+                       f"Ra x V grid needs {design.get('replicates_for_half_width_0.15')} replicate(s) for 95 % "
+                       "half-widths of n and m <= 0.15 (fivid.study.fits.replicates_for_exponents).")
     st = summary.get("roughness_settings") or {}
     if st:
         mesh = "; ".join(f"{b}: {m['divisions'][0]} x {m['divisions'][1]}" for b, m in st.get("mesh", {}).items())
@@ -114,7 +125,11 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
                 "Shock rate (contact closing events) against Ra and V.", "shock rate")
     page.figure(_panels(ds, "shock_impulse", "mean impulse per shock [N s]", log_y=True),
                 "Mean impulse per shock against Ra and V.", "shock impulse")
-    page.figure(_panels(ds, "dissipated_power", "friction power [W]", log_y=True),
+    for name, label, what in (("shock_energy", "vibratory energy per shock [J]", "shock intensity"),
+                              ("vibratory_power", "vibratory power [W]", "vibratory power")):
+        if name in ds and np.any(np.isfinite(ds[name].values)):
+            page.figure(_panels(ds, name, label, log_y=True), f"{label} against Ra and V (seed 003 Figs. 6, 7).", what)
+    page.figure(_panels(ds, "friction_power", "friction power [W]", log_y=True),
                 "Friction power against Ra and V.", "power")
     if "friction_coefficient_rms" in ds and np.any(np.isfinite(ds["friction_coefficient_rms"].values)):
         page.figure(_panels(ds, "friction_coefficient_rms", "RMS of mu(t) (transducer)", log_y=True),

@@ -16,6 +16,8 @@ record's analyses, any kind with a transient) take plain data (picklable): ``sys
   ``coulomb_reference: true`` (and a law) also ``rms_coulomb`` and ``perturbation_gain_db``, the same point
   simulated with the law's mu0 alone (what the perturbation adds), ``coulomb_decay_db`` (its ring-down), and
   with ``psd`` its ``psd_coulomb`` and ``psd_perturbation`` (of the law's response minus Coulomb's);
+- ``solver_path`` (full or reduced, the choice's reason in its attrs) and ``reduced_error_estimate_db`` of an FE
+  transient (:func:`solver_choice`: the automatic path unless the study's ``points.transient.solver`` forces one);
 - ``psd``: ``psd(frequency)`` of the second half of the response's steady part (Welch, Hann, half overlap).
 
 The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``); a
@@ -40,7 +42,8 @@ from fivid.study.analysis import analyse_transient
 from fivid.study.coupling import coupling_bounds, coupling_indicator
 from fivid.surface.rough_pair import RQ_PER_RA
 
-__all__ = ["REGIMES", "TRANSIENT_KEYS", "COUPLING_KEYS", "element_size", "fe_point", "coupling_system", "transient_variables", "refined_model"]
+__all__ = ["REGIMES", "TRANSIENT_KEYS", "COUPLING_KEYS", "element_size", "fe_point", "coupling_system", "transient_variables", "refined_model",
+           "solver_choice"]
 
 REGIMES = ("stable", "mode_coupling", "stick_slip")
 #: (point variable, summary.json key) of the transient analyses, copied into a study summary's points
@@ -52,15 +55,22 @@ TRANSIENT_KEYS = (("regime", "regime"), ("growth_rate", "growth_rate"), ("respon
 COUPLING_KEYS = (("coupling_modal", "coupling_modal"),)
 
 
-def fe_point(system: dict, tasks: dict, conditions: dict):
+def fe_point(system: dict, tasks: dict, conditions: dict, *, probes=None, run_analysis=None):
     """An FE model's point: element size, ``modes`` (and the coupling indicator with ``system["coupling_bounds"]``),
-    ``transient`` and ``psd`` (see the module docstring); an xarray Dataset."""
+    ``transient`` and ``psd`` (see the module docstring); an xarray Dataset.
+
+    ``probes(model)`` (optional) returns extra sensor entries (model-config form) added after the model's own
+    (the response stays the first sensor); ``run_analysis(model, run, data, coords, conditions)`` (optional) adds
+    a kind's own variables from the transient's run dataset (its steady part)."""
     import xarray as xr
 
     data, coords = {}, {}
     ra = conditions.get("roughness_ra")
-    model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra,
-                          surface=None if ra is None else system.get("surfaces", {}).get(repr(float(ra))))
+    surface = None if ra is None else system.get("surfaces", {}).get(repr(float(ra)))
+    model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra, surface=surface)
+    if probes is not None:
+        model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra, surface=surface,
+                              sensors=probes(model))
     if "transient" in tasks:  # its size before any work (the modes first), as fivid simulate and fivid run do
         check_simulation_memory(simulation_memory(model, duration=tasks["transient"]["duration"],
                                                   sample_rate=tasks["transient"]["sample_rate"]),
@@ -87,6 +97,13 @@ def fe_point(system: dict, tasks: dict, conditions: dict):
             return _fe_transient(model, {"transient": ref}, {**conditions, "mu": mu0})[1]
 
         transient_variables(t, x, units, state, tasks, data, coords, coulomb=coulomb)
+        data["solver_path"] = ((), np.array(state["solver"]["solver_path"], dtype=object), {
+            "long_name": "solver path of the transient (full or reduced)",
+            "reason": state["solver"]["solver_choice_reason"]})
+        data["reduced_error_estimate_db"] = ((), state["solver"]["reduced_error_estimate_db"], {
+            "units": "dB", "long_name": "estimated in-band error of the reduced path (NaN: not estimated)"})
+        if run_analysis is not None:
+            run_analysis(model, state["run"], data, coords, conditions)
     return xr.Dataset(data, coords=coords)
 
 
@@ -164,21 +181,25 @@ def _psd_variable(name, x, fs, tasks, units, data, coords, long_name):
     coords["frequency"] = ("frequency", f, {"units": "Hz", "long_name": "frequency"})
 
 
-def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None, *, surface: dict | None = None):
+def refined_model(path, factor: float = 1.0, roughness_ra: float | None = None, *, surface: dict | None = None,
+                  sensors: list | None = None):
     """The FE model of ``path`` with every body's divisions multiplied by ``factor`` (rounded, at least 1; a full
     ring keeps at least 3 around); ``factor`` 1 is the model as configured. With ``roughness_ra`` [m], every
     Greenwood-Williamson contact gets the surface of that Ra: ``surface`` (``sigma``, ``asperity_radius``,
     ``asperity_density`` in SI, e.g. :func:`fivid.surface.contact_law.gw_parameters` of a profile, with its
     ``source``) when given, else the summit-height deviation of a Gaussian surface of that Ra,
-    ``sigma = sqrt(pi/2) Ra`` (the rest of its surface parameters as configured)."""
+    ``sigma = sqrt(pi/2) Ra`` (the rest of its surface parameters as configured). ``sensors``: extra sensor
+    entries (model-config form) appended to the model's own."""
     gw = False
     if roughness_ra is not None:
         raw = read_yaml(path, "model config").data
         gw = any(isinstance(c.get("normal"), dict) and c["normal"].get("law") == "greenwood-williamson"
                  for c in raw.get("contacts") or [])
-    if factor == 1.0 and not gw:
+    if factor == 1.0 and not gw and not sensors:
         return load_model(path)
     data = read_config(path)[0]
+    if sensors:
+        data["sensors"] = list(data.get("sensors") or []) + list(sensors)
     for body in data["bodies"].values():
         body["divisions"] = [max(3 if "annulus" in body and i == 0 else 1, int(round(float(d) * factor)))
                              for i, d in enumerate(body["divisions"])]
@@ -215,11 +236,16 @@ def _fe_transient(model, tasks, conditions):
     # (mesh, time_step: the model and step)
     condition = OperatingCondition(*(float(conditions[name]) if name in conditions else None
                                      for name in ("sliding_velocity", "normal_load", "roughness_ra")))
-    integration = IntegrationOptions(safety=float(conditions["time_step"])) if "time_step" in conditions \
-        else IntegrationOptions()
+    kw = solver_choice(tr, conditions)
+    if "time_step" in conditions:
+        kw["safety"] = float(conditions["time_step"])
+    integration = IntegrationOptions(**kw)
     ds = simulate(model, condition, FrictionInput(law=law, mu=mu, seed=int(conditions.get("seed", 0))),
                   schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"]),
                   integration=integration, output=OutputOptions(progress=False))
+    solver = {"solver_path": ds.attrs.get("solver_path", "full"),
+              "solver_choice_reason": ds.attrs.get("solver_choice_reason", ""),
+              "reduced_error_estimate_db": float(ds.attrs.get("reduced_error_estimate_db", np.nan))}
     ds = steady_part(ds)  # from the run's transient_end
     acc = ds["acceleration"]
     if "sensor" in acc.dims:
@@ -234,5 +260,21 @@ def _fe_transient(model, tasks, conditions):
     # the CEA's sliding equilibrium: the contact slides as a whole (most of it; a few nodes of a large contact
     # may stick where the pressure peaks, and a held ring winds up with a shrinking stick zone)
     sliding = stick < 0.5
-    return t, x, "m s-2", {"sliding": sliding, "stick": stick}
+    return t, x, "m s-2", {"sliding": sliding, "stick": stick, "solver": solver, "run": ds}
+
+
+def solver_choice(transient: dict, conditions: dict) -> dict:
+    """The solver-path fields of :class:`fivid.solver.IntegrationOptions` for a point's transient:
+    ``transient["solver"]`` (``auto``, the default: the reduced path when its estimated in-band error is within
+    ``transient["reduced_tolerance"]`` [dB], 0.5 by default, as ``fivid simulate``; ``full``; ``reduced``: the
+    automatic path's reduced settings whatever the estimate). A point
+    that refines the ``mesh`` or the ``time_step`` studies the full model's discretisation: ``auto`` runs it on the
+    full path."""
+    solver = transient.get("solver", "auto")
+    if solver == "auto" and ({"mesh", "time_step"} & set(conditions)):
+        solver = "full"
+    kw = {"reduced": {"full": None}.get(solver, solver)}
+    if solver == "auto":
+        kw["reduced_tolerance"] = float(transient.get("reduced_tolerance", 0.5))
+    return kw
 

@@ -193,6 +193,8 @@ def evaluate_profile(profile, *, window=None, form="line", cutoff=None, short_cu
     length = x.size * step
     params = amplitude_parameters(roughness)
     n_sampling = int(math.floor(length / cutoff + 1e-9)) if cutoff is not None else 0
+    if n_sampling >= 1:  # whole sampling lengths of round(cutoff / step) samples (rounding up may leave one less)
+        n_sampling = min(n_sampling, x.size // int(round(cutoff / step)))
     if n_sampling >= 1:
         params["Rz"] = peak_to_valley_mean(roughness, n_sampling, segment_points=int(round(cutoff / step)))
         sampling_length = cutoff

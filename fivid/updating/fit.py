@@ -217,8 +217,8 @@ def update_model(model_path, targets: Targets):
     params = resolve_parameters(msrc.data, str(model_path), targets)
     predict = predictor_for(msrc.data, targets)
     p0 = np.array([p.initial for p in params])
-    f_t = np.array([t.frequency for t in targets.modes])
-    tol = np.array([t.tolerance for t in targets.modes])
+    f_t = np.array([t.frequency for t in targets.modes] + [t.value for t in targets.critical_mu])
+    tol = np.array([t.tolerance for t in targets.modes] + [t.tolerance for t in targets.critical_mu])
     cache = {}
 
     def config(x):
@@ -234,7 +234,8 @@ def update_model(model_path, targets: Targets):
         return cache[k]
 
     def residual(x):
-        return (run(x).frequency - f_t) / tol
+        pred = run(x)
+        return (np.concatenate([pred.frequency, pred.critical_mu]) - f_t) / tol
 
     lb = np.array([p.lower for p in params]) / p0
     ub = np.array([p.upper for p in params]) / p0
@@ -293,6 +294,14 @@ def _statistics(fit, params, p0, targets, pred) -> UpdateResult:
         if t.normal_load is not None:
             row["normal_load_n"] = t.normal_load
         residuals.append(row)
+    for t, v, d in zip(targets.critical_mu, pred.critical_mu, pred.critical_detail):
+        residuals.append({"name": t.name, "target": t.value, "model": float(v),
+                          "error_pct": float(100 * (v - t.value) / t.value), "tolerance": t.tolerance,
+                          "quantity": "critical_mu", "model_mode": d["mode"], "partner_mode": d["partner"],
+                          "frequency_hz": d["frequency_hz"], "extrapolated": d["extrapolated"]})
+        if d["extrapolated"]:
+            warnings.append(f"{t.key}: the pair of CEA mode {d['mode']} stays stable over the sweep; its critical "
+                            f"mu {v:.3g} is extrapolated: widen mu")
     counts = []
     for c in targets.count_below:
         n_below = int(np.sum((pred.all_frequencies > 0) & (pred.all_frequencies < c.frequency)))
@@ -327,8 +336,12 @@ def _updated_text(msrc, params, values, targets, result) -> str:
         ci_text = f" +- {ci:.3g}{unit} (95 %)" if ci is not None else " (not identified by the targets)"
         lines.append(f"#   {p.path}: {p.initial:.6g}{unit} -> {v:.6g}{unit}{ci_text}")
     for row in result.residuals:
-        lines.append(f"#   {row['name']}: target {row['target']:.6g} Hz, model {row['model']:.6g} Hz "
+        unit = "" if row.get("quantity") == "critical_mu" else " Hz"
+        lines.append(f"#   {row['name']}: target {row['target']:.6g}{unit}, model {row['model']:.6g}{unit} "
                      f"({row['error_pct']:+.3f} %)")
+    for row in result.count_below:
+        lines.append(f"#   {row['name']}: {row['model_count']} modes below {row['frequency_hz']:g} Hz (target "
+                     f"{row['count']})")
     lines.append(f"# cost {result.cost:.4g}, {result.evaluations} model evaluations, converged: "
                  f"{str(result.converged).lower()}")
     for w in result.warnings:

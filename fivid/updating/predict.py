@@ -4,6 +4,8 @@ peak frequencies (damper models), from a config mapping.
 * :class:`FEModes` — ``fivid modes`` on the config (:func:`fivid.fe.modal.modal_analysis`, same preload and
   contact options), mode shapes read at the model's sensors, targets paired by MAC or by order.
 * :class:`DamperPeaks` — harmonic-balance FRF peak per target normal load (:func:`fivid.damper.peaks.frf_peak`).
+* :func:`pair_critical_mu` — the critical friction coefficient of a CEA mode pair (``critical_mu`` targets of an
+  FE model, :func:`fivid.fe.cea.complex_eigenvalue_analysis`).
 
 Each is called with a config mapping and returns one predicted frequency [Hz] per target mode, plus what
 the report needs (paired model mode, MAC).
@@ -11,17 +13,18 @@ the report needs (paired model mode, MAC).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from fivid.damper.model import damper_model_from_dict
 from fivid.damper.peaks import frf_peak
 from fivid.errors import ConfigError
+from fivid.fe.cea import complex_eigenvalue_analysis
 from fivid.fe.modal import modal_analysis
 from fivid.fe.build import load_model
 
-__all__ = ["Prediction", "FEModes", "DamperPeaks", "mac", "is_damper_config", "predictor_for"]
+__all__ = ["Prediction", "FEModes", "DamperPeaks", "mac", "pair_critical_mu", "is_damper_config", "predictor_for"]
 
 #: a shape target pairs with a model mode only at or above this MAC
 PAIRING_MAC = 0.6
@@ -49,12 +52,69 @@ class Prediction:
         MAC of the paired shapes (None where the target has no shape).
     all_frequencies : ndarray
         Every computed model frequency [Hz] (for ``count_below``; empty for damper models).
+    critical_mu : ndarray
+        Predicted critical friction coefficient per ``critical_mu`` target [1] (empty without such targets).
+    critical_detail : list of dict
+        Per ``critical_mu`` target: ``mode``, ``partner`` (1-based CEA modes), ``frequency_hz`` (of the mode at
+        the first μ) and ``extrapolated`` (True when the pair stays stable over the sweep).
     """
 
     frequency: np.ndarray
     model_mode: list
     mac: list
     all_frequencies: np.ndarray
+    critical_mu: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    critical_detail: list = field(default_factory=list)
+
+
+def pair_critical_mu(ds, mode: int) -> tuple[float, dict]:
+    """The critical friction coefficient of the pair containing CEA mode ``mode`` (1-based).
+
+    The pair is the mode and its nearest mode in frequency at the first μ (a doublet's twin: which of the two
+    turns unstable depends on the arbitrary basis of a degenerate pair), plus the mode the CEA names as its
+    partner; the value is the smallest finite ``critical_mu`` among them. When the pair stays stable over the
+    sweep, it is extrapolated linearly from the last two sweep points of the larger real part of the mode and
+    its nearest mode (10 x the last μ when that real part does not grow), so that a fit started far from the
+    instability still sees a slope.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        :func:`fivid.fe.cea.complex_eigenvalue_analysis` output.
+    mode : int
+
+    Returns
+    -------
+    mu_c : float
+        [1].
+    detail : dict
+        ``mode``, ``partner`` (1-based, None if unknown), ``frequency_hz`` (the mode's frequency at the first
+        μ), ``extrapolated``.
+    """
+    n = ds.sizes["mode"]
+    if not 1 <= mode <= n:
+        raise ConfigError(f"critical_mu: CEA mode {mode} is not among the {n} modes reported; raise n_modes",
+                          key="critical_mu")
+    i = mode - 1
+    crit = ds["critical_mu"].values
+    f0 = ds["frequency"].values[0]
+    dist = np.abs(f0 - f0[i])
+    dist[i] = np.inf
+    near = int(np.argmin(dist)) if n > 1 else i  # its doublet twin / nearest mode
+    partner = int(ds["partner"].values[i])
+    pair = {i, near} | ({partner - 1} if partner > 0 else set())
+    finite = sorted((float(crit[k]), k) for k in pair if np.isfinite(crit[k]))
+    if finite:
+        value, k = finite[0]
+        other = int(ds["partner"].values[k]) if k != i else partner
+        detail = {"mode": mode, "partner": (k + 1) if k != i else (other if other > 0 else near + 1),
+                  "frequency_hz": float(f0[i]), "extrapolated": False}
+        return value, detail
+    detail = {"mode": mode, "partner": near + 1, "frequency_hz": float(f0[i]), "extrapolated": True}
+    mu = ds["mu"].values
+    re = np.maximum(ds["real_part"].values[:, i], ds["real_part"].values[:, near])
+    slope = (re[-1] - re[-2]) / (mu[-1] - mu[-2])
+    return (float(mu[-1] - re[-1] / slope) if slope > 0 else float(10 * mu[-1])), detail
 
 
 def is_damper_config(data) -> bool:
@@ -86,7 +146,7 @@ class FEModes:
         """Predictions for the config mapping ``data``."""
         model = load_model(data)
         ds = modal_analysis(model, self.n_modes, mass=self.targets.mass, include_contact=self.targets.contact,
-                            normal_load=self.targets.load)
+                            normal_load=self.targets.load, prestress=self.targets.prestress)
         freq = ds["frequency"].values
         elastic = np.flatnonzero(freq > 1e-6 * max(freq.max(), 1e-300))
         shapes = ds["mode_shape"].values
@@ -123,7 +183,22 @@ class FEModes:
             used.add(j)
             out_f.append(freq[j])
             out_mode.append(int(np.searchsorted(elastic, j)) + 1)
-        return Prediction(np.array(out_f), out_mode, out_mac, freq)
+        crit, detail = self.critical(model)
+        return Prediction(np.array(out_f), out_mode, out_mac, freq, crit, detail)
+
+    def critical(self, model) -> tuple[np.ndarray, list]:
+        """The ``critical_mu`` targets' predictions (:func:`pair_critical_mu`), one CEA per distinct μ sweep."""
+        out, detail, sweeps = [], [], {}
+        n_report = max([t.mode for t in self.targets.critical_mu], default=0) + 2
+        for t in self.targets.critical_mu:
+            k = tuple(t.mu)
+            if k not in sweeps:
+                sweeps[k] = complex_eigenvalue_analysis(model, t.mu, normal_load=self.targets.load,
+                                                        n_modes=max(20, n_report), prestress=self.targets.prestress)
+            value, d = pair_critical_mu(sweeps[k], t.mode)
+            out.append(value)
+            detail.append(d)
+        return np.array(out), detail
 
 
 class DamperPeaks:
@@ -142,6 +217,8 @@ class DamperPeaks:
                 raise targets.source.error(f"{t.key}.shape", "a damper model has one sensor: no shape to pair")
         if targets.count_below:
             raise targets.source.error(targets.count_below[0].key, "count_below is for FE models (modal analysis)")
+        if targets.critical_mu:
+            raise targets.source.error(targets.critical_mu[0].key, "critical_mu is for FE models with a contact (CEA)")
 
     def __call__(self, data) -> Prediction:
         """Predictions for the config mapping ``data``."""

@@ -10,6 +10,9 @@ Layout (quantities with units; relative file names are relative to the targets f
       - {frequency: 2410 Hz, tolerance: 5 Hz, shape: {file: MODES.nc, mode: 2, sensors: [acc_a, acc_b]}}
       - {frequency: 86 Hz, tolerance: 1 Hz, normal_load: 40 N}     # damper models: FRF peak at that load
     count_below: [{frequency: 5 kHz, count: 6}]    # optional: how many modes lie below a frequency
+    critical_mu:         # optional (FE models with a contact): CEA critical friction coefficient of a mode pair
+      - {value: 0.15, tolerance: 0.02, mode: 6, mu: [0, 1, 21]}
+    prestress: false     # optional: modes and CEA about the prestressed state (as 'fivid modes --prestress')
     load: 5 N            # optional: preloaded contact, as 'fivid modes --load'
     contact: false       # optional: couple the bodies at the contact (with load, or the model's pressure loads)
     n_modes: 12          # optional: modes computed (default: 2 x the targets, at least 10)
@@ -19,6 +22,11 @@ Pairing: a mode with ``shape`` is paired with the model mode of highest MAC betw
 (``mode`` of the MODES.nc written by ``fivid ema``, its measured DOFs in file order) and the model's shape at
 the model sensors listed (same order); a mode without is paired by order (the k-th such target with the
 k-th elastic model mode, or ``mode: N`` to name the model mode).
+
+A ``critical_mu`` target is the friction coefficient at which the pair containing CEA mode ``mode`` (numbered by
+frequency at the first ``mu``, as ``fivid cea`` numbers them) turns unstable: the smaller of the two modes'
+critical μ (:func:`fivid.fe.cea.complex_eigenvalue_analysis` over ``mu`` = [start, stop, steps], refined by root
+finding), with the model's contact preload (``load`` or its pressure loads).
 """
 
 from __future__ import annotations
@@ -33,9 +41,10 @@ from fivid.config_layer import ConfigSource, read_yaml
 from fivid.errors import FividError, UnitError
 from fivid.units import parse_quantity
 
-__all__ = ["ParameterSpec", "ModeTarget", "CountTarget", "Targets", "load_targets"]
+__all__ = ["ParameterSpec", "ModeTarget", "CountTarget", "CriticalMuTarget", "Targets", "load_targets"]
 
-_TOP = ("parameters", "modes", "count_below", "load", "contact", "n_modes", "mass")
+_TOP = ("parameters", "modes", "count_below", "critical_mu", "prestress", "load", "contact", "n_modes", "mass")
+_CRIT = ("value", "tolerance", "mode", "mu", "name")
 _PARAM = ("path", "bounds")
 _MODE = ("frequency", "tolerance", "shape", "mode", "normal_load", "name")
 _SHAPE = ("file", "mode", "sensors")
@@ -106,12 +115,37 @@ class CountTarget:
 
 
 @dataclass(frozen=True)
+class CriticalMuTarget:
+    """The critical friction coefficient of the CEA mode pair containing ``mode``.
+
+    Attributes
+    ----------
+    value, tolerance : float
+        Target critical μ and its tolerance (one standard deviation) [1].
+    mode : int
+        1-based CEA mode (by frequency at the first μ of the sweep).
+    mu : ndarray
+        The CEA's friction coefficients [1].
+    key, name : str
+    """
+
+    value: float
+    tolerance: float
+    mode: int
+    mu: np.ndarray
+    key: str
+    name: str
+
+
+@dataclass(frozen=True)
 class Targets:
     """A parsed targets file (see the module docstring)."""
 
     parameters: tuple
     modes: tuple
     count_below: tuple = ()
+    critical_mu: tuple = ()
+    prestress: bool = False
     load: float | None = None
     contact: bool = False
     n_modes: int | None = None
@@ -225,6 +259,11 @@ def load_targets(path) -> Targets:
         if not isinstance(c.get("count"), int) or c["count"] < 0:
             raise src.error(f"{key}.count", f"expected a number of modes >= 0, found {c.get('count')!r}")
         counts.append(CountTarget(_quantity(src, c.get("frequency"), f"{key}.frequency", "Hz"), c["count"], key))
+    crits = [_critical_mu(src, c, f"critical_mu[{i}]")
+             for i, c in enumerate(_list(src, data.get("critical_mu", []), "critical_mu"))]
+    prestress = data.get("prestress", False)
+    if not isinstance(prestress, bool):
+        raise src.error("prestress", f"expected true or false, found {prestress!r}")
     load = None if data.get("load") is None else _quantity(src, data["load"], "load", "N")
     contact = data.get("contact", False)
     if not isinstance(contact, bool):
@@ -235,5 +274,29 @@ def load_targets(path) -> Targets:
     mass = data.get("mass", "consistent")
     if mass not in ("consistent", "lumped"):
         raise src.error("mass", f"expected 'consistent' or 'lumped', found {mass!r}")
-    return Targets(tuple(params), tuple(modes), tuple(counts), load, bool(contact or load is not None),
-                   n_modes, mass, src)
+    return Targets(tuple(params), tuple(modes), tuple(counts), tuple(crits), prestress, load,
+                   bool(contact or load is not None or crits), n_modes, mass, src)
+
+
+def _critical_mu(src: ConfigSource, spec, key: str) -> CriticalMuTarget:
+    c = _mapping(src, spec, key, _CRIT, ("value", "tolerance", "mode", "mu"),
+                 "a critical_mu target needs value, tolerance, mode (the CEA mode) and mu [start, stop, steps]")
+    vals = {}
+    for k in ("value", "tolerance"):
+        v = c[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+            raise src.error(f"{key}.{k}", f"expected a friction coefficient > 0 (a bare number), found {v!r}")
+        vals[k] = float(v)
+    mode = c["mode"]
+    if not isinstance(mode, int) or isinstance(mode, bool) or mode < 1:
+        raise src.error(f"{key}.mode", f"expected a CEA mode number >= 1, found {mode!r}")
+    mu = c["mu"]
+    ok = (isinstance(mu, list) and len(mu) == 3 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                        for x in mu))
+    if not ok or not (0 <= mu[0] < mu[1] and isinstance(mu[2], int) and mu[2] >= 2):
+        raise src.error(f"{key}.mu", f"expected [start, stop, steps] with 0 <= start < stop and steps >= 2 "
+                                     f"(e.g. [0, 1, 21]), found {mu!r}")
+    if not mu[0] < vals["value"] < mu[1]:
+        raise src.error(f"{key}.value", f"the target {vals['value']:g} lies outside the sweep mu {mu!r}")
+    return CriticalMuTarget(vals["value"], vals["tolerance"], mode, np.linspace(mu[0], mu[1], mu[2]), key,
+                            str(c.get("name", key)))

@@ -131,13 +131,14 @@ def test_the_pair_record_is_written_and_read_by_its_named_columns():
     curve = FrictionCurve(mu_static_excess=0.15, stribeck_velocity=2e-3, viscous=0.5)
     law = NormalLaw("power", 3e9, 1.5, "given")
     circle = RigidSurface("circle", np.array([0.1, -0.2]), radius=0.05, side="inside", angular_velocity=3.0,
-                          start=0.01, ramp_time=0.02)
+                          start=0.01, ramp_time=0.02, expansion=-1e-4, expansion_start=1e-3, expansion_ramp_time=4e-3)
     row = kernel_row(law, curve, circle)
     assert row.shape == (L.NPAR,)
     expected = {L.LAW: L.LAW_POWER, L.LAW_COEFFICIENT: 3e9, L.LAW_EXPONENT: 1.5, L.MU_STATIC_EXCESS: 0.15,
                 L.STRIBECK_VELOCITY: 2e-3, L.VISCOUS: 0.5, L.MASTER: L.MASTER_CIRCLE, L.SURFACE_X: 0.1,
                 L.SURFACE_Y: -0.2, L.SURFACE_A: 0.05, L.SURFACE_B: -1.0, L.SURFACE_SX: 3.0, L.SURFACE_SY: 0.0,
-                L.SURFACE_START: 0.01, L.SURFACE_RAMP: 0.02}
+                L.SURFACE_START: 0.01, L.SURFACE_RAMP: 0.02, L.EXPANSION: -1e-4, L.EXPANSION_START: 1e-3,
+                L.EXPANSION_RAMP: 4e-3}
     assert sorted(expected) == list(range(L.NPAR))  # every column named once
     assert {c: row[c] for c in expected} == expected
     edge = kernel_row(NormalLaw(), FrictionCurve(), None)

@@ -110,6 +110,9 @@ DECISIONS: dict[str, Decision] = {
     "fivid study configs/studies/ring_mu_sweep.yaml -o out/ring": slow(
         "the full seed-002 study is 25 min on 2 workers (docs/studies.md); the slow test runs its --quick "
         "variant (README: about a minute)", run="fivid study configs/studies/ring_mu_sweep.yaml -o out/ring --quick"),
+    "fivid update configs/models/ring.yaml --targets configs/models/targets/ring_seed002.yaml -o ring-fitted.yaml "
+    "--json": slow("the seed-002 ring fit: about 20 model evaluations, each a prestressed modal analysis and a "
+                   "21-value CEA (8 min on a loaded 2-core machine)"),
     "{ command -v chromium >/dev/null && ldconfig -p | grep -q libudunits2 || { apt-get update -qq && apt-get "
     "install -y -qq chromium libudunits2-0; }; } && python -m pip install -q -e \".[all,test]\" -c constraints.txt "
     "&& python -m pytest -q": skip("apt-get (root, network), pip (network), and it runs this very test suite"),
@@ -133,6 +136,12 @@ DECISIONS: dict[str, Decision] = {
     # docs/roughness.md
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness --quick": slow(
         "4 rough-pair transients of 1.2 ms (under 2 min)"),
+    "fivid study configs/studies/roughness_paper.yaml -o out/rough-paper --quick": slow(
+        "6 points of the 12 x 2 mm cut (about a minute; tests/study/test_roughness_paper.py runs it too)"),
+    "fivid study configs/studies/roughness_paper_cut.yaml -o out/rough-cut": skip(
+        "30 points of the 12 x 2 mm cut, about 20 CPU-minutes (docs/roughness.md gives its measured results)"),
+    "fivid study configs/studies/roughness_paper.yaml -o out/rough-paper": skip(
+        "the 120 x 8 mm study: hours of CPU (docs/roughness.md, 'At the paper's scale: cost')"),
     "fivid study configs/studies/roughness_noise.yaml -o out/roughness": skip(
         "the full seed-003 study is 15-45 min for its 18 points on the shared 2 cores (docs/roughness.md); the "
         "--quick line above runs the same study in the slow test"),

@@ -37,16 +37,17 @@ RING = "configs/models/ring.yaml"
 #: signatures it starts) -> (base configs merged in order, keys dropped from the base, where the fragment goes:
 #: None for a top-level fragment, else a path of keys/indices). A base under configs/rigs/ is a rig profile.
 FRAGMENTS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple | None]] = {
-    "bodies: / ring:": ((RING,), ("springs", "sensors"), None),  # a quarter ring: the base's supports are off it
+    # a quarter ring: the base's supports are off it, and nothing holds it on the expanding cylinder
+    "bodies: / ring:": ((RING,), ("springs", "sensors", "contacts"), None),
     "bodies: / lower:": (("configs/models/triboair_rough.yaml",), (), None),
     "grading: {edge: top, ratio: 1.2}": ((COARSE,), (), ("bodies", "lower")),
     "{body: upper, edge: bottom, x: [90 mm, 100 mm]}": ((COARSE,), (), ("contacts", 0, "slave")),
-    "loads: / - {name: expansion, body: ring": ((COARSE, RING), ("springs", "sensors"), None),
+    "loads: / - {name: expansion, body: ring": ((COARSE, RING), ("springs", "sensors", "contacts"), None),
     "rigid:": ((RING,), (), ("contacts", 0)),
     "acceleration: / - {name:": (("configs/rigs/labdaq.yaml",), (), ("columns",)),
 }
 MODEL_KEYS = {"name", "description", "plane", "materials", "bodies", "damping", "contacts", "motions",
-              "point_masses", "springs", "sensors", "reactions", "loads"}
+              "point_masses", "springs", "sensors", "reactions", "loads", "prestress"}
 
 
 def yaml_examples() -> list[tuple[str, str]]:

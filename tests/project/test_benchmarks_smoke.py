@@ -28,11 +28,14 @@ POSITIVE = {
     "bench_modes.py": ["n_dofs", "modes_s", "lu_s", "cea_s", "full_order_point_s", "cea_speedup"],
     "bench_damping.py": ["rayleigh_wall_s", "band_limited_wall_s", "rayleigh_steps_per_s", "fast_speedup",
                          "fast_rms_ratio"],
-    "bench_rough.py": ["rough_dofs", "rough_dof_updates_per_s", "default_dof_updates_per_s", "rough_over_default"],
+    "bench_rough.py": ["rough_dofs", "rough_dof_updates_per_s", "default_dof_updates_per_s", "rough_over_default",
+                       "full_scale_slave_nodes", "full_scale_fraction_of_bare_stencil"],
     "bench_psd.py": ["samples", "speedup_vs_scipy_welch"],
     "bench_frf.py": ["hbm_frf_s", "arclength_points", "time_domain_s"],
     "bench_ingest.py": ["rows", "rows_per_s", "fivid_ingest_s", "pandas_pyarrow_s", "time_ratio_vs_pandas_pyarrow"],
     "bench_update.py": ["update_params", "update_evaluations", "update_s", "ema_s"],
+    "bench_prestress.py": ["ring_dofs", "rig_dofs", "steps", "step_s", "prestress_step_s", "steps_rig", "step_s_rig",
+                           "prestress_step_s_rig"],
 }
 #: values that are fixed by the benchmark's set-up
 EXACT = {
@@ -43,6 +46,7 @@ EXACT = {
     "bench_rough.py": {"benchmark": "rough", "quick": True},
     "bench_ingest.py": {"benchmark": "ingest", "rows": 300_000, "columns": 5},
     "bench_update.py": {"benchmark": "update", "quick": True, "update_converged": True},
+    "bench_prestress.py": {"benchmark": "prestress", "quick": True},
 }
 
 

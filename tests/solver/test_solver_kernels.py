@@ -37,7 +37,7 @@ def test_stencil_equals_assembled_stiffness(root, config):
 def test_mapped_block_uses_per_node_coefficients():
     st = block_stencils(load_model(cantilever(mapped=True)))
     # one mapped patch of all 17 x 4 nodes with per-node coefficients, nothing listed
-    assert st.blocks.tolist() == [[st.pad, 17, 4, 17, 2, 0]] and st.lst_idx.size == 0 and st.c_map.shape == (36, 68)
+    assert st.blocks.tolist() == [[st.pad, 17, 4, 17, 2, 0, 0, 0]] and st.lst_idx.size == 0 and st.c_map.shape == (36, 68)
     st = block_stencils(load_model(cantilever()))
     assert st.blocks.shape[0] == 5 and st.lst_idx.size == 4  # interior + 4 edges; corners listed
     # rectangles: the 13-term stencil in the interior; at an edge one element row is missing and the xy
@@ -191,3 +191,29 @@ def test_time_loop_with_pressure_equals_naive_numpy_central_difference():
     assert scale > 0
     assert np.abs(u - ur).max() <= n_int * n_sub * EPS * scale * 4
     np.testing.assert_allclose(rec[-1, K.R_WLOAD], wload, rtol=n_int * n_sub * EPS * 4)
+
+
+def test_rotated_ring_stencils_give_the_per_node_run(root, monkeypatch):
+    """The ring of ring_pressure.yaml (360 x 20, under pressure) run 1 ms with one stencil per radial layer in the
+    column frames (the default) and with per-node stencils: the same run to the stencils' agreement.
+
+    The rotated stencils differ from the per-node ones by at most ``eps_K = 36 SAME_STENCIL_RTOL`` relative to the
+    largest coefficient (test_fe_geometry); a relative stiffness change ``eps_K`` moves every mode's frequency by
+    at most ``eps_K / 2`` relative, so a response over ``t`` by at most ~``eps_K omega_max t`` relative
+    (``omega_max ~ 2 / dt``: the fastest mode's phase), 1e-6 here; a wrong rotation or row would be O(1) off."""
+    import functools
+
+    from fivid.solver import FrictionInput, OperatingCondition, OutputOptions, RunSchedule, simulate
+    from fivid.solver import stencil as S
+
+    model = load_model(root / "configs/models/ring_pressure.yaml")
+    assert block_stencils(model).blocks[:, 4].tolist() == [S.PATCH_ROTATED]
+    args = dict(schedule=RunSchedule(duration=1e-3, sample_rate=51200.0), output=OutputOptions(progress=False))
+    rotated = simulate(model, OperatingCondition(), FrictionInput(), **args)
+    monkeypatch.setattr(S, "block_stencils", functools.partial(S.block_stencils, rotated=False))
+    per_node = simulate(model, OperatingCondition(), FrictionInput(), **args)
+    t = float(per_node.time[-1])
+    eps = 36 * S.SAME_STENCIL_RTOL * (2.0 / per_node.attrs["time_step"]) * t
+    for name in ("acceleration", "sensor_velocity", "strain_energy", "kinetic_energy"):
+        a, b = rotated[name].values, per_node[name].values
+        assert np.abs(a - b).max() <= eps * np.abs(b).max(), name

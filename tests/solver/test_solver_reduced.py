@@ -48,7 +48,8 @@ def test_reduced_contact_correction_with_a_dense_inverse_mass_closes_the_gap(coa
     projected Gauss-Seidel drives the gap to zero with a compressive multiplier, and the correction it applied
     equals ``dt^2 W G^T lam`` (the kernel's own path, not jitted)."""
     from fivid.contact import kernel_row, kernel_tables
-    from fivid.solver._contact_kernels import contact_solve
+    from fivid.contact._layout_kernels import GEO_N0, GEO_N1, GEO_NX, GEO_NY, GEO_TX, GEO_TY, N_CNODE, N_GEO
+    from fivid.solver._contact_kernels import CANDIDATE_MARGIN, contact_solve
 
     rng = np.random.default_rng(1)
     nb = 3  # node 0 slave; master segment from node 2 (1, 0) to node 1 (0, 0): outward normal +y
@@ -62,18 +63,20 @@ def test_reduced_contact_correction_with_a_dense_inverse_mass_closes_the_gap(coa
     c = coarse.contacts[0]
     pair_par = np.array([kernel_row(c.law, c.friction, c.rigid)], dtype=float)
     lam = np.zeros((1, 2))
-    geo = np.zeros((1, 9))
+    geo = np.zeros((1, N_GEO))
     dt = 1e-3
     solve = getattr(contact_solve, "py_func", contact_solve)
     solve(X, u, v, nb, dt, dt, np.zeros(2 * nb), W, np.array([0]), np.array([0]), np.array([0, 2]),
           np.array([2, 1]), np.array([1.0]), pair_par, kernel_tables([c.law]), np.ones(1),
-          np.zeros(1, dtype=np.int64), geo, lam, np.zeros(1, dtype=np.int64), np.zeros(1), 200, 1e-16)
+          np.zeros(1, dtype=np.int64), geo, lam, np.zeros(1, dtype=np.int64), np.zeros(1), 200, 1e-16,
+          np.arange(nb), np.zeros((nb, N_CNODE)), CANDIDATE_MARGIN)
     gap = (X[nb] + u[nb]) - 0.5 * ((X[nb + 1] + u[nb + 1]) + (X[nb + 2] + u[nb + 2]))
     assert lam[0, 0] > 0.0
     assert abs(gap) < 1e-12
     f = np.zeros(2 * nb)
-    fx, fy = lam[0, 0] * geo[0, 2] + lam[0, 1] * geo[0, 4], lam[0, 0] * geo[0, 3] + lam[0, 1] * geo[0, 5]
-    for node, wgt in ((0, 1.0), (2, -geo[0, 0]), (1, -geo[0, 1])):
+    fx = lam[0, 0] * geo[0, GEO_NX] + lam[0, 1] * geo[0, GEO_TX]
+    fy = lam[0, 0] * geo[0, GEO_NY] + lam[0, 1] * geo[0, GEO_TY]
+    for node, wgt in ((0, 1.0), (2, -geo[0, GEO_N0]), (1, -geo[0, GEO_N1])):
         f[node] += wgt * fx
         f[node + nb] += wgt * fy
     np.testing.assert_allclose(u - u0, dt * dt * W @ f, rtol=1e-9, atol=1e-18)

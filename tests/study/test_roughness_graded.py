@@ -104,7 +104,7 @@ def test_flat_profiles_give_no_shocks_and_the_smooth_transducer_result():
     assert r["mean_normal_force"] == pytest.approx(1.0, rel=1e-3)  # the dead load
     assert abs(r["mean_friction_force"]) == pytest.approx(0.2 * r["mean_normal_force"], abs=1e-3)
     assert r["friction_coefficient"] == pytest.approx(0.2, abs=1e-3)
-    assert r["dissipated_power"] == pytest.approx(0.2 * r["mean_normal_force"] * 0.1, rel=0.01)
+    assert r["friction_power"] == pytest.approx(0.2 * r["mean_normal_force"] * 0.1, rel=0.01)
 
 
 def test_lv_grows_with_roughness_at_fixed_velocity():
@@ -182,7 +182,7 @@ def test_the_quick_roughness_study_writes_exponents_fits_and_its_report_section(
     for key in ("n", "m"):
         lo, hi = s[key]["ci"]
         assert lo < s[key]["value"] < hi
-    assert {"vibration_level_vs_rz_rsm", "shock_rate", "dissipated_power"} <= set(s["fits"])
+    assert {"vibration_level_vs_rz_rsm", "shock_rate", "friction_power"} <= set(s["fits"])
     assert all(p["shock_count"] >= 0 and np.isfinite(p["vibration_level"]) for p in s["points"])
     assert s["roughness_settings"]["profiles"]["rsm_levels"] == list(RSM_LEVELS)
     html = (tmp_path / "report.html").read_text()

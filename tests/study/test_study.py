@@ -287,6 +287,26 @@ def test_fe_load_sweep_with_a_law_and_its_coulomb_reference(tmp_path):
         assert p["perturbation_gain_db"] > 20, p
     ds = open_study(tmp_path / "out" / "study.nc")
     assert ds.sel(normal_load=5.0)["mode_frequency"].sizes["mode"] == 6
+    # the automatic path, as fivid simulate (issue 30): reduced within its 0.5 dB tolerance, recorded per point
+    assert list(ds["solver_path"].values) == ["reduced", "reduced"]
+    assert np.all(ds["reduced_error_estimate_db"].values <= 0.5)
+
+
+def test_study_points_take_the_automatic_path_unless_forced():
+    """points.transient.solver: auto (default) passes reduced='auto' with the tolerance; full/reduced force one; a
+    point refining the mesh or the time step studies the full model's discretisation (auto -> full)."""
+    from fivid.study.tasks import solver_choice
+
+    assert solver_choice({}, {"mu": 0.3}) == {"reduced": "auto", "reduced_tolerance": 0.5}
+    assert solver_choice({"reduced_tolerance": 0.2}, {}) == {"reduced": "auto", "reduced_tolerance": 0.2}
+    assert solver_choice({"solver": "full"}, {}) == {"reduced": None}
+    assert solver_choice({"solver": "reduced"}, {"mesh": 2.0}) == {"reduced": "reduced"}
+    assert solver_choice({}, {"mesh": 2.0}) == {"reduced": None}
+    assert solver_choice({}, {"time_step": 0.5}) == {"reduced": None}
+    study = load_study({"fivid-study": 1, "name": "s", "system": {"model": str(ROOT / "configs/models/triboair_coarse.yaml")},
+                        "sweep": {"mu": {"values": [0.3]}},
+                        "points": {"transient": {"duration": "0.1 s", "solver": "full", "reduced_tolerance": 1}}})
+    assert study.points["transient"]["solver"] == "full" and study.points["transient"]["reduced_tolerance"] == 1.0
 
 
 def test_observed_order_on_known_convergence():

@@ -126,7 +126,8 @@ def test_a_kind_missing_a_method_is_refused():
 
 @pytest.mark.parametrize("study, kind", [("hoffmann_mu_sweep", "hoffmann"), ("ring_mu_sweep", "ring"),
                                          ("weak_strong", "weak_strong"), ("convergence", "convergence"),
-                                         ("roughness_noise", "roughness")])
+                                         ("roughness_noise", "roughness"), ("roughness_paper", "roughness"),
+                                         ("roughness_paper_cut", "roughness")])
 def test_shipped_studies_name_their_kind_and_the_guess_agrees(study, kind):
     """Each shipped study says its kind; without the ``kind:`` line the registry's guess finds the same one."""
     import yaml

@@ -27,7 +27,8 @@ def register(subparsers) -> None:
     p.add_argument("--load", metavar="Q", type=quantity("N", positive=True),
                    help="normal load, e.g. '5 N' (a bare number is in N; the preload the contact is linearised "
                         "about); leave it "
-                        "out for a model pressed by its own pressure loads (e.g. configs/models/ring.yaml)")
+                        "out for a model pressed by its own pressure loads or an expanding rigid circle (e.g. "
+                        "configs/models/ring.yaml)")
     p.add_argument("--mu", nargs=3, required=True, metavar=("START", "STOP", "STEPS"),
                    help="friction coefficients: STEPS values from START to STOP inclusive")
     p.add_argument("-n", "--n-modes", type=int, default=20, metavar="N", help="modes reported (default 20)")
@@ -36,7 +37,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-damping", action="store_true", help="leave out Rayleigh damping and dashpots")
     p.add_argument("--prestress", action="store_true",
                    help="linearise about the prestressed state: add the initial-stress (geometric) stiffness of the "
-                        "preload's static state (fivid.fe.prestress)")
+                        "preload's static state (fivid.fe.prestress; on by default for a model with 'prestress: true')")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("-o", "--output", metavar="CEA.nc", help="write the sweep to netCDF")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output file")
@@ -64,6 +65,7 @@ def run(args) -> int:
     from fivid.fe import load_model
     from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
     from fivid.execution.resources import check_modal_memory
+    from fivid.fe.static import pressed_by_itself
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
     mu = _mu_grid(args.mu)
@@ -76,16 +78,17 @@ def run(args) -> int:
     load = None if args.load is None else float(args.load)
     check_modal_memory(args.model, args.basis or max(3 * args.n_modes, 40))  # before the mesh is built
     model = load_model(args.model)
-    if load is None and not model.loads:
+    if load is None and not pressed_by_itself(model):
         raise ConfigError("--load Q is needed (e.g. --load '5 N'): the contact is linearised about the nodes closed "
-                          "under that normal load (only a model pressed by its own pressure loads can go without)")
+                          "under that normal load (only a model pressed by its own pressure loads or an expanding "
+                          "rigid circle can go without)")
     from tqdm import tqdm
 
     # a bar on a terminal only (disable=None): scripted --json runs keep a clean stderr
     with tqdm(total=mu.size, desc="CEA mu sweep", unit="mu", disable=None, file=sys.stderr) as bar:
         ds = complex_eigenvalue_analysis(model, mu, normal_load=load, n_modes=args.n_modes, n_basis=args.basis,
                                          damping=not args.no_damping, progress=bar.update,
-                                         prestress=bool(args.prestress))
+                                         prestress=True if args.prestress else None)
     if args.output:
         write_netcdf(ds, args.output, overwrite=args.overwrite)
     result = cea_to_json(ds)

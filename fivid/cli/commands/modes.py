@@ -35,11 +35,12 @@ def register(subparsers) -> None:
                         "nodes closed under it (static preload solve; no friction)")
     p.add_argument("--contact", action="store_true",
                    help="couple the bodies at the contact: with --load, under that normal load; without, under the "
-                        "model's pressure loads (e.g. a ring squeezed on a shaft)")
+                        "model's own loading (pressure loads, an expanding rigid circle: e.g. the ring of seed 002)")
     p.add_argument("--prestress", action="store_true",
                    help="vibrations about the prestressed state: add the initial-stress (geometric) stiffness of the "
                         "static state (the contact preload with --load/--contact, else the pressure loads); "
-                        "tension stiffens, compression softens (fivid.fe.prestress)")
+                        "tension stiffens, compression softens (fivid.fe.prestress; on by default for a model with "
+                        "'prestress: true')")
     p.add_argument("--damping-curve", metavar="PNG",
                    help="plot the modal damping ratio vs frequency of the model's damping scheme (classic or "
                         "band-limited Rayleigh, docs/model-config.md) with the modes marked, to this PNG file")
@@ -52,6 +53,7 @@ def run(args) -> int:
     from fivid.fe import load_model
     from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
     from fivid.execution.resources import check_modal_memory
+    from fivid.fe.static import pressed_by_itself
     from fivid.storage import check_writable, dumps_json
 
     if args.n_modes < 1:
@@ -63,12 +65,13 @@ def run(args) -> int:
     load = None if args.load is None else float(args.load)
     check_modal_memory(args.model, args.n_modes)  # from the config's divisions, before the mesh is built
     model = load_model(args.model)
-    if args.contact and load is None and not model.loads:
+    if args.contact and load is None and not pressed_by_itself(model):
         raise ConfigError("--contact needs --load Q (e.g. --load '5 N'): the contact is linearised about the "
-                          "nodes closed under that normal load (or pressure loads in the model that press it)")
+                          "nodes closed under that normal load (or pressure loads or an expanding rigid circle in the "
+                          "model that press it)")
     include = load is not None or bool(args.contact)
     ds = modal_analysis(model, args.n_modes, mass=args.mass, include_contact=include, normal_load=load,
-                        prestress=bool(args.prestress))
+                        prestress=True if args.prestress else None)
     if args.output:
         write_modes(ds, args.output, overwrite=args.overwrite)
     summary = modes_to_json(ds)
@@ -83,7 +86,7 @@ def run(args) -> int:
     else:
         print(f"{model.describe()}; {ds.attrs['n_free_dofs']} free dofs; {args.mass} mass")
         if "contact" in summary:
-            what = f"{load:g} N" if load is not None else "the model's pressure loads"
+            what = f"{load:g} N" if load is not None else "the model's own loading"
             print(f"contact closed under {what} at {len(summary['closed_slave_nodes'])} slave node(s)")
             for c in summary["contact"]:
                 print(f"  {c['contact']}: {c['normal_law']}; normal force {c['normal_force_n']:.4g} N over "

@@ -1,13 +1,209 @@
 """The ring kind (``kind: ring``, seed 002): a ring's instability regimes over mu -- transients classified as
 stable, mode coupling or stick-slip, each beside the study-level CEA at the same mu (critical mu, the coalescing
-doublet, the CEA's growth rate and frequency)."""
+doublet, the CEA's growth rate and frequency) -- and, mode by mode, the transient against the CEA (the paper's
+Fig. 5) with the contact states along the bore (Fig. 8).
+
+Linearisation: the ring kind's CEA (study level and per point) is the prestressed one (``prestress=True``:
+:mod:`fivid.fe.prestress`), as the paper's ("a prestressing static analysis ... then the prestressed CEA").
+
+Per transient point, from probes at every contact (bore) node -- two sensors each, along the rigid circle's
+radius and its counter-clockwise tangent, added after the model's own sensors (the response stays the first):
+
+``mac_with_cea``
+    MAC between the CEA's most unstable mode at the point's mu (:func:`fivid.fe.cea.cea_mode_shapes`, at the
+    probes: radial and tangential components) and the transient's velocity field at the probes during growth.
+    The velocity field is real; the CEA mode complex (a travelling/standing mix): the field's complex amplitude at
+    its dominant frequency ``ods_frequency`` (Hann-weighted DFT of each probe's velocity over the growth window:
+    the analytic signal's phasor at that frequency) is compared with the complex MAC ``|phi^H v|^2 /
+    (|phi|^2 |v|^2)``, which takes the best phase (and scale) automatically. Growth window: the 1 ms before
+    ``onset_time`` (10 periods at 10 kHz); without an onset (stable, stick-slip) the record's last 1 ms.
+``contact_state(map_time, bore_angle)``
+    0 stick, 1 slip, 2 open at each bore node over the steady part (at most ``MAP_SAMPLES`` times): open where
+    the node's radial displacement exceeds the smallest one around the bore (the closed nodes' common radius: the
+    rigid core's) by more than ``OPEN_GAP``; stick where its tangential velocity is within ``STICK_SPEED`` of the
+    core's surface speed; else slip.
+``vibration_to_sliding_speed``
+    The bore's tangential vibration velocity amplitude in the last quarter (median over the nodes) over the core's
+    surface speed: near 1 when the limit cycle is bounded by local stick within each cycle (the vibration speed
+    catches up with the sliding speed), which sets the limit-cycle level to about ``2 pi f V``.
+``ods_shape_*``, ``cea_shape_*``, ``velocity_snapshot``
+    The two shapes (phase-aligned, unit largest component) and four radial-velocity snapshots a quarter period
+    apart at the end of the growth window, for the report's figures.
+"""
 
 from __future__ import annotations
 
-from fivid.report.html import table
-from fivid.study.kinds.sweep import FeSweep
+import numpy as np
 
-__all__ = ["RingRegimes", "KIND"]
+from fivid.fe.cea import cea_mode_shapes, complex_eigenvalue_analysis
+from fivid.fe.modal import modal_analysis
+from fivid.report.html import figure_data_uri, table
+from fivid.study.kinds.sweep import FeSweep
+from fivid.study.tasks import TRANSIENT_KEYS, fe_point, refined_model
+
+__all__ = ["RingRegimes", "KIND", "bore_probes", "MAP_SAMPLES", "OPEN_GAP", "STICK_SPEED", "COUNT_BELOW_HZ"]
+
+#: time columns of a contact-state map
+MAP_SAMPLES = 400
+#: radial gap above the core's radius from which a bore node is open [m] (the rigid law closes to ~1e-13 m)
+OPEN_GAP = 1e-9
+#: a bore node sticks while its tangential velocity is within this share of the core's surface speed
+STICK_SPEED = 0.05
+#: the frequency below which the preloaded ring's eigenvalues are counted (seed 002, Fig. 2) [Hz]
+COUNT_BELOW_HZ = 15e3
+_WINDOW = 1e-3  # growth window [s]
+
+
+def bore_probes(model) -> list[dict]:
+    """Sensor entries (model-config form) at every slave node of the model's first contact, whose master is a
+    rigid circle: ``bore_r###`` along the radius, ``bore_t###`` along the counter-clockwise tangent."""
+    c = model.contacts[0]
+    if c.rigid is None or c.rigid.kind != "circle":
+        from fivid.errors import ConfigError
+
+        raise ConfigError("the ring kind probes the bore of a rigid circle contact: the model's first contact "
+                          f"{c.name!r} has no rigid circle master", key="contacts[0].rigid")
+    out = []
+    for k, n in enumerate(c.slave_nodes):
+        x, y = model.coords[n]
+        th = np.arctan2(y - c.rigid.point[1], x - c.rigid.point[0])
+        at = [f"{float(x)!r} m", f"{float(y)!r} m"]
+        out.append({"name": f"bore_r{k:03d}", "body": c.slave_block, "at": at,
+                    "direction": [float(np.cos(th)), float(np.sin(th))]})
+        out.append({"name": f"bore_t{k:03d}", "body": c.slave_block, "at": at,
+                    "direction": [float(-np.sin(th)), float(np.cos(th))]})
+    return out
+
+
+def _window(t, data) -> np.ndarray:
+    onset = float(data["onset_time"][1]) if "onset_time" in data else float("nan")
+    end = onset if np.isfinite(onset) else t[-1]
+    return (t >= end - _WINDOW) & (t <= end)
+
+
+def _phasors(v, fs: float, lo: float = 1e3, hi: float = 25e3):
+    """Dominant frequency of the (time, probe) field ``v`` (Hann, zero-padded x8 DFT, summed power in [lo, hi])
+    and each probe's complex amplitude there."""
+    w = np.hanning(v.shape[0])[:, None]
+    n = 8 * v.shape[0]
+    spec = np.fft.rfft((v - v.mean(axis=0)) * w, n=n, axis=0)
+    f = np.fft.rfftfreq(n, 1.0 / fs)
+    band = (f >= lo) & (f <= min(hi, 0.45 * fs))
+    k = np.flatnonzero(band)[np.argmax(np.sum(np.abs(spec[band]) ** 2, axis=1))]
+    return float(f[k]), spec[k]
+
+
+def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = True) -> None:
+    """The per-point variables of the module docstring, into ``data``/``coords``."""
+    c = model.contacts[0]
+    names = list(run["sensor"].values)
+    r_idx = [names.index(s) for s in names if s.startswith("bore_r")]
+    t_idx = [names.index(s) for s in names if s.startswith("bore_t")]
+    t = run["time"].values
+    fs = 1.0 / float(np.median(np.diff(t)))
+    vel = run["sensor_velocity"].values
+    disp = run["sensor_displacement"].values
+    xy = model.coords[c.slave_nodes] - c.rigid.point
+    angle = np.degrees(np.arctan2(xy[:, 1], xy[:, 0])) % 360.0
+    coords["bore_angle"] = ("bore_angle", angle, {"units": "degree", "long_name": "angle of the bore node"})
+    coords["component"] = ("component", np.array(["radial", "tangential"], dtype=object))
+    # contact states over the steady part
+    step = max(1, t.size // MAP_SAMPLES)
+    sel = slice(0, step * (t.size // step), step)
+    ur = disp[sel][:, r_idx]
+    vt = vel[sel][:, t_idx]
+    speed = abs(c.rigid.angular_velocity * c.rigid.radius)
+    state = np.where(np.abs(vt - c.rigid.angular_velocity * c.rigid.radius) <= STICK_SPEED * speed, 0, 1)
+    state = np.where(ur - ur.min(axis=1, keepdims=True) > OPEN_GAP, 2, state).astype(np.int8)
+    coords["map_time"] = ("map_time", t[sel] - t[0], {"units": "s", "long_name": "time since the steady part began"})
+    data["contact_state"] = (("map_time", "bore_angle"), state, {
+        "long_name": "contact state of the bore node", "flag_values": "0 1 2", "flag_meanings": "stick slip open"})
+    # what bounds the limit cycle: the bore's tangential vibration speed against the core's surface speed (once it
+    # reaches it, the nodes stick within each cycle and friction stops feeding the mode)
+    tail = vel[3 * t.size // 4:][:, t_idx]
+    amp = np.max(np.abs(tail - tail.mean(axis=0)), axis=0)
+    data["vibration_to_sliding_speed"] = ((), float(np.median(amp) / speed), {
+        "units": "1", "long_name": "median over the bore of the tangential vibration velocity amplitude (last "
+                                   "quarter) over the core's surface speed"})
+    # transient velocity field during growth against the CEA's most unstable mode at this mu
+    win = _window(t, data)
+    field = np.concatenate([vel[win][:, r_idx], vel[win][:, t_idx]], axis=1)
+    f_ods, ods = _phasors(field, fs)
+    lam, shapes = cea_mode_shapes(model, float(conditions["mu"]), prestress=prestress)
+    k = int(np.argmax(lam.real))
+    rad = np.stack([np.cos(np.radians(angle)), np.sin(np.radians(angle))], axis=1)
+    tan = np.stack([-rad[:, 1], rad[:, 0]], axis=1)
+    sh = shapes[k][c.slave_nodes]
+    phi = np.concatenate([np.sum(sh * rad, axis=1), np.sum(sh * tan, axis=1)])
+    mac = abs(np.vdot(phi, ods)) ** 2 / np.real(np.vdot(phi, phi) * np.vdot(ods, ods))
+    data["mac_with_cea"] = ((), float(mac), {"units": "1", "long_name": "MAC of the CEA's most unstable mode "
+                                                "and the transient's bore velocity field during growth"})
+    data["ods_frequency"] = ((), f_ods, {"units": "Hz", "long_name": "dominant frequency of the bore velocity "
+                                                                      "field in the growth window"})
+    data["cea_mode_frequency"] = ((), float(lam[k].imag / (2 * np.pi)), {
+        "units": "Hz", "long_name": "frequency of the CEA's most unstable mode at this mu"})
+    phi = phi * np.exp(-1j * np.angle(np.vdot(ods, phi)))  # phase-aligned with the field
+    for name, z in (("ods", ods), ("cea", phi)):
+        z = z / np.max(np.abs(z))
+        for part, v in (("real", z.real), ("imag", z.imag)):
+            data[f"{name}_shape_{part}"] = (("bore_angle", "component"), v.reshape(2, -1).T, {
+                "units": "1", "long_name": f"{name.upper()} shape at the bore ({part} part), unit largest"})
+    period = int(round(fs / f_ods)) if f_ods > 0 else 4
+    idx = np.flatnonzero(win)[-1] - np.arange(4)[::-1] * max(1, period // 4)
+    coords["snapshot"] = ("snapshot", t[idx] - t[0], {"units": "s", "long_name": "snapshot time"})
+    data["velocity_snapshot"] = (("snapshot", "bore_angle"), vel[idx][:, r_idx], {
+        "units": "m s-1", "long_name": "radial velocity of the bore nodes"})
+
+
+def _state_map_figure(ds, summary) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
+    pts = [i for i, p in enumerate(summary["points"]) if "mu" in p]
+    fig, axes = plt.subplots(1, len(pts), figsize=(4 * len(pts), 3.6), layout="constrained", squeeze=False)
+    cmap = ListedColormap(["#1f77b4", "#ffbf00", "#d62728"])
+    for ax, i in zip(axes[0], pts):
+        st = ds["contact_state"].isel(point=i)
+        order = np.argsort(ds["bore_angle"].values)
+        im = ax.pcolormesh(ds["map_time"].values * 1e3, ds["bore_angle"].values[order], st.values[:, order].T,
+                           cmap=cmap, vmin=-0.5, vmax=2.5, shading="nearest")
+        ax.set_title(f"μ = {summary['points'][i]['mu']:g}")
+        ax.set_xlabel("time in steady part [ms]")
+        ax.set_ylabel("bore angle [°]")
+    cb = fig.colorbar(im, ax=axes[0, -1], ticks=[0, 1, 2])
+    cb.ax.set_yticklabels(["stick", "slip", "open"])
+    return figure_data_uri(fig)
+
+
+def _shape_figure(ds, summary) -> str:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    pts = [i for i, p in enumerate(summary["points"]) if "mu" in p]
+    fig, axes = plt.subplots(2, len(pts), figsize=(4 * len(pts), 5.5), layout="constrained", squeeze=False)
+    order = np.argsort(ds["bore_angle"].values)
+    ang = ds["bore_angle"].values[order]
+    for j, i in enumerate(pts):
+        p = summary["points"][i]
+        ax = axes[0, j]
+        for name, style in (("ods", "-"), ("cea", "--")):
+            ax.plot(ang, ds[f"{name}_shape_real"].isel(point=i, component=0).values[order], style,
+                    label=f"{'transient' if name == 'ods' else 'CEA'} (radial, real)")
+        ax.set_title(f"μ = {p['mu']:g}: MAC {p.get('mac_with_cea', float('nan')):.2f}")
+        ax.set_xlabel("bore angle [°]")
+        ax.legend(fontsize=7)
+        ax = axes[1, j]
+        snaps = ds["velocity_snapshot"].isel(point=i).values
+        for s in range(snaps.shape[0]):
+            ax.plot(ang, 1e3 * snaps[s][order], lw=1, label=f"t{s}")
+        ax.set_xlabel("bore angle [°]")
+        ax.set_ylabel("radial velocity [mm/s]")
+    return figure_data_uri(fig)
 
 
 class RingRegimes(FeSweep):
@@ -15,20 +211,64 @@ class RingRegimes(FeSweep):
 
     name = "ring"
     description = "instability regimes over mu (seed 002): transients classified and compared with the CEA"
+    point_keys = FeSweep.point_keys + (("mac_with_cea", "mac_with_cea"), ("ods_frequency", "ods_frequency"),
+                                       ("cea_mode_frequency", "cea_mode_frequency"), ("amplitude", "amplitude"),
+                                       ("vibration_to_sliding_speed", "vibration_to_sliding_speed"))
 
     def guess(self, data: dict) -> bool:
         """An FE study with a CEA and transients."""
         return bool(data.get("cea")) and "transient" in (data.get("points") or {})
 
+    def evaluate(self, system: dict, tasks: dict, conditions: dict):
+        """:func:`fivid.study.tasks.fe_point` with bore probes and the mode-by-mode comparison (module docstring)."""
+        if "transient" not in tasks or "mu" not in conditions:
+            return fe_point(system, tasks, conditions)
+        return fe_point(system, tasks, conditions, probes=bore_probes, run_analysis=_bore_analysis)
+
+    def cea(self, study, mu) -> dict:
+        """The prestressed CEA (the paper's) on the swept mesh."""
+        meshes = np.unique(study.axes.get("mesh", [1.0]))
+        model = refined_model(study.model_path, float(meshes[0]))
+        ds = complex_eigenvalue_analysis(model, mu, normal_load=study.cea.get("normal_load"), n_modes=30,
+                                         prestress=True)
+        lam = ds["real_part"].transpose("mu", "mode").values + 2j * np.pi * ds["frequency"].transpose("mu", "mode").values
+        p = ds["partner"].values
+        return {"eigenvalues": lam, "critical_mu": ds["critical_mu"].values, "partner": np.where(p > 0, p - 1, -1)}
+
+    def summarise(self, study, ds, points: list[dict]) -> dict:
+        """``eigenvalues_below_15khz``: the preloaded, prestressed ring's modes below 15 kHz (seed 002, Fig. 2;
+        :func:`fivid.fe.modal.modal_analysis` on the swept mesh), with their frequencies."""
+        meshes = np.unique(study.axes.get("mesh", [1.0]))
+        model = refined_model(study.model_path, float(meshes[0]))
+        f = modal_analysis(model, 40, include_contact=True, normal_load=study.cea.get("normal_load") if study.cea
+                           else None, prestress=True)["frequency"].values
+        f = f[f > 1e-6 * f.max()]
+        return {"eigenvalues_below_15khz": int(np.sum(f < COUNT_BELOW_HZ)),
+                "modal_frequencies_hz": [float(x) for x in f[f < 1.2 * COUNT_BELOW_HZ]]}
+
     def report(self, page, ds, summary: dict) -> None:
-        """Each transient's regime and growth rate beside the CEA's at the same mu."""
+        """Each transient's regime, frequency and MAC beside the CEA's at the same mu; contact-state maps and
+        velocity snapshots."""
         rows = [[p.get("mu"), p.get("regime"), p.get("growth_rate"), p.get("cea_growth_rate"), p.get("frequency"),
-                 p.get("cea_frequency")] for p in summary["points"] if "regime" in p and "mu" in p]
+                 p.get("cea_frequency"), p.get("ods_frequency"), p.get("mac_with_cea"), p.get("amplitude"),
+                 p.get("vibration_to_sliding_speed")]
+                for p in summary["points"] if "regime" in p and "mu" in p]
         if not rows:
             return
         page.heading("Transients against the CEA", level=3)
+        page.paragraph(f"Eigenvalues of the preloaded ring below 15 kHz: {summary.get('eigenvalues_below_15khz')} "
+                       "(seed 002: 20).")
         page.raw(table(["mu", "regime", "growth rate [1/s]", "CEA growth rate [1/s]", "frequency [Hz]",
-                        "CEA frequency [Hz]"], rows))
+                        "CEA frequency [Hz]", "growth-window frequency [Hz]", "MAC with CEA",
+                        "limit-cycle RMS [m/s²]", "vibration / sliding speed"], rows))
+        if "contact_state" in ds:
+            page.figure(_state_map_figure(ds, summary), "Contact state along the bore (stick / slip / open) against "
+                        "time, per μ (seed 002, Fig. 8).", "contact states")
+        if "ods_shape_real" in ds:
+            page.figure(_shape_figure(ds, summary), "Top: the transient's bore velocity field at its growth-window "
+                        "frequency against the CEA's most unstable mode (phase-aligned; seed 002, Fig. 5). Bottom: "
+                        "radial velocity snapshots a quarter period apart at the end of the growth window.",
+                        "velocity field")
 
 
 #: the registered instance

@@ -7,7 +7,7 @@ Its section is ``points.roughness`` (:class:`RoughnessSettings`); the point's re
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field
 
@@ -20,10 +20,12 @@ from fivid.study.roughness_report import roughness_section
 __all__ = ["RoughnessSettings", "RoughnessNoise", "KIND", "ROUGHNESS_KEYS"]
 
 #: per-point results of a roughness-noise point copied into summary.json
-ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impulse", "shock_count", "dissipated_power",
+ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impulse", "shock_count", "shock_energy",
+                  "friction_power", "vibratory_power", "impact_power",
                   "mean_normal_force", "mean_friction_force", "open_fraction", "friction_coefficient",
                   "friction_coefficient_rms", "profile_rsm_target", "profile_Ra", "profile_Rq",
-                  "profile_Rz", "profile_Rsm", "simulation_seconds", "dof_updates_per_second", "n_dof", "time_step")
+                  "profile_Rz", "profile_Rsm", "simulation_seconds", "simulation_cpu_seconds", "mesh_step",
+                  "dof_updates_per_second", "n_dof", "time_step")
 
 
 class RoughnessSettings(ConfigModel):
@@ -37,13 +39,22 @@ class RoughnessSettings(ConfigModel):
     gs_tolerance: Annotated[Number, Field(gt=0, lt=1)] = None
     gs_max_iterations: Annotated[int, Field(ge=1)] = None
     settle_time: Quantity("s", positive=True, bare_is_si=True) = None
+    surfaces: Literal["rsm_levels", "table1", "measured"] = Field(
+        None, description="rsm_levels: Gaussian profiles at the replicate's Rsm level; table1: seed 003's Table 1 "
+                          "surface of the point's Ra; measured: profile_files")
+    nodes_per_rsm: Annotated[int, Field(ge=2)] = Field(None, description="re-divide the blocks at Rsm / this")
+    sensor_spacing: Quantity("m", positive=True, bare_is_si=True) = None
+    seat: bool = Field(None, description="start the upper block seated on its two supporting asperities")
+    profile_files: Annotated[list[str], Field(min_length=2, max_length=2, description="lower, upper profile files "
+                                                                                       "(surfaces: measured)")] = None
 
 
 class RoughnessNoise(FeSweep):
     """Roughness noise of a rough pair (:class:`fivid.study.kind.StudyKind`)."""
 
     name = "roughness"
-    description = "roughness noise of a rough sliding pair (seed 003): Lv, shocks, friction power, their power laws"
+    description = ("roughness noise of a rough sliding pair (seed 003): Lv, shocks, vibratory and friction power, "
+                   "their power laws")
     section = ("points", "roughness")
     config = RoughnessSettings
     point_keys = tuple((k, k) for k in ROUGHNESS_KEYS)
