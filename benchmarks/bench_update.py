@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 from fivid.ema import identify_modes  # noqa: E402
 from fivid.fe.modal import modal_analysis  # noqa: E402
-from fivid.fe.model import load_model  # noqa: E402
+from fivid.fe.build import load_model  # noqa: E402
 from fivid.updating import load_targets, update_model  # noqa: E402
 from fivid.updating.paths import replace_values  # noqa: E402
 from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)

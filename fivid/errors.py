@@ -16,6 +16,7 @@ __all__ = [
     "DataQualityError",
     "UnitError",
     "OutputExistsError",
+    "SimulationDiverged",
     "Interrupted",
     "exit_status",
 ]
@@ -98,6 +99,10 @@ class UnitError(FividError):
 
 class OutputExistsError(FividError):
     """An output file exists and overwriting was not asked for."""
+
+
+class SimulationDiverged(FividError):
+    """The explicit run produced NaN or a runaway energy; the message names the step, time and node."""
 
 
 class Interrupted(KeyboardInterrupt):

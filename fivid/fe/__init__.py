@@ -14,6 +14,7 @@ from fivid.fe.assembly import (
     stiffness_matrix,
 )
 from fivid.fe.damping import RayleighFit, fit_rayleigh_least_squares, rayleigh_through_two_ratios
+from fivid.fe.build import load_model
 from fivid.fe.cea import cea_to_json, complex_eigenvalue_analysis
 from fivid.fe.contact import linearise_contact, linearise_preloaded_contact
 from fivid.fe.loads import external_load_vector, pressure_forces, static_response
@@ -29,7 +30,6 @@ from fivid.fe.model import (
     Reaction,
     Sensor,
     Spring,
-    load_model,
 )
 from fivid.fe.prestress import buckling_load_factors, geometric_stiffness_matrix
 from fivid.fe.static import preload_state

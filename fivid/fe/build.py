@@ -10,12 +10,15 @@ config layer's one error format (file, line, key path, value, what is allowed).
 from __future__ import annotations
 
 import math
+import os
 from os import PathLike
+from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 
 import fivid.fe.model as fm
+from fivid.builtin import builtin_names, find_builtin
 from fivid.config_layer import ConfigSource, validate
 from fivid.contact.config import normal_law, rigid_surface
 from fivid.errors import ConfigError
@@ -24,7 +27,7 @@ from fivid.fe.damping import rayleigh_through_two_ratios
 from fivid.fe.geometry import block_coords
 from fivid.fe.static import resolve_expansions
 
-__all__ = ["build_model"]
+__all__ = ["build_model", "load_model"]
 
 
 def build_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
@@ -199,3 +202,29 @@ def _damping(ctx, spec: DampingConfig | None) -> tuple[float, float, float]:
         raise ctx.error("damping.ratios", f"these ratios need a negative Rayleigh coefficient (alpha {alpha:.4g} "
                                           f"s-1, beta {beta:.4g} s): no Rayleigh curve passes through both points")
     return alpha, beta, spec.cutoff
+
+
+def load_model(source: str | PathLike | Mapping[str, Any]) -> fm.Model:
+    """Build a :class:`~fivid.fe.model.Model` from a YAML config file (path) or an already-parsed mapping.
+
+    The configuration format is documented in ``docs/model-config.md``. Every problem raises
+    :class:`~fivid.errors.ConfigError` naming the file, line and key path (``bodies.upper.material.nu``),
+    the value given and what is allowed.
+
+    A name without a folder or suffix (``"triboair_coarse"``) that is not a file is one of the example
+    models shipped with fivid (``configs/models/``, installed with the package: :mod:`fivid.builtin`).
+    """
+    return build_model(_resolve_model_name(source))
+
+
+def _resolve_model_name(source):
+    """``source`` unchanged, or the built-in model file when it is the name of one and not an existing file."""
+    if isinstance(source, (str, os.PathLike)) and not Path(source).exists():
+        found = find_builtin("models", str(source))
+        if found is not None:
+            return found
+        text = str(source)
+        if not any(c in text for c in "/\\") and not text.endswith((".yaml", ".yml")):  # meant as a name
+            raise ConfigError(f"no model file or built-in model named {text!r}; built-in models: "
+                              f"{', '.join(builtin_names('models')) or '(none)'}; or give the path of a YAML file")
+    return source

@@ -1,6 +1,6 @@
 """The finite-element model of a rig: structured Q4 blocks, constraints, discrete elements, contact, sensors.
 
-A :class:`Model` is built from a YAML configuration by :func:`load_model` (validation in
+A :class:`Model` is built from a YAML configuration by :func:`fivid.fe.build.load_model` (validation in
 :mod:`fivid.fe.config`) and is plain data: numpy arrays and frozen dataclasses, no behaviour beyond
 index arithmetic. Assembly (:mod:`fivid.fe.assembly`), modal analysis (:mod:`fivid.fe.modal`), CEA
 (:mod:`fivid.fe.cea`) and the explicit solver (:mod:`fivid.solver`) read it.
@@ -38,8 +38,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from os import PathLike
-from typing import Any, Mapping
 
 import numpy as np
 
@@ -57,7 +55,6 @@ __all__ = [
     "PressureLoad",
     "Reaction",
     "Model",
-    "load_model",
 ]
 
 EDGES = ("bottom", "right", "top", "left")
@@ -521,36 +518,3 @@ class Model:
         parts = [f"{b.name} {b.nx}x{b.ny}" for b in self.blocks]
         return f"{len(self.blocks)} bodies ({', '.join(parts)}), {self.n_nodes} nodes, {self.n_dofs} dofs, plane {self.plane}"
 
-
-def load_model(source: str | PathLike | Mapping[str, Any]) -> Model:
-    """Build a :class:`Model` from a YAML config file (path) or an already-parsed mapping.
-
-    The configuration format is documented in ``docs/model-config.md``. Every problem raises
-    :class:`~fivid.errors.ConfigError` naming the file, line and key path (``bodies.upper.material.nu``),
-    the value given and what is allowed.
-
-    A name without a folder or suffix (``"triboair_coarse"``) that is not a file is one of the example
-    models shipped with fivid (``configs/models/``, installed with the package: :mod:`fivid.builtin`).
-    """
-    from fivid.fe.build import build_model
-
-    return build_model(_resolve_model_name(source))
-
-
-def _resolve_model_name(source):
-    """``source`` unchanged, or the built-in model file when it is the name of one and not an existing file."""
-    import os
-    from pathlib import Path
-
-    from fivid.builtin import builtin_names, find_builtin
-    from fivid.errors import ConfigError
-
-    if isinstance(source, (str, os.PathLike)) and not Path(source).exists():
-        found = find_builtin("models", str(source))
-        if found is not None:
-            return found
-        text = str(source)
-        if not any(c in text for c in "/\\") and not text.endswith((".yaml", ".yml")):  # meant as a name
-            raise ConfigError(f"no model file or built-in model named {text!r}; built-in models: "
-                              f"{', '.join(builtin_names('models')) or '(none)'}; or give the path of a YAML file")
-    return source

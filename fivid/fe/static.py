@@ -89,7 +89,7 @@ class ContactGeometry:
 
 def contact_geometry(model, u=None) -> ContactGeometry:
     """Project every slave node onto its master edge or rigid surface (in ``coords + u``; ``u`` global, optional)."""
-    from fivid.fe.contact import slave_areas
+    from fivid.fe.contact_nodes import slave_areas
 
     x = model.coords if u is None else model.coords + np.asarray(u).reshape(-1, 2)
     nodes, pairs, segs, xis, normals, gaps, ends, vts = [], [], [], [], [], [], [], []
@@ -187,7 +187,7 @@ class Preload:
         """Per pair: resultant normal force [N], contact length [m], peak and mean pressure [Pa], normal
         stiffness [N m-1] (the tangent of a compliant law summed over the closed nodes; for the rigid law the
         modal penalty ``normal_stiffness x area``), closed nodes."""
-        from fivid.fe.contact import node_stiffness
+        from fivid.fe.contact_nodes import node_stiffness
 
         out = []
         geo = self.geometry

@@ -419,8 +419,8 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
 
 
 def _check_simulation_size(cfg: RunConfig, model) -> None:
-    """Refuse, at plan time, a simulate stage whose runs cannot fit in memory or time (fivid.pipeline.resources)."""
-    from fivid.pipeline.resources import check_simulation_memory, simulation_memory
+    """Refuse, at plan time, a simulate stage whose runs cannot fit in memory or time (fivid.execution.resources)."""
+    from fivid.execution.resources import check_simulation_memory, simulation_memory
 
     try:
         size = simulation_memory(model, duration=cfg.duration, sample_rate=cfg.sample_rate)

@@ -1,7 +1,7 @@
 """Run a Monte-Carlo over a friction law's uncertainty on dask → the PSD envelope (issue 16 item 3).
 
 The samples (:func:`fivid.identify.montecarlo.monte_carlo_laws`) are simulated with
-:func:`fivid.identify.montecarlo.sample_spectrum` as tasks of :func:`fivid.pipeline.sweep.map_tasks`
+:func:`fivid.identify.montecarlo.sample_spectrum` as tasks of :func:`fivid.execution.cluster.map_tasks`
 (the LocalCluster or the scheduler of the sweeps and studies), or in this process with ``workers=0``;
 their PSDs become the envelope (:func:`fivid.score.envelope.envelope_dataset`). The result does not
 depend on the number of workers nor on the order in which the samples finish.
@@ -87,7 +87,7 @@ def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSche
                           f"{n_steady} samples, fewer than one Welch segment (nperseg {int(nperseg)}); lengthen the "
                           "duration or lower nperseg", key="nperseg")
     if scheduler is not None:
-        from fivid.pipeline.sweep import check_scheduler_address
+        from fivid.execution.cluster import check_scheduler_address
 
         check_scheduler_address(scheduler)
     draws = monte_carlo_laws(law, samples, seed)
@@ -104,7 +104,7 @@ def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSche
                 results[name] = sample_spectrum(*args)
                 bar.update(1)
         else:
-            from fivid.pipeline.sweep import map_tasks
+            from fivid.execution.cluster import map_tasks
 
             for name, out, seconds, pid in map_tasks(sample_spectrum, items, workers=max(int(workers), 1),
                                                      scheduler=scheduler):

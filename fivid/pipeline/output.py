@@ -20,7 +20,7 @@ from pathlib import Path
 
 from fivid import __version__
 from fivid.errors import FividError
-from fivid.pipeline.lock import LOCK_NAME
+from fivid.execution.lock import LOCK_NAME
 from fivid.storage import write_json
 
 __all__ = ["MANIFEST_NAME", "check_output_folder", "check_inside", "write_output_manifest",

@@ -26,7 +26,7 @@ from fivid import __version__
 from fivid.errors import FividError, Interrupted, exit_status
 from fivid.pipeline.cache import Task, TaskCache
 from fivid.pipeline.config import Plan
-from fivid.pipeline.lock import OutputLock
+from fivid.execution.lock import OutputLock
 from fivid.pipeline.output import (check_inside, check_output_folder, remove_stale_temporaries,
                                    write_output_manifest)
 from fivid.storage import check_folder_writable, write_json
@@ -214,7 +214,7 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         The content of ``summary.json`` (empty for a dry run).
     """
     if scheduler is not None:  # before any work: a bad address used to fail after three stages
-        from fivid.pipeline.sweep import check_scheduler_address
+        from fivid.execution.cluster import check_scheduler_address
 
         check_scheduler_address(scheduler)
     out = plan.config.output

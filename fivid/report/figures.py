@@ -8,25 +8,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from fivid.report.html import figure_data_uri
+from fivid.report.html import figure_data_uri, new_figure
 
 __all__ = ["law_shape_figure", "amplitude_figure", "psd_overlay_figure", "psd_envelope_figure", "modal_figure",
            "psd_axis_limits", "PSD_DYNAMIC_RANGE_DB"]
 
 
-def _figure(width: float = 7.0, height: float = 4.0):
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(width, height), layout="constrained")
-    return fig, ax
-
-
 def law_shape_figure(frequency, shape, band) -> str:
     """Normalised perturbation spectrum s(f) [Hz-1] (∫ s df = 1) on log axes, valid band shaded."""
-    fig, ax = _figure()
+    fig, ax = new_figure()
     ax.loglog(frequency, shape, color="C0", lw=1.5, label="identified shape s(f)")
     ax.axvspan(band[0], band[1], color="C2", alpha=0.08, label="valid band")
     ax.set_xlabel("frequency [Hz]")
@@ -46,7 +36,7 @@ def amplitude_figure(curves: list[dict], points: list[dict]) -> str:
     points : list of dict
         ``label, velocity [m s-1], amplitude`` and optional ``error`` (half-width) — per-run estimates.
     """
-    fig, ax = _figure()
+    fig, ax = new_figure()
     for i, c in enumerate(curves):
         color = f"C{i}"
         v = np.asarray(c["velocity"]) * 1e3
@@ -103,7 +93,7 @@ def psd_overlay_figure(frequency, measured: list[dict], simulated: list[dict], b
 
     ``measured``/``simulated``: dicts with ``label, psd, lower, upper`` on the common ``frequency`` [Hz].
     """
-    fig, ax = _figure(7.5, 4.2)
+    fig, ax = new_figure(7.5, 4.2)
     f = np.asarray(frequency)
     for i, m in enumerate(measured):
         ax.fill_between(f, m["lower"], m["upper"], color="k", alpha=0.15, lw=0)
@@ -123,7 +113,7 @@ def psd_envelope_figure(env_frequency, p05, median, p95, n_samples: int, frequen
     ``env_frequency`` [Hz] and ``p05``, ``median``, ``p95`` [units] are the envelope's; ``measured``: dicts with
     ``label, psd`` on ``frequency`` [Hz].
     """
-    fig, ax = _figure(7.5, 4.2)
+    fig, ax = new_figure(7.5, 4.2)
     fe = np.asarray(env_frequency)
     ax.fill_between(fe, p05, p95, color="C0", alpha=0.25, lw=0, label=f"simulated 5-95 % ({n_samples} samples)")
     ax.semilogy(fe, median, color="C0", lw=1.2, label="simulated median")
@@ -135,7 +125,7 @@ def psd_envelope_figure(env_frequency, p05, median, p95, n_samples: int, frequen
 
 def modal_figure(frequency, psd, modal_frequencies, peak_frequencies, band, units: str) -> str:
     """A measured PSD with the model's modal frequencies (dashed) and the detected peaks (markers)."""
-    fig, ax = _figure(7.5, 4.0)
+    fig, ax = new_figure(7.5, 4.0)
     f = np.asarray(frequency)
     ax.semilogy(f, psd, color="k", lw=1.0, label="measured (mean over runs)")
     for i, fm in enumerate(modal_frequencies):

@@ -10,7 +10,7 @@ import base64
 import html
 import io
 
-__all__ = ["Page", "figure_data_uri", "table", "Formatted", "fmt", "general_number"]
+__all__ = ["Page", "figure_data_uri", "new_figure", "table", "Formatted", "fmt", "general_number"]
 
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",sans-serif;margin:2em auto;max-width:72em;padding:0 1em;color:#222}
@@ -24,6 +24,18 @@ code,pre{font-family:ui-monospace,monospace;font-size:.85em}pre{background:#f7f7
 .synthetic{background:#fff4d6;border:1px solid #e0b84c;padding:.5em 1em}
 .warning{background:#fbe4e7;border:1px solid #d9899a;padding:.5em 1em}
 """
+
+
+def new_figure(width: float = 7.0, height: float = 4.0, nrows: int = 1, ncols: int = 1, **subplots):
+    """A matplotlib figure and its axes on the Agg backend, ``width`` x ``height`` [inch], constrained layout
+    (``nrows`` x ``ncols`` axes; ``subplots`` passed to :func:`matplotlib.pyplot.subplots`, e.g. ``sharex``).
+    Every report figure starts here and ends in :func:`figure_data_uri`."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt.subplots(nrows, ncols, figsize=(width, height), layout="constrained", **subplots)
 
 
 def figure_data_uri(fig, *, fmt: str = "png", dpi: int = 110) -> str:

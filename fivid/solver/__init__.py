@@ -10,8 +10,9 @@ friction, *, schedule, integration, output)`` (:class:`OperatingCondition`, :cla
 (compilation setting in :mod:`fivid.solver._kernels`) and are imported only when a simulation runs.
 """
 
+from fivid.errors import SimulationDiverged
 from fivid.friction.inputs import FrictionInput, OperatingCondition
-from fivid.solver.driver import SimulationDiverged, simulate
+from fivid.solver.driver import simulate
 from fivid.solver.options import IntegrationOptions, OutputOptions, RunSchedule, SimulationInputs
 from fivid.solver.step_halving import time_step_halving
 from fivid.solver.timestep import critical_time_step, stable_step

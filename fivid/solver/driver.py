@@ -13,8 +13,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fivid.errors import ConfigError, FividError
-from fivid.fe.model import Model, load_model
+from fivid.errors import ConfigError, SimulationDiverged
+from fivid.fe.build import load_model
+from fivid.fe.model import Model
 from fivid.fe.prestress import preload_ramp_end, prestress_state
 from fivid.fe.static import Preload, preload_state
 from fivid.friction.curve import slave_coefficients
@@ -34,7 +35,7 @@ from fivid.solver.stencil import BlockStencils, block_stencils
 if TYPE_CHECKING:  # an annotation of PreparedRun (fivid.solver.reduced imports this module)
     from fivid.solver.reduced import ReducedSystem
 
-__all__ = ["SimulationDiverged", "IntegrationSettings", "PreparedRun", "simulate", "prepare_run", "AUTO_SCALING_FACTOR",
+__all__ = ["IntegrationSettings", "PreparedRun", "simulate", "prepare_run", "AUTO_SCALING_FACTOR",
            "DEFAULT_REDUCED_TOLERANCE"]
 
 log = logging.getLogger("fivid")
@@ -42,10 +43,6 @@ log = logging.getLogger("fivid")
 #: the reduced path's cut-off and mass-scaling target with ``reduced="auto"``/``"reduced"``, in units of the band
 #: top ``sample_rate / 2``: 18 x 25.6 kHz = 460.8 kHz (docs/solver.md, "Reduced-order path")
 AUTO_SCALING_FACTOR = 18.0
-
-
-class SimulationDiverged(FividError):
-    """The explicit run produced NaN or a runaway energy; the message names the step, time and node."""
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,7 @@ def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     """Run the time loop of ``settings.n_intervals`` output intervals; :class:`SimulationDiverged` on failure."""
     from fivid.solver import _kernels as K
     from fivid.solver import _loop_kernels as L
-    from fivid.solver.driver import SimulationDiverged
+    from fivid.errors import SimulationDiverged
 
     dt = settings.time_step
     n_sub = settings.steps_per_interval

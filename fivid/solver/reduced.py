@@ -518,7 +518,7 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
     final state expanded to the global dofs."""
     from fivid.solver import _kernels as K
     from fivid.solver._reduced_kernels import run_reduced_steps
-    from fivid.solver.driver import SimulationDiverged
+    from fivid.errors import SimulationDiverged
     from fivid.solver.integrate import (
         RUNAWAY_FACTOR,
         RawRecords,

@@ -190,7 +190,7 @@ def _contact_arrays(model, st: BlockStencils) -> dict:
     the pairs' law rows and tables, the slaves' tributary areas."""
     from fivid.contact import kernel_row, kernel_tables
     from fivid.contact._layout_kernels import NPAR
-    from fivid.fe.contact import slave_areas
+    from fivid.fe.contact_nodes import slave_areas
 
     slave_nodes, slave_pair, master, ptr = [], [], [], [0]
     for p, pair in enumerate(model.contacts):

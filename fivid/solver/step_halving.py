@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from fivid.fe.model import Model, load_model
+from fivid.fe.build import load_model
+from fivid.fe.model import Model
 from fivid.signal.compare import band_distance, steady_psds
 from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.solver.driver import simulate

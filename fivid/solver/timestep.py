@@ -178,7 +178,7 @@ def critical_time_step(model) -> float:
     A 1-DOF mass-spring has ``omega_max = sqrt(k/m)`` and ``dt_crit = 2/omega`` without damping.
     """
     if not hasattr(model, "blocks"):
-        from fivid.fe.model import load_model
+        from fivid.fe.build import load_model
 
         model = load_model(model)
     return stable_step(model).critical_time_step

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fivid.report.html import Page, figure_data_uri, table
+from fivid.report.html import Page, figure_data_uri, new_figure, table
 from fivid.study.axes import AXES
 from fivid.study.kind import study_kind
 
@@ -14,18 +14,9 @@ __all__ = ["render_study_report", "study_section"]
 _COLOURS = {"stable": "C2", "mode_coupling": "C1", "stick_slip": "C3"}
 
 
-def _figure(width: float = 7.0, height: float = 4.0):
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(figsize=(width, height), layout="constrained")
-
-
 def _response_figure(ds, axis: str, name: str, label: str, cea_curve=None) -> str:
     """``name`` against the swept ``axis``, one marker per point coloured by regime."""
-    fig, ax = _figure()
+    fig, ax = new_figure()
     x = ds[axis].values
     y = ds[name].values
     regimes = ds["regime"].values.astype(str) if "regime" in ds else np.array(["point"] * x.size)
@@ -45,12 +36,7 @@ def _response_figure(ds, axis: str, name: str, label: str, cea_curve=None) -> st
 
 
 def _cea_figure(ds) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True, layout="constrained")
+    fig, (a1, a2) = new_figure(7.0, 6.0, 2, 1, sharex=True)
     mu = ds["cea_mu"].values
     for k in range(ds.sizes["cea_mode"]):
         a1.plot(mu, ds["cea_frequency"].values[:, k], lw=1)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fivid.report.html import Page, figure_data_uri, table
+from fivid.report.html import Page, figure_data_uri, new_figure, table
 
 __all__ = ["roughness_section"]
 
@@ -25,13 +25,9 @@ def _by(ds, name, axis, group):
 
 def _panels(ds, name: str, label: str, *, log_y: bool = False) -> str:
     """``name`` against Ra (one line per V) and against V (one line per Ra); markers by replicate."""
-    import matplotlib
     import matplotlib.ticker
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9.0, 3.6), layout="constrained")
+    fig, (ax1, ax2) = new_figure(9.0, 3.6, 1, 2)
     seeds = np.unique(ds["seed"].values) if "seed" in ds.coords else [None]
     for ax, axis, group, unit, scale in ((ax1, "roughness_ra", "sliding_velocity", "um", 1e6),
                                          (ax2, "sliding_velocity", "roughness_ra", "cm/s", 1e2)):
@@ -55,9 +51,7 @@ def _panels(ds, name: str, label: str, *, log_y: bool = False) -> str:
 
 
 def _rz_rsm_figure(ds, fit) -> str:
-    from fivid.study.report import _figure
-
-    fig, ax = _figure(6.0, 3.8)
+    fig, ax = new_figure(6.0, 3.8)
     r = np.log10(ds["profile_Rz"].values / ds["profile_Rsm"].values)
     v = ds["sliding_velocity"].values
     for j, vv in enumerate(np.unique(v)):

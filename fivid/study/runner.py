@@ -80,11 +80,11 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
     """
     from tqdm.auto import tqdm
 
-    from fivid.pipeline.lock import OutputLock
+    from fivid.execution.lock import OutputLock
     from fivid.storage import write_json, write_netcdf
 
     if scheduler is not None:  # before any work or output
-        from fivid.pipeline.sweep import check_scheduler_address
+        from fivid.execution.cluster import check_scheduler_address
 
         check_scheduler_address(scheduler)
     outdir = Path(outdir)
@@ -106,7 +106,7 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
             if workers == 0 and scheduler is None:
                 results = _in_process(todo)
             else:
-                from fivid.pipeline.sweep import map_tasks
+                from fivid.execution.cluster import map_tasks
 
                 results = map_tasks(_safe_evaluate, todo, workers=max(workers, 1), scheduler=scheduler)
             with tqdm(total=len(todo), desc=f"study {study.name}", unit="point", leave=False,

@@ -33,7 +33,7 @@ from fivid.fe import load_model
 from fivid.fe.config import read_config
 from fivid.fe.modal import modal_analysis
 from fivid.friction import load_law
-from fivid.pipeline.resources import check_simulation_memory, simulation_memory
+from fivid.execution.resources import check_simulation_memory, simulation_memory
 from fivid.signal.spectral import welch_density
 from fivid.signal.steady import steady_part
 from fivid.signal.transient import narrowband_fraction

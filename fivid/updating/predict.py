@@ -22,7 +22,7 @@ from fivid.damper.peaks import frf_peak
 from fivid.errors import ConfigError
 from fivid.fe.cea import Linearisation, complex_eigenvalue_analysis
 from fivid.fe.modal import modal_analysis
-from fivid.fe.model import load_model
+from fivid.fe.build import load_model
 
 __all__ = ["Prediction", "FEModes", "DamperPeaks", "mac", "pair_critical_mu", "is_damper_config", "predictor_for"]
 

@@ -13,7 +13,7 @@ import os
 import time
 from pathlib import Path
 
-from fivid.pipeline.sweep import check_scheduler_address, map_tasks
+from fivid.execution.cluster import check_scheduler_address, map_tasks
 from fivid.verify.case import Case, Result
 
 __all__ = ["run_cases", "evaluate_case", "find_real_data", "default_real_data_folders"]

@@ -205,7 +205,7 @@ def test_simulate_of_a_billion_seconds_is_refused_before_work(root, tmp_path, ca
 
 def test_simulate_beyond_the_time_cap_is_refused(root, tmp_path, capsys, monkeypatch):
     """On a machine with memory to spare, the solver work itself is capped (MAX_DOF_STEPS, about 4 days)."""
-    from fivid.pipeline import resources
+    from fivid.execution import resources
 
     monkeypatch.setattr(resources, "available_memory", lambda: (1 << 62, "test"))
     model = root / "configs" / "models" / "triboair_coarse.yaml"

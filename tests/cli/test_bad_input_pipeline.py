@@ -28,7 +28,7 @@ def test_simulate_one_year_is_refused_before_work(tmp_path, capsys):
 
 
 def test_simulate_refused_when_the_estimate_exceeds_available_memory(tmp_path, capsys, monkeypatch):
-    from fivid.pipeline import resources
+    from fivid.execution import resources
 
     monkeypatch.setattr(resources, "available_memory", lambda: (1 << 20, "test"))  # 1 MiB
     out = tmp_path / "sim.nc"
@@ -47,7 +47,7 @@ def test_simulate_dry_run_prints_the_estimate(tmp_path, capsys):
 
 def test_memory_estimate_counts_the_records():
     from fivid.fe import load_model
-    from fivid.pipeline.resources import simulation_memory
+    from fivid.execution.resources import simulation_memory
 
     model = load_model(COARSE)
     small = simulation_memory(model, duration=0.1, sample_rate=51200.0)
@@ -98,7 +98,7 @@ def test_scheduler_not_reachable(tmp_path, capsys):
 
 
 def test_scheduler_check_accepts_a_listening_port():
-    from fivid.pipeline.sweep import check_scheduler_address
+    from fivid.execution.cluster import check_scheduler_address
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -16,13 +16,9 @@ from tests.pipeline.test_pipeline_runner import make_pipeline
 from tests.pipeline.test_pipeline_safety import _wait_for_stage
 
 from fivid.cli import main
+from tests.helpers.cli import fivid_process
 
 ROOT_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def _cli(*args, **kw):
-    return subprocess.Popen([sys.executable, "-m", "fivid", *args], cwd=ROOT_DIR, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": ROOT_DIR}, **kw)
 
 
 def test_run_config_dump_has_no_serializer_warning(tmp_path, root, capsys):
@@ -36,7 +32,7 @@ def test_run_config_dump_has_no_serializer_warning(tmp_path, root, capsys):
 
 
 def test_local_cluster_with_port_8787_taken_does_not_warn():
-    from fivid.pipeline.sweep import dask_client
+    from fivid.execution.cluster import dask_client
 
     sock = socket.socket()
     try:
@@ -58,7 +54,7 @@ def test_local_cluster_with_port_8787_taken_does_not_warn():
 def test_run_without_terminal_logs_each_task(tmp_path, root):
     """The report's path as the last line is checked on the full pipeline (test_pipeline_sample.py, slow)."""
     s = make_pipeline(tmp_path, root, "ingest, modal", "modal: {n_modes: 4}")
-    proc = _cli("run", str(s["recipe"]), "--config", str(s["config"]))
+    proc = fivid_process("run", str(s["recipe"]), "--config", str(s["config"]))
     out, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err
     lines = err.strip().splitlines()
@@ -67,14 +63,14 @@ def test_run_without_terminal_logs_each_task(tmp_path, root):
     assert any(ln.strip().startswith("modal/modal done in") for ln in lines), lines
     assert lines[-1].startswith("fivid run: pass (exit 0)") and "open the report" not in err  # no report stage
     assert "warn" not in err.lower(), err
-    proc = _cli("run", str(s["recipe"]), "--config", str(s["config"]))  # all cached: a line per stage
+    proc = fivid_process("run", str(s["recipe"]), "--config", str(s["config"]))  # all cached: a line per stage
     _, err = proc.communicate(timeout=300)
     assert "ingest: 2 task(s), all cached" in err and " done in " not in err
 
 
 def test_sigint_message_once(tmp_path, root):
     s = make_pipeline(tmp_path, root, "ingest, identify", "identify: {band: [100 Hz, 5 kHz]}")
-    proc = _cli("run", str(s["recipe"]), "--config", str(s["config"]))
+    proc = fivid_process("run", str(s["recipe"]), "--config", str(s["config"]))
     _wait_for_stage(proc, s["out"], "identify")
     assert proc.poll() is None, "the run ended before it could be interrupted"
     proc.send_signal(signal.SIGINT)
@@ -90,7 +86,7 @@ def test_ctrl_c_during_the_dask_sweep_prints_one_message_and_no_leak_warning(tmp
     s = make_pipeline(tmp_path, root, "ingest, identify, simulate",
                       "simulate: {duration: 0.3 s, sample_rate: 51.2 kHz, seeds: 2}\n"
                       "analysis: {band: [500 Hz, 5 kHz], nperseg: 512}")
-    proc = _cli("run", str(s["recipe"]), "--config", str(s["config"]), "--workers", "2", start_new_session=True)
+    proc = fivid_process("run", str(s["recipe"]), "--config", str(s["config"]), "--workers", "2", start_new_session=True)
     _wait_for_stage(proc, s["out"], "simulate")
     time.sleep(8.0)  # the workers are simulating
     assert proc.poll() is None, "the run ended before it could be interrupted"

@@ -78,13 +78,28 @@ def test_bare_number_with_default_units():
 # ---- one home (issue 20 item 4): the rig readers' and the spectra's unit helpers are fivid.units' own ----
 
 def test_rig_quantities_only_call_into_units():
-    import importlib.util
-
     import fivid.io.rig_quantities as rq
     import fivid.units as u
 
     assert rq.sensitivity_factor is u.sensitivity_factor and rq.NUMBER is u.NUMBER
-    assert importlib.util.find_spec("fivid.signal.unit_strings") is None  # its helpers live in fivid.units now
+
+
+def test_unit_helpers_have_one_home():
+    """No module but fivid/units.py defines a function named like one of fivid.units' public helpers (a copy of
+    ``parse_quantity``, ``sensitivity_factor`` ... elsewhere fails here, wherever it is written)."""
+    import ast
+    from pathlib import Path
+
+    import fivid.units as u
+
+    helpers = {name for name in u.__all__ if callable(getattr(u, name))}
+    assert {"parse_quantity", "sensitivity_factor", "convert"} <= helpers
+    pkg = Path(u.__file__).parent
+    copies = [f"{path.relative_to(pkg.parent)}:{node.lineno}: {node.name}"
+              for path in sorted(pkg.rglob("*.py")) if path.name != "units.py" or path.parent != pkg
+              for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+              if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name in helpers]
+    assert not copies, "unit helpers defined outside fivid/units.py:\n" + "\n".join(copies)
 
 
 @pytest.mark.parametrize("text, decimal, expected", [

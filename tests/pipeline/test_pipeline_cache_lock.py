@@ -9,7 +9,7 @@ import textwrap
 import pytest
 
 from fivid.pipeline.cache import Task, TaskCache, digest, file_sha256
-from fivid.pipeline.lock import LockedError, OutputLock
+from fivid.execution.lock import LockedError, OutputLock
 
 
 def test_file_sha256_matches_hashlib_on_multi_chunk_file(tmp_path):
@@ -49,7 +49,7 @@ def test_cache_hit_only_for_same_key_and_intact_outputs(tmp_path):
 
 _HOLDER = textwrap.dedent("""
     import sys, time
-    from fivid.pipeline.lock import OutputLock
+    from fivid.execution.lock import OutputLock
     lock = OutputLock(sys.argv[1]).acquire()
     print("locked", flush=True)
     time.sleep(60)

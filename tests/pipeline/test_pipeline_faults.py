@@ -20,6 +20,7 @@ import pytest
 from tests.pipeline.test_pipeline_runner import _assert_same_content, _content, _variant
 
 from fivid.cli import main
+from tests.helpers.cli import pipeline_process
 
 ROOT_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -34,13 +35,6 @@ def _make(base, root, n_runs, stages):
     (base / "run.yaml").write_text(f"inputs: {{folder: data}}\nmodel: {root / 'configs/models/triboair_coarse.yaml'}\n"
                                    "output: out\nidentify: {band: [100 Hz, 5 kHz]}\nmodal: {n_modes: 4}\n")
     return base
-
-
-def _cli(base, *extra):
-    return subprocess.Popen([sys.executable, "-m", "fivid", "run", str(base / "recipe.yaml"), "--config",
-                             str(base / "run.yaml"), "--no-progress", *extra], cwd=ROOT_DIR,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            env={**os.environ, "PYTHONPATH": ROOT_DIR})
 
 
 def _check_outputs_open(out):
@@ -60,7 +54,7 @@ def test_sigkill_at_20_random_points_then_rerun_equals_an_uninterrupted_run(tmp_
     stages = ["ingest", "identify", "modal"]
     ref = _make(tmp_path / "ref", root, 3, stages)
     t0 = time.monotonic()
-    proc = _cli(ref)
+    proc = pipeline_process(ref / "recipe.yaml", ref / "run.yaml", stdout=subprocess.DEVNULL)
     assert proc.wait(timeout=300) == 0, proc.stderr.read()
     t_full = time.monotonic() - t0
     reference = _content(ref / "out")
@@ -70,7 +64,7 @@ def test_sigkill_at_20_random_points_then_rerun_equals_an_uninterrupted_run(tmp_
     points = sorted(rng.uniform(0.0, 0.9 * t_full) for _ in range(20))
     killed = 0
     for i, t_kill in enumerate(points):
-        proc = _cli(base, *(["--force"] if i else []))  # --force: every task is redone, so there is work to kill
+        proc = pipeline_process(base / "recipe.yaml", base / "run.yaml", stdout=subprocess.DEVNULL, *(["--force"] if i else []))  # --force: every task is redone, so there is work to kill
         time.sleep(t_kill)
         if proc.poll() is None:
             killed += 1

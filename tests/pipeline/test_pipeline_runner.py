@@ -15,6 +15,7 @@ import time
 import pytest
 
 from fivid.cli import main
+from tests.helpers.cli import pipeline_process
 
 ROOT_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -140,7 +141,7 @@ def test_bad_csv_gives_exit_2_naming_the_file_and_line(setup, capsys):
 
 _HOLDER = """
 import sys, time
-from fivid.pipeline.lock import OutputLock
+from fivid.execution.lock import OutputLock
 lock = OutputLock(sys.argv[1]).acquire()
 print("locked", flush=True)
 time.sleep(60)
@@ -159,12 +160,6 @@ def test_concurrent_run_on_the_same_output_is_refused(setup, capsys):
     finally:
         proc.kill()
         proc.wait()
-
-
-def _cli(s, *extra):
-    return subprocess.Popen([sys.executable, "-m", "fivid", "run", str(s["recipe"]), "--config", str(s["config"]),
-                             "--no-progress", *extra], cwd=ROOT_DIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
 
 
 def _content(folder):
@@ -201,15 +196,15 @@ def test_killed_run_then_rerun_gives_identical_results_and_no_corrupt_file(setup
     for i in range(4):
         _variant(setup["src"], setup["data"] / f"K{i}.csv", f"K{i}", 20 + i)
     # reference: an uninterrupted run in another folder
-    ref = _cli(setup, "--output", str(tmp_path / "ref"))
+    ref = pipeline_process(setup["recipe"], setup["config"], "--output", str(tmp_path / "ref"))
     assert ref.wait(timeout=300) == 0, ref.stderr.read()
     t_full = json.loads((tmp_path / "ref" / "summary.json").read_text())["seconds"]
     rng = random.Random(os.getpid())
-    proc = _cli(setup)
+    proc = pipeline_process(setup["recipe"], setup["config"])
     time.sleep(0.6 + rng.uniform(0.0, max(t_full, 0.5)))  # 0.6 s: interpreter start-up before any output
     proc.send_signal(signal.SIGKILL)
     proc.wait()
-    again = _cli(setup)
+    again = pipeline_process(setup["recipe"], setup["config"])
     assert again.wait(timeout=300) == 0, again.stderr.read()
     s = _summary(setup)
     assert s["status"] == "pass"

@@ -19,6 +19,7 @@ ROOT_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__fil
 
 
 from tests.pipeline.test_pipeline_runner import _assert_same_content, _content, make_pipeline  # noqa: E402
+from tests.helpers.cli import pipeline_process
 
 
 def _make(base, root):
@@ -101,12 +102,6 @@ def test_stale_temporaries_are_removed_on_the_next_run(setup, caplog):
 
 # --- interruption --------------------------------------------------------------------------------------------
 
-def _cli(s, *extra):
-    return subprocess.Popen([sys.executable, "-m", "fivid", "run", str(s["recipe"]), "--config", str(s["config"]),
-                             "--no-progress", *extra], cwd=ROOT_DIR, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env={**os.environ, "PYTHONPATH": ROOT_DIR})
-
-
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     """An uninterrupted run's outputs."""
@@ -129,7 +124,7 @@ def _wait_for_stage(proc, out, stage, timeout=300):
 
 @pytest.mark.parametrize("signum, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_signal_stops_the_run_cleanly_and_a_rerun_completes(setup, reference, signum, status):
-    proc = _cli(setup)
+    proc = pipeline_process(setup["recipe"], setup["config"])
     _wait_for_stage(proc, setup["out"], "identify")
     assert proc.poll() is None, "the run ended before it could be interrupted"
     t_signal = time.monotonic()
@@ -157,7 +152,7 @@ def test_sigterm_during_the_dask_sweep_stops_cleanly(setup, delay):
     with open(setup["config"], "a") as f:
         f.write("simulate: {duration: 0.05 s, sample_rate: 51.2 kHz, seeds: 1}\n"
                 "analysis: {band: [500 Hz, 5 kHz], nperseg: 512}\n")
-    proc = _cli(setup, "--workers", "1")
+    proc = pipeline_process(setup["recipe"], setup["config"], "--workers", "1")
     _wait_for_stage(proc, setup["out"], "simulate")
     time.sleep(delay)
     assert proc.poll() is None, "the run ended before it could be interrupted"

@@ -16,7 +16,7 @@ def _law():
 
 
 def test_sweep_on_two_local_worker_processes_matches_serial():
-    from fivid.pipeline.sweep import map_tasks
+    from fivid.execution.cluster import map_tasks
 
     law = _law()
     seeds = range(6)
@@ -33,7 +33,7 @@ def test_sweep_on_two_local_worker_processes_matches_serial():
 
 def test_unreachable_scheduler_is_a_clear_input_error():
     from fivid.errors import FividError
-    from fivid.pipeline.sweep import map_tasks
+    from fivid.execution.cluster import map_tasks
 
     with pytest.raises(FividError, match="cannot reach the dask scheduler"):
         list(map_tasks(len, {"a": ("x",)}, scheduler="tcp://127.0.0.1:9", connect_timeout=1.0))
@@ -43,7 +43,7 @@ def test_sweep_on_an_existing_scheduler_by_address():
     """``--scheduler tcp://...``: the tasks go to a cluster started elsewhere (here: a loopback LocalCluster)."""
     from distributed import LocalCluster
 
-    from fivid.pipeline.sweep import map_tasks
+    from fivid.execution.cluster import map_tasks
 
     law = _law()
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",

@@ -1,4 +1,5 @@
-"""Imports flow down the layers of DESIGN §1; kernels import nothing from fivid; import fivid is light."""
+"""Imports flow down the layers of DESIGN §1 and form no cycle; kernels import nothing from fivid; import fivid is
+light."""
 
 import ast
 import subprocess
@@ -13,7 +14,7 @@ PKG = Path(__file__).resolve().parents[2] / "fivid"
 LAYERS = {
     "cli": 5,
     "pipeline": 4, "study": 4, "verify": 4,
-    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3, "ema": 3, "updating": 3,
+    "identify": 3, "score": 3, "solver": 3, "report": 3, "damper": 3, "ema": 3, "updating": 3, "execution": 3,
     "io": 2, "signal": 2, "friction": 2, "fe": 2, "surface": 2, "contact": 2,
     "schema": 1, "units": 1, "errors": 1, "storage": 1, "builtin": 1, "config_layer": 1,
     "__init__": 1, "__main__": 5,
@@ -83,6 +84,126 @@ def test_imports_flow_down_the_layers():
                     f"fivid.{'.'.join(target)} (L{their})"
                 )
     assert not bad, "imports against the layers of DESIGN §1:\n" + "\n".join(bad)
+
+
+def _imported_names(path: Path):
+    """(line, ("a", "b", "name")) for every ``import fivid.a.b`` / ``from fivid.a.b import name`` anywhere."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "fivid":
+                    yield node.lineno, tuple(alias.name.split(".")[1:])
+        elif isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == "fivid":
+            for alias in node.names:
+                yield node.lineno, tuple(node.module.split(".")[1:]) + (alias.name,)
+
+
+def _import_graph() -> dict[tuple[str, ...], dict[tuple[str, ...], list[int]]]:
+    """Every fivid module -> the fivid modules it imports, with the lines: module level, class and function bodies
+    alike (a function-level import is an edge too: it runs, later), inside a package as well as across packages.
+    ``from fivid.a import b`` is an edge to the module ``a.b`` when it is one, else to ``a``; importing ``a.b``
+    also runs the ``__init__`` of ``a`` (an edge to ``a``) unless the importer is inside ``a`` already."""
+    modules = dict((parts, path) for path, parts in _modules())
+    graph = {}
+    for parts, path in modules.items():
+        edges = graph.setdefault(parts, {})
+        for lineno, target in _imported_names(path):
+            while target and target not in modules:  # ``from fivid.a.b import name``: the module a.b
+                target = target[:-1]
+            if not target or target == parts:
+                continue
+            for i in range(1, len(target) + 1):
+                pkg = target[:i]
+                if i < len(target) and parts[:i] == pkg:
+                    continue  # the importer's own enclosing package is initialised already
+                if pkg != parts:
+                    edges.setdefault(pkg, []).append(lineno)
+    return graph
+
+
+def _cycles(graph) -> list[list]:
+    """The strongly connected components of more than one module (Tarjan), each in a stable order."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+@pytest.mark.parametrize("graph, n", [
+    ({("a",): {("b",): [1]}, ("b",): {("a",): [2]}}, 1),
+    ({("a",): {("b",): [1]}, ("b",): {("c",): [1]}, ("c",): {("a",): [1]}, ("d",): {("a",): [1]}}, 1),
+    ({("a",): {("b",): [1], ("c",): [1]}, ("b",): {("c",): [1]}, ("c",): {}}, 0),
+    ({("a",): {("b",): [1]}, ("b",): {("a",): [1]}, ("c",): {("d",): [1]}, ("d",): {("c",): [1]}}, 2),
+])
+def test_the_cycle_finder_finds_cycles(graph, n):
+    """The cycle check below is an oracle only if it finds a cycle of any length and nothing in a DAG."""
+    assert len(_cycles(graph)) == n
+
+
+def test_the_import_graph_sees_function_bodies_and_packages():
+    """The graph has the edges that hid the old cycles: a function-level import (fe.contact's of fe.static), an
+    import inside a package, and ``__init__`` edges (importing fivid.study.runner runs fivid/study/__init__.py)."""
+    graph = _import_graph()
+    assert ("fe", "static") in graph[("fe", "contact")]
+    assert ("study",) in graph[("pipeline", "discretisation")]
+    assert ("study", "runner") in graph[("study",)]
+
+
+def test_no_import_cycles():
+    """fivid's modules import each other without a cycle: every import (module level or in a function), every
+    package's ``__init__``, inside a package and across packages. A cycle is broken by moving the shared piece
+    down into a module both sides import (docs/architecture.md), never by hiding the import in a function."""
+    graph = _import_graph()
+    lines = []
+    for comp in _cycles(graph):
+        members = set(comp)
+        lines.append("cycle: " + ", ".join("fivid." + ".".join(m) for m in comp))
+        for m in comp:
+            for t, linenos in sorted(graph[m].items()):
+                if t in members:
+                    lines.append(f"    fivid/{'/'.join(m)}.py lines {linenos} -> fivid.{'.'.join(t)}")
+    assert not lines, "import cycles:\n" + "\n".join(lines)
+
+
+def test_docs_package_graph_matches_the_code():
+    """docs/architecture.md's package graph (which package imports which) is the import graph of the code."""
+    import re
+
+    graph = _import_graph()
+    actual = {}
+    for m, targets in graph.items():
+        if len(m) == 1 and not (PKG / m[0]).is_dir():
+            continue  # top-level modules (errors, units, ...): the layer table places them
+        deps = {t[0] for t in targets if t[0] != m[0] and (PKG / t[0]).is_dir()}
+        actual.setdefault(m[0], set()).update(deps)
+    text = (PKG.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    documented = {pkg: set(re.findall(r"`(\w+)`", deps))
+                  for pkg, deps in re.findall(r"^\| `(\w+)` \| (.*) \|$", text, flags=re.M)}
+    assert documented == actual, "redraw the package graph of docs/architecture.md:\n" + "\n".join(
+        f"| `{p}` | {', '.join(f'`{d}`' for d in sorted(actual[p])) or '-'} |" for p in sorted(actual))
 
 
 def _kernel_modules():

@@ -71,7 +71,7 @@ def test_an_unknown_model_name_lists_the_built_in_ones(tmp_path, monkeypatch, ca
 
 def test_the_lock_is_portable():
     """The output-folder lock goes through filelock (flock on POSIX, msvcrt on Windows), not fcntl."""
-    source = (ROOT / "fivid" / "pipeline" / "lock.py").read_text(encoding="utf-8")
+    source = (ROOT / "fivid" / "execution" / "lock.py").read_text(encoding="utf-8")
     assert "fcntl" not in source and "from filelock import" in source
 
 

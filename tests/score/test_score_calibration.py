@@ -4,7 +4,7 @@ flag must be raised in about 1 - confidence of the pairs (Monte Carlo; slow)."""
 import numpy as np
 import pytest
 
-from tests.score.test_score_runs import synthetic_run
+from tests.helpers.resonance_runs import resonance_run
 
 from fivid.score import score_runs
 
@@ -24,8 +24,8 @@ def test_false_alarm_rates_match_the_confidence(n_measured, n_simulated, nperseg
     flags = {k: [] for k in names}
     bands, peak_f, peak_l = [], [], []
     for i in range(PAIRS):
-        sc = score_runs(synthetic_run(1000 + 2 * i, n=n_measured),
-                        synthetic_run(1001 + 2 * i, n=n_simulated, run_id="S"), nperseg=nperseg, confidence=0.95)
+        sc = score_runs(resonance_run(1000 + 2 * i, n=n_measured),
+                        resonance_run(1001 + 2 * i, n=n_simulated, run_id="S"), nperseg=nperseg, confidence=0.95)
         for k in names:
             flags[k].append(bool(sc[f"{k}_significant"]))
         bands.extend(sc.band_level_error_db_significant.values.tolist())

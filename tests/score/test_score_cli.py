@@ -5,17 +5,17 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
-from tests.score.test_score_runs import synthetic_run
+from tests.helpers.resonance_runs import resonance_run
 
 from fivid.cli import main
 from fivid.io import write_run
 
 
 def run_file(path, seed, run_id, **kw):
-    ds = synthetic_run(seed, run_id=run_id, n=2**16, **kw)
+    ds = resonance_run(seed, run_id=run_id, n=2**16, **kw)
     ds["normal_force"] = ("time", np.full(ds.sizes["time"], 5.0), {"units": "N"})
     ds.attrs.update(rig="synthetic", sliding_velocity=0.01, normal_load=5.0, roughness_ra=8e-7,
-                    source="synthetic: tests/score/test_score_runs.py synthetic_run", history="synthetic")
+                    source="synthetic: tests/helpers/resonance_runs.py resonance_run", history="synthetic")
     write_run(ds, path, overwrite=True)
     return path
 
@@ -66,7 +66,7 @@ def test_score_command_bad_band_exits_2_naming_the_file(runs, capsys):
 
 def test_score_command_variable_missing_in_one_run(tmp_path, capsys):
     m = run_file(tmp_path / "M.nc", 1, "M")
-    s = synthetic_run(2, run_id="S", n=2**16)
+    s = resonance_run(2, run_id="S", n=2**16)
     s["normal_force"] = ("time", np.full(s.sizes["time"], 5.0), {"units": "N"})
     s["velocity"] = ("time", np.full(s.sizes["time"], 0.01), {"units": "m s-1"})
     s.attrs.update(rig="x", sliding_velocity=0.01, normal_load=5.0, roughness_ra=8e-7, source="synthetic", history="h")
@@ -84,7 +84,7 @@ def test_help_lists_both_commands(capsys):
 
 
 def test_psd_command_steady_window_and_missing_variable(tmp_path, capsys):
-    ds = synthetic_run(1, run_id="V", n=2**16)
+    ds = resonance_run(1, run_id="V", n=2**16)
     t = ds["time"].values
     ds["velocity"] = ("time", 0.01 * np.clip(t / 1.0, 0, 1) * np.clip((t[-1] - t) / 1.0, 0, 1), {"units": "m s-1"})
     ds["normal_force"] = ("time", np.full(t.size, 5.0), {"units": "N"})

@@ -11,24 +11,11 @@ import xarray as xr
 
 from fivid.errors import ConfigError, DataQualityError, SchemaError, UnitError
 from fivid.score import score_runs, scores_to_json
-
-FS = 10000.0
-
-
-def synthetic_run(seed, *, n=2**16, fs=FS, peak=1200.0, q=10.0, scale=1.0, run_id="M", units="m s-2"):
-    """White noise through a resonator at ``peak`` Hz (quality ``q``) plus a white floor 26 dB down."""
-    rng = np.random.default_rng(seed)
-    b, a = scipy.signal.iirpeak(peak, q, fs)
-    x = scipy.signal.lfilter(b, a, rng.standard_normal(n)) + 0.05 * rng.standard_normal(n)
-    t = np.arange(n) / fs
-    return xr.Dataset({"acceleration": ("time", scale * x, {"units": units}),
-                       "friction_force": ("time", np.ones(n), {"units": "N"})},
-                      coords={"time": ("time", t, {"units": "s"})},
-                      attrs={"run_id": run_id, "sample_rate": fs})
+from tests.helpers.resonance_runs import FS, resonance_run
 
 
 def test_run_against_itself():
-    m = synthetic_run(1)
+    m = resonance_run(1)
     sc = score_runs(m, m, nperseg=1024)
     assert float(sc.lsd_db) == 0.0
     assert float(sc.level_diff_db) == 0.0
@@ -42,8 +29,8 @@ def test_run_against_itself():
 
 
 def test_scaled_by_two_is_plus_6_02_db_everywhere():
-    m = synthetic_run(1)
-    s = synthetic_run(1, scale=2.0, run_id="S")
+    m = resonance_run(1)
+    s = resonance_run(1, scale=2.0, run_id="S")
     sc = score_runs(m, s, nperseg=1024)
     six = 20 * np.log10(2.0)  # 6.0206 dB; PSD scales by 4 exactly, so only float round-off remains
     np.testing.assert_allclose(sc.log_psd_difference_db.values, six, atol=1e-12)
@@ -57,7 +44,7 @@ def test_scaled_by_two_is_plus_6_02_db_everywhere():
 
 
 def test_independent_realisations_are_within_uncertainty():
-    sc = score_runs(synthetic_run(10), synthetic_run(11, run_id="S"), nperseg=1024)
+    sc = score_runs(resonance_run(10), resonance_run(11, run_id="S"), nperseg=1024)
     # one draw: each flag is false with probability ~0.95 (the slow calibration test measures the rates)
     assert float(sc.lsd_db) < 2 * float(sc.lsd_db_threshold)
     assert not bool(sc.lsd_db_significant)
@@ -65,7 +52,7 @@ def test_independent_realisations_are_within_uncertainty():
 
 
 def test_moved_resonance_is_detected():
-    sc = score_runs(synthetic_run(1), synthetic_run(2, peak=1380.0, run_id="S"), nperseg=1024)
+    sc = score_runs(resonance_run(1), resonance_run(2, peak=1380.0, run_id="S"), nperseg=1024)
     assert bool(sc.lsd_db_significant)
     assert bool(sc.shape_correlation_significant)
     # iirpeak puts the resonances exactly at 1200 and 1380 Hz: error 0.15. Each fitted vertex has a standard
@@ -77,7 +64,7 @@ def test_moved_resonance_is_detected():
 
 
 def test_json_has_the_issue_keys():
-    j = scores_to_json(score_runs(synthetic_run(1), synthetic_run(2, run_id="S"), nperseg=1024, band=(100, 4000)))
+    j = scores_to_json(score_runs(resonance_run(1), resonance_run(2, run_id="S"), nperseg=1024, band=(100, 4000)))
     for key in ("lsd_db", "level_diff_db", "band_level_rms_error_db", "shape_correlation", "peaks"):
         assert key in j
     assert isinstance(j["lsd_db"], float) and isinstance(j["peaks"], list)
@@ -89,7 +76,7 @@ def test_json_has_the_issue_keys():
 
 
 def test_different_rates_are_resampled():
-    m = synthetic_run(3)
+    m = resonance_run(3)
     up = scipy.signal.resample_poly(m["acceleration"].values, 2, 1)  # the same signal at 20 kHz
     n = up.size
     s = xr.Dataset({"acceleration": ("time", up, {"units": "m s-2"})},
@@ -104,9 +91,9 @@ def test_different_rates_are_resampled():
 
 @pytest.mark.parametrize("which", ["measured", "simulated"])
 def test_band_beyond_nyquist_names_the_run(which):
-    m, s = synthetic_run(1), synthetic_run(2, fs=8000.0, run_id="S")
+    m, s = resonance_run(1), resonance_run(2, fs=8000.0, run_id="S")
     if which == "measured":
-        m, s = synthetic_run(1, fs=8000.0), synthetic_run(2, run_id="S")
+        m, s = resonance_run(1, fs=8000.0), resonance_run(2, run_id="S")
     run = "'M'" if which == "measured" else "'S'"
     message = rf"4500.0 Hz is beyond the Nyquist frequency 4000.0 Hz of the {which} run {run}"
     with pytest.raises(ConfigError, match=message):
@@ -115,47 +102,47 @@ def test_band_beyond_nyquist_names_the_run(which):
 
 def test_different_units_are_named():
     with pytest.raises(UnitError, match=r"'m s-2' in the measured run 'M' but in 'g' in the simulated run 'S'"):
-        score_runs(synthetic_run(1), synthetic_run(2, units="g", run_id="S"), nperseg=1024)
+        score_runs(resonance_run(1), resonance_run(2, units="g", run_id="S"), nperseg=1024)
 
 
 def test_missing_variable_is_named():
-    s = synthetic_run(2, run_id="S").drop_vars("acceleration")
+    s = resonance_run(2, run_id="S").drop_vars("acceleration")
     with pytest.raises(SchemaError, match=r"simulated run 'S' has no variable 'acceleration'; it has: friction_force"):
-        score_runs(synthetic_run(1), s, nperseg=1024)
+        score_runs(resonance_run(1), s, nperseg=1024)
 
 
 def test_short_signal_names_the_run():
     with pytest.raises(DataQualityError, match=r"simulated run 'S'.* 500 samples .* nperseg = 1024"):
-        score_runs(synthetic_run(1), synthetic_run(2, n=500, run_id="S"), nperseg=1024)
+        score_runs(resonance_run(1), resonance_run(2, n=500, run_id="S"), nperseg=1024)
 
 
 def test_nan_names_the_run_and_time():
-    m = synthetic_run(1)
+    m = resonance_run(1)
     m["acceleration"][7000] = np.nan
     with pytest.raises(DataQualityError, match=r"measured run 'M'.*'acceleration' has 1 non-finite.*t = 0.7 s"):
-        score_runs(m, synthetic_run(2, run_id="S"), nperseg=1024)
+        score_runs(m, resonance_run(2, run_id="S"), nperseg=1024)
 
 
 def test_non_uniform_time_names_the_run():
-    s = synthetic_run(2, run_id="S")
+    s = resonance_run(2, run_id="S")
     t = s["time"].values.copy()
     t[100:] += 0.5 / FS
     s = s.assign_coords(time=("time", t, {"units": "s"}))
     with pytest.raises(DataQualityError, match=r"simulated run 'S': non-uniform time: step 99"):
-        score_runs(synthetic_run(1), s, nperseg=1024)
+        score_runs(resonance_run(1), s, nperseg=1024)
 
 
 def test_band_narrower_than_three_bins():
     with pytest.raises(ConfigError, match="fewer than 3 PSD bins"):
-        score_runs(synthetic_run(1), synthetic_run(2, run_id="S"), nperseg=1024, band=(1000, 1010))
+        score_runs(resonance_run(1), resonance_run(2, run_id="S"), nperseg=1024, band=(1000, 1010))
 
 
 def test_significance_grows_with_record_length():
     # A true 0.5 dB level difference: with 2**13 samples (15 segments of 1024) the band-level threshold is
     # larger than 0.5 dB, with 2**19 samples (1023 segments) it is ~8x smaller (it scales as 1/sqrt(segments)).
     gain = 10 ** (0.5 / 20)
-    short = score_runs(synthetic_run(5, n=2**13), synthetic_run(6, n=2**13, scale=gain, run_id="S"), nperseg=1024)
-    long = score_runs(synthetic_run(5, n=2**19), synthetic_run(6, n=2**19, scale=gain, run_id="S"), nperseg=1024)
+    short = score_runs(resonance_run(5, n=2**13), resonance_run(6, n=2**13, scale=gain, run_id="S"), nperseg=1024)
+    long = score_runs(resonance_run(5, n=2**19), resonance_run(6, n=2**19, scale=gain, run_id="S"), nperseg=1024)
     assert not bool(short.level_diff_db_significant)
     assert bool(long.level_diff_db_significant)
     assert float(long.level_diff_db) == pytest.approx(0.5, abs=float(long.level_diff_db_threshold))
@@ -164,7 +151,7 @@ def test_significance_grows_with_record_length():
 
 
 def test_steady_option_crops_each_run():
-    m = synthetic_run(1, n=2**15)
+    m = resonance_run(1, n=2**15)
     t = m["time"].values
     ramp = np.clip(t / 0.5, 0, 1) * np.clip((t[-1] - t) / 0.5, 0, 1)  # 0.5 s ramps, plateau 2.28 s
     m["velocity"] = ("time", 0.01 * ramp, {"units": "m s-1"})
@@ -178,14 +165,14 @@ def test_steady_option_crops_each_run():
     np.testing.assert_array_equal(sc.psd_measured.values, crop.values)
     whole = welch_psd(m["acceleration"], nperseg=1024).sel(frequency=slice(100, 4000))
     assert not np.array_equal(sc.psd_measured.values, whole.values)
-    no_encoder = synthetic_run(2, run_id="S")
+    no_encoder = resonance_run(2, run_id="S")
     with pytest.raises(DataQualityError, match=r"simulated run 'S'.*neither 'velocity' nor 'position'"):
         score_runs(m, no_encoder, nperseg=1024, steady=True)
 
 
 def test_sensor_selection_survives_resampling():
-    s = synthetic_run(2, run_id="S")
-    base = synthetic_run(1, n=2**17, fs=2 * FS)["acceleration"].values
+    s = resonance_run(2, run_id="S")
+    base = resonance_run(1, n=2**17, fs=2 * FS)["acceleration"].values
     t = np.arange(base.size) / (2 * FS)
     m = xr.Dataset({"acceleration": (("time", "sensor"), np.stack([base, 2 * base], axis=1), {"units": "m s-2"})},
                    coords={"time": ("time", t, {"units": "s"}), "sensor": ["a", "b"]},
@@ -200,6 +187,6 @@ def test_sensor_selection_survives_resampling():
 
 def test_sensor_given_for_a_variable_without_sensors_is_named():
     # used to be ignored silently: a typo in --sensor scored the single channel without a word
-    m, s = synthetic_run(1, run_id="M"), synthetic_run(2, run_id="S")
+    m, s = resonance_run(1, run_id="M"), resonance_run(2, run_id="S")
     with pytest.raises(ConfigError, match=r"sensor 'x' given, but 'acceleration' has no 'sensor' dimension"):
         score_runs(m, s, nperseg=1024, sensor="x")

@@ -1,4 +1,4 @@
-"""Steady-sliding window on synthetic rig runs with a known velocity profile (generator below)."""
+"""Steady-sliding window on synthetic rig runs with a known velocity profile (tests/helpers/steady_runs.py)."""
 
 import numpy as np
 import pytest
@@ -6,33 +6,7 @@ import xarray as xr
 
 from fivid.errors import ConfigError, DataQualityError
 from fivid.signal import steady_sliding_window
-
-
-def synthetic_run(*, fs=5000.0, duration=2.0, ramp=0.2, v=0.01, noise=0.0, encoder=None, seed=0, kind="velocity",
-                  run_id="SYN1"):
-    """Synthetic encoder record: linear ramp 0 -> v over ``ramp`` s, plateau, ramp down over the last ``ramp`` s.
-
-    ``kind="position"`` integrates the profile in closed form and quantises it to ``encoder`` [m].
-    """
-    t = np.arange(int(duration * fs)) / fs
-    up = np.clip(t / ramp, 0, 1)
-    down = np.clip((duration - t) / ramp, 0, 1)
-    vel = v * np.minimum(up, down)
-    rng = np.random.default_rng(seed)
-    data = {}
-    if kind == "velocity":
-        data["velocity"] = ("time", vel + noise * rng.standard_normal(t.size), {"units": "m s-1"})
-    else:
-        # closed-form integral of the trapezoid profile
-        x_up = v * np.minimum(t, ramp) ** 2 / (2 * ramp)
-        x_flat = v * np.clip(t - ramp, 0, duration - 2 * ramp)
-        td = np.clip(t - (duration - ramp), 0, ramp)
-        x_down = v * (td - td**2 / (2 * ramp))
-        pos = x_up + x_flat + x_down
-        if encoder:
-            pos = np.round(pos / encoder) * encoder
-        data["position"] = ("time", pos, {"units": "m"})
-    return xr.Dataset(data, coords={"time": ("time", t, {"units": "s"})}, attrs={"run_id": run_id})
+from tests.helpers.steady_runs import steady_sliding_run
 
 
 @pytest.mark.parametrize("smoothing", [0.005, 0.02])
@@ -40,7 +14,7 @@ def test_window_of_a_trapezoid_profile(smoothing):
     # Within tolerance 5 %: v >= 0.95 v0 from t = 0.95 ramp = 0.19 s to duration - 0.19 = 1.81 s. A centred moving
     # average of width h equals a piecewise-linear profile except within h/2 of a kink, so each end moves by at
     # most h/2 (plus one sample).
-    ds = synthetic_run()
+    ds = steady_sliding_run()
     t0, t1 = steady_sliding_window(ds, tolerance=0.05, smoothing=smoothing)
     slack = smoothing / 2 + 1 / 5000.0
     assert abs(t0 - 0.19) <= slack
@@ -50,7 +24,7 @@ def test_window_of_a_trapezoid_profile(smoothing):
 def test_window_from_quantised_position():
     # 1 um encoder at 10 mm/s: differentiated position has quantisation noise ~ 1e-6 m / (2 dt) per sample; a
     # 20 ms average brings it to ~ 1e-6 / 0.02 = 5e-5 m/s = 0.5 % of v0, below the 5 % tolerance.
-    ds = synthetic_run(kind="position", encoder=1e-6)
+    ds = steady_sliding_run(kind="position", encoder=1e-6)
     t0, t1 = steady_sliding_window(ds, tolerance=0.05, smoothing=0.02)
     # slack: h/2, plus the velocity error 1e-6 m / h divided by the ramp's slope v0 / ramp = 0.05 m s-2 (1 ms)
     slack = 0.02 / 2 + (1e-6 / 0.02) / (0.01 / 0.2)
@@ -58,13 +32,13 @@ def test_window_from_quantised_position():
 
 
 def test_noisy_velocity_is_smoothed():
-    ds = synthetic_run(noise=0.002, seed=3)  # 20 % noise per sample, averaged over 250 samples -> 1.3 %
+    ds = steady_sliding_run(noise=0.002, seed=3)  # 20 % noise per sample, averaged over 250 samples -> 1.3 %
     t0, t1 = steady_sliding_window(ds, tolerance=0.05, smoothing=0.05)
     assert abs(t0 - 0.19) < 0.05 and abs(t1 - 1.81) < 0.05
 
 
 def test_no_plateau_is_a_clear_error():
-    ds = synthetic_run(ramp=1.0)  # a triangle: never steady
+    ds = steady_sliding_run(ramp=1.0)  # a triangle: never steady
     with pytest.raises(DataQualityError, match=r"run 'SYN1'.*no steady sliding.*plateau"):
         steady_sliding_window(ds, tolerance=0.02, smoothing=0.01)
 
@@ -73,23 +47,23 @@ def test_no_plateau_is_a_clear_error():
 def test_bad_smoothing_is_named(smoothing):
     # negative smoothing used to be silently replaced by one sample; NaN crashed in int(round(nan))
     with pytest.raises(ConfigError, match="smoothing must be a duration >= 0"):
-        steady_sliding_window(synthetic_run(), smoothing=smoothing)
+        steady_sliding_window(steady_sliding_run(), smoothing=smoothing)
 
 
 def test_standstill_is_a_clear_error():
-    ds = synthetic_run(v=0.0)
+    ds = steady_sliding_run(v=0.0)
     with pytest.raises(DataQualityError, match=r"run 'SYN1'.*plateau .* is 0.0"):
         steady_sliding_window(ds)
 
 
 def test_missing_encoder_is_named():
-    ds = synthetic_run().rename({"velocity": "acceleration"})
+    ds = steady_sliding_run().rename({"velocity": "acceleration"})
     with pytest.raises(DataQualityError, match="neither 'velocity' nor 'position'.*acceleration"):
         steady_sliding_window(ds)
 
 
 def test_nan_in_velocity_is_named():
-    ds = synthetic_run()
+    ds = steady_sliding_run()
     ds["velocity"][100] = np.nan
     with pytest.raises(DataQualityError, match=r"'velocity' has 1 non-finite.*index 100"):
         steady_sliding_window(ds)

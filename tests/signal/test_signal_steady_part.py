@@ -11,7 +11,7 @@ import xarray as xr
 
 from fivid.errors import ConfigError, DataQualityError
 from fivid.signal import steady_part, steady_sliding_window
-from tests.signal.test_signal_steady import synthetic_run
+from tests.helpers.steady_runs import steady_sliding_run
 
 FS = 5000.0
 
@@ -25,7 +25,7 @@ def _simulated(transient_end=0.3, duration=1.0, v=0.01):
 
 
 def test_measured_run_is_cut_to_its_encoder_window():
-    ds = synthetic_run(fs=FS)  # ramps of 0.2 s: within 5 % from 0.19 s to 1.81 s (closed form)
+    ds = steady_sliding_run(fs=FS)  # ramps of 0.2 s: within 5 % from 0.19 s to 1.81 s (closed form)
     part = steady_part(ds)
     t0, t1 = steady_sliding_window(ds)
     assert part.time.values[0] == t0 and part.time.values[-1] == t1
@@ -33,7 +33,7 @@ def test_measured_run_is_cut_to_its_encoder_window():
 
 
 def test_measured_run_with_settle_starts_later_by_settle():
-    ds = synthetic_run(fs=FS)
+    ds = steady_sliding_run(fs=FS)
     t0, t1 = steady_sliding_window(ds)
     part = steady_part(ds, settle=0.1)
     assert part.time.values[0] == pytest.approx(t0 + 0.1, abs=1 / FS) and part.time.values[-1] == t1
@@ -57,7 +57,7 @@ def test_settle_longer_than_the_steady_part_is_an_error_naming_the_run():
 
 
 def test_run_without_window_raises_or_is_used_whole_on_request():
-    ds = synthetic_run(fs=FS).drop_vars("velocity")
+    ds = steady_sliding_run(fs=FS).drop_vars("velocity")
     ds["acceleration"] = ("time", np.zeros(ds.time.size), {"units": "m s-2"})
     with pytest.raises(DataQualityError, match=r"^rig A: run 'SYN1'.*neither 'velocity' nor 'position'"):
         steady_part(ds, label="rig A")

@@ -15,7 +15,7 @@ import pytest
 
 from fivid.fe.cea import cea_mode_shapes
 from fivid.fe.modal import modal_analysis
-from fivid.fe.model import load_model
+from fivid.fe.build import load_model
 from fivid.study.kinds.ring import _phasors, bore_probes
 
 

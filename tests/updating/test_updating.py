@@ -15,7 +15,7 @@ import yaml
 
 from fivid.cli import main
 from fivid.fe.modal import modal_analysis
-from fivid.fe.model import load_model
+from fivid.fe.build import load_model
 from fivid.updating import load_targets, update_model
 from fivid.updating.paths import get_path, parse_path, replace_values
 

@@ -13,7 +13,7 @@ import pytest
 import xarray as xr
 
 from fivid.fe.cea import complex_eigenvalue_analysis
-from fivid.fe.model import load_model
+from fivid.fe.build import load_model
 from fivid.updating import load_targets, update_model
 from fivid.updating.predict import pair_critical_mu
 

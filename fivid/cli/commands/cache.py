@@ -25,7 +25,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     """Handler of ``fivid cache``."""
-    from fivid.pipeline.resources import format_bytes
+    from fivid.execution.resources import format_bytes
     from fivid.solver.basis_cache import cache_info, clear_cache
     from fivid.storage import dumps_json
 

@@ -63,9 +63,9 @@ def run(args) -> int:
     """Handler of ``fivid cea``."""
     from fivid.errors import ConfigError
     from fivid.fe import load_model
+    from fivid.execution.resources import check_modal_memory
     from fivid.fe.cea import Linearisation, cea_to_json, complex_eigenvalue_analysis
     from fivid.fe.static import pressed_by_itself
-    from fivid.pipeline.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json, write_netcdf
 
     mu = _mu_grid(args.mu)

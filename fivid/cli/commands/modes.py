@@ -52,8 +52,8 @@ def run(args) -> int:
     from fivid.errors import ConfigError
     from fivid.fe import load_model
     from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
+    from fivid.execution.resources import check_modal_memory
     from fivid.fe.static import pressed_by_itself
-    from fivid.pipeline.resources import check_modal_memory
     from fivid.storage import check_writable, dumps_json
 
     if args.n_modes < 1:

@@ -106,7 +106,7 @@ def run(args) -> int:
 
     from fivid.errors import FividError
     from fivid.io import write_run
-    from fivid.pipeline.resources import check_monte_carlo_size, check_simulation_memory, simulation_memory
+    from fivid.execution.resources import check_monte_carlo_size, check_simulation_memory, simulation_memory
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
 
@@ -123,7 +123,7 @@ def run(args) -> int:
     size = simulation_memory(model, duration=inputs.schedule.duration, sample_rate=inputs.schedule.sample_rate,
                              time_step=inputs.integration.time_step, law=law)
     check_simulation_memory(size, n_dofs=2 * model.n_nodes)  # before any allocation: a year of records fails here
-    if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.pipeline.resources)
+    if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.execution.resources)
         check_monte_carlo_size(size, samples=args.samples, nperseg=args.nperseg, n_dofs=2 * model.n_nodes,
                                workers=args.workers)
     if args.dry_run:
@@ -331,7 +331,7 @@ def _load_model(path):
     """The model of ``path``; a mesh too large for this machine is a ConfigError naming the file."""
     from fivid.errors import ConfigError
     from fivid.fe import load_model
-    from fivid.pipeline.resources import available_memory, format_bytes
+    from fivid.execution.resources import available_memory, format_bytes
 
     try:
         return load_model(path)
