@@ -40,6 +40,7 @@ import numpy as np
 from pydantic import Field
 
 from fivid.config_layer import ConfigModel, Number, Quantity
+from fivid.report.html import figure_data_uri, new_figure
 from fivid.signal.peaks import near_frequencies, strongest_peaks
 from fivid.study.axes import AXES
 from fivid.study.coupling import WEAK_STRONG_THRESHOLD, peak_positions, reference_frequencies, response_coupling
@@ -343,13 +344,11 @@ def peak_figure(summary: dict) -> str:
     the strongest largest, coloured by roughness; the uncoupled frequencies dashed, the coupled solid."""
     import matplotlib.ticker
 
-    from fivid.report.html import figure_data_uri
-    from fivid.study.report import _figure
 
     ref = summary["reference_frequencies"]
     pts = [p for p in summary["points"] if p.get("peak_frequencies")]
     top = 1.1 * max(max(f for p in pts for f in p["peak_frequencies"]), 1.0)
-    fig, ax = _figure(7.5, 4.5)
+    fig, ax = new_figure(7.5, 4.5)
     for f in ref["uncoupled"]:
         if f <= top:
             ax.axhline(f / 1e3, color="C0", ls="--", lw=0.8)
