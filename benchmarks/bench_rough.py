@@ -25,7 +25,7 @@ full-scale model config exists: ``full_scale_slave_nodes``, ``full_scale_dofs``,
 node count, measured in this run, as ``bench_solver.py``'s ``rough_fraction_of_bare_stencil``), the same without its
 contact pair (``full_scale_no_contact_fraction_of_bare_stencil``: the mapped stencil's own cost), the contact's
 share of the step ``full_scale_contact_share`` and ``full_scale_steps`` of a short preload-and-slide record
-(30 mm/s).
+(30 mm/s). With ``--quick`` the full-scale figures come from a 12 mm cut at the same spacing (the smoke run).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def main(argv=None) -> int:
     ap.add_argument("--full-scale-only", action="store_true", help="only the full-scale contact figures")
     args, load = parse_guarded(ap, argv)
     out = {"benchmark": "rough", "quick": bool(args.quick)}
-    out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300))
+    out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300, 0.012 if args.quick else 0.12))
     if args.full_scale_only:
         out["load_average_1min"] = load
         print(json.dumps(out))
@@ -119,9 +119,10 @@ def main(argv=None) -> int:
     return 0
 
 
-def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8):
+def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12):
     """The full-scale rough pair (see the module docstring): ``configs/models/rough_pair.yaml`` with
-    ``ceil(120 mm / (rsm / per_rsm))`` divisions along x and Gaussian profiles of ``ra``, ``rsm`` [m]."""
+    ``ceil(length / (rsm / per_rsm))`` divisions along x over ``length`` [m] (0.12: the paper's blocks) and
+    Gaussian profiles of ``ra``, ``rsm`` [m]."""
     import math
 
     import yaml
@@ -131,18 +132,20 @@ def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8):
     from fivid.surface.rough_pair import RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
 
     data = yaml.safe_load((ROOT / "configs/models/rough_pair.yaml").read_text())
-    length = 0.12
     nx = math.ceil(length / (rsm / per_rsm))
     for body in data["bodies"].values():
         body["divisions"] = [nx, body["divisions"][1]]
+        # the corners in the file's units: scale x to ``length`` (120 mm in the file; --quick cuts it)
+        body["corners"] = [[f"{float(str(x).split()[0]) * length / 0.12:.9g} mm", y] for x, y in body["corners"]]
     lower, upper = synthetic_rough_profiles(ra, length, correlation_length=rsm / RSM_PER_CORRELATION_LENGTH,
                                             step=rsm / (2 * per_rsm), seeds=(3, 4))
     cfg, _ = rough_pair_config(data, lower, upper, sensor_every=64)
     return load_model(cfg)
 
 
-def _full_scale(rounds, steps):
-    """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run, best of ``rounds``."""
+def _full_scale(rounds, steps, length=0.12):
+    """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run, best of ``rounds``, on
+    blocks ``length`` [m] long (``--quick``: a 12 mm cut at the same surface spacing, so the smoke run stays short)."""
     import dataclasses
 
     import numpy as np
@@ -153,7 +156,7 @@ def _full_scale(rounds, steps):
     from fivid.solver.stencil import block_stencils
     from fivid.solver.timestep import stable_step
 
-    model = _full_scale_pair()
+    model = _full_scale_pair(length=length)
     st = block_stencils(load_model(ROOT / "configs/models/triboair.yaml"))
     c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
     bare = _bare_kernels()[0]
@@ -161,7 +164,7 @@ def _full_scale(rounds, steps):
     kw = dict(condition=OperatingCondition(sliding_velocity=0.03),
               schedule=RunSchedule(duration=steps * dt, sample_rate=1.0 / (16 * dt), preload_time=2 * dt,
                                    settle_time=0.0, base_ramp_time=2 * dt))
-    out = {"full_scale_model": "configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um)",
+    out = {"full_scale_model": f"configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um), {length * 1e3:g} mm long",
            "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
            "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt}
     frac, _, _, sweeps, _ = _mapped_fraction(model, c_rect, bare, kw, steps * dt, rounds)
