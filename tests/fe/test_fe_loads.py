@@ -9,6 +9,7 @@ from fivid.errors import ConfigError
 from fivid.fe import external_load_vector, load_model, pressure_forces, static_response
 from tests.helpers.solver_models import cantilever
 from tests.helpers.convergence import assert_order
+from tests.helpers.config_errors import assert_config_error
 
 EPS = np.finfo(float).eps
 PC = {"E": "2.3 GPa", "nu": 0.3, "rho": "1200 kg/m^3"}
@@ -148,11 +149,7 @@ def test_pressure_enters_the_contact_preload(root):
 def test_bad_load_is_a_config_error(load, key, words):
     cfg = copy.deepcopy(cantilever())
     cfg["loads"] = [load]
-    with pytest.raises(ConfigError) as exc:
-        load_model(cfg)
-    assert exc.value.key == key
-    for w in words:
-        assert w in str(exc.value)
+    assert_config_error(cfg, key, words)
 
 
 def test_pressurised_free_ring_stays_axisymmetric_in_the_explicit_solver():
