@@ -16,7 +16,7 @@ import pytest
 from fivid.fe.cea import cea_mode_shapes
 from fivid.fe.modal import modal_analysis
 from fivid.fe.build import load_model
-from fivid.study.kinds.ring import _phasors, bore_probes
+from fivid.study.kinds.ring import _complex_mac, _phasors, bore_probes
 
 
 def _ring():
@@ -69,5 +69,16 @@ def test_phasor_of_a_growing_field_gives_its_shape_and_frequency():
     v = np.real(phi[None, :] * np.exp((2j * np.pi * f0 + 2000.0) * t[:, None]))
     f, z = _phasors(v, fs)
     assert abs(f - f0) <= fs / (8 * t.size)  # one bin of the x8 zero-padded DFT
-    mac = abs(np.vdot(phi, z)) ** 2 / np.real(np.vdot(phi, phi) * np.vdot(z, z))
-    assert mac > 0.99  # the negative-frequency image leaks ~1e-3 through the Hann window at 10 periods
+    assert _complex_mac(phi, z) > 0.99  # the negative-frequency image leaks ~1e-3 through the Hann window at 10 periods
+
+
+def test_mac_tells_a_travelling_wave_from_its_mirror():
+    """A wave of n nodal diameters travelling one way around the bore against the same wave travelling the other
+    way (the shape a CEA with the sliding direction reversed gives): orthogonal, MAC 0 (sum of exp(2 i n theta)
+    over equally spaced nodes); against itself at any complex scale and against its standing part: 1 and 1/2."""
+    theta = 2 * np.pi * np.arange(180) / 180
+    n = 3
+    ccw = np.exp(1j * n * theta)
+    assert _complex_mac(ccw, (0.3 - 2j) * ccw) == pytest.approx(1.0, rel=1e-12)
+    assert _complex_mac(ccw, np.conj(ccw)) == pytest.approx(0.0, abs=1e-25)
+    assert _complex_mac(ccw, np.cos(n * theta)) == pytest.approx(0.5, rel=1e-12)
