@@ -159,18 +159,23 @@ def test_the_pooled_replicate_scatter_recovers_the_generator_sigma():
 QUICK = ROOT / "configs/models/rough_pair_paper_quick.yaml"
 
 
-def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations():
+@pytest.mark.parametrize("transition", [False, True], ids=["graded", "transition"])
+def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations(transition):
     """One point of the 12 x 2 mm cut (Table 1's Ra 26 um at Rsm/4, 12.5 cm/s, 0.45 ms): the power the drive and
     the load put in over the steady window equals friction + vibratory (damping) + impact power + the rate of
     change of the stored energies, to the solver's energy-balance error (its change over the window); each
     dissipation is >= 0; the shock intensity is the vibratory energy per shock (P = n_c E). (Friction power = mu Fn V
-    is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.)"""
+    is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.) Both meshes:
+    graded through the depth, and coarsening along x with depth (fivid.fe.transition: tied levels, whose kernel
+    elimination must keep the balance)."""
     from fivid.score.roughness import dissipation_rate, roughness_metrics
     from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
     from fivid.study.roughness import build_point_model
 
-    model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3},
+    model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3,
+                                               "transition": transition},
                                        {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0})
+    assert bool(model.ties) == transition
     ds = simulate(model, OperatingCondition(sliding_velocity=0.125, roughness_ra=26e-6),
                   schedule=RunSchedule(duration=0.45e-3, sample_rate=2e6, settle_time=0.05e-3),
                   integration=IntegrationOptions(gs_tolerance=1e-6, gs_max_iterations=30),
