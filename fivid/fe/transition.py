@@ -31,12 +31,18 @@ import numpy as np
 
 import fivid.fe.model as fm
 
-__all__ = ["DEPTH_PER_MAX_WIDTH", "TransitionLevels", "transition_levels", "transition_columns", "surface_rows_for", "transition_model"]
+__all__ = ["DEPTH_PER_MAX_WIDTH", "WIDTH_TOLERANCE", "TransitionLevels", "transition_levels", "transition_columns", "surface_rows_for", "transition_model"]
 
 
 #: the widest element of a coarsening stack is the block's depth over this (8: 1 mm in seed 003's 8 mm blocks):
 #: the bulk's bending is then resolved to ~0.5 % in frequency below 20 kHz (docs/roughness.md, tests/fe/test_fe_transition.py)
 DEPTH_PER_MAX_WIDTH = 8
+
+
+#: relative slack of the ``max_width`` cap: the surface step is ``length / nx`` (a few % under the asked one) and a
+#: block's depth (to its profile's mean line) differs from the nominal one by the profile's mean height; neither
+#: may drop a level whose width is the nominal cap (1.026 mm for Ra 26's 64.1 um x 16)
+WIDTH_TOLERANCE = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,7 +75,7 @@ def transition_levels(nx: int, step: float, depth: float, *, surface_rows: int =
 
     Level 0: ``surface_rows`` rows of ``step``; level ``k``: ``rows_per_level`` square rows of ``step 2^k`` while
     the rest of the depth holds that level and the next one, ``nx`` divides by ``2^k`` and ``step 2^k`` is at most
-    ``max_width`` [m] (None: no cap); the last level fills the remaining depth with rows as close to square as
+    ``max_width`` [m] (None: no cap; within :data:`WIDTH_TOLERANCE`); the last level fills the remaining depth with rows as close to square as
     whole rows allow.
 
     Raises
@@ -86,7 +92,7 @@ def transition_levels(nx: int, step: float, depth: float, *, surface_rows: int =
                          f"{depth:g} m")
     cap = math.inf if max_width is None else float(max_width)
     top = 0  # the coarsest level allowed by divisibility and the cap
-    while nx % 2 ** (top + 1) == 0 and step * 2 ** (top + 1) <= cap * (1 + 1e-12):
+    while nx % 2 ** (top + 1) == 0 and step * 2 ** (top + 1) <= cap * (1 + WIDTH_TOLERANCE):
         top += 1
     cols, rows, thick = [nx], [surface_rows], [step]
     rest = depth - surface_rows * step
@@ -212,7 +218,7 @@ def transition_model(model: fm.Model, bodies, *, surface_rows: int | None = None
     :func:`fivid.fe.rough_pair.rough_pair_config`), with ``nx`` dividing by ``2^K`` (:func:`transition_columns`);
     its divisions through the depth are replaced. References into it are carried over edge by edge: whole clamped
     edges stay clamped, motions, contacts and pressure loads keep the same edge and coordinate range, sensors go
-    to the nearest node of their edge (one sensor per node). The profiled edge keeps its nodes exactly.
+    to the nearest node of their edge (one sensor per node), reactions keep their edge. The profiled edge keeps its nodes exactly.
 
     Parameters
     ----------
@@ -231,7 +237,7 @@ def transition_model(model: fm.Model, bodies, *, surface_rows: int | None = None
     Raises
     ------
     ValueError
-        A named block is not a profiled rectangle, or springs, point masses or reactions use its nodes.
+        A named block is not a profiled rectangle, or springs or point masses use its nodes.
     """
     names = list(bodies)
     new_blocks, ties, replaced = [], [], {}
@@ -286,8 +292,6 @@ def transition_model(model: fm.Model, bodies, *, surface_rows: int | None = None
         _refuse(replaced, model, s.node_a, "spring", s.name)
         if s.node_b >= 0:
             _refuse(replaced, model, s.node_b, "spring", s.name)
-    for r in model.reactions:
-        _refuse(replaced, model, r.nodes[0], "reaction", r.name)
 
     fixed = set()
     fixed_old = set(int(d) for d in model.fixed_dofs)
@@ -308,6 +312,7 @@ def transition_model(model: fm.Model, bodies, *, surface_rows: int | None = None
         nodes = remap(m.nodes)
         motions.append(dataclasses.replace(m, nodes=nodes))
         fixed.update(int(2 * n + m.component) for n in nodes)
+    reactions = tuple(dataclasses.replace(r, nodes=remap(r.nodes)) for r in model.reactions)
     contacts = tuple(dataclasses.replace(c, slave_nodes=remap(c.slave_nodes),
                                          master_nodes=remap(c.master_nodes) if len(c.master_nodes) else c.master_nodes)
                      for c in model.contacts)
@@ -336,7 +341,7 @@ def transition_model(model: fm.Model, bodies, *, surface_rows: int | None = None
     fixed_dofs = fixed_dofs[~np.isin(fixed_dofs // 2, tied)]
     return dataclasses.replace(model, blocks=tuple(new_blocks), n_nodes=int(coords.shape[0]), coords=coords,
                                fixed_dofs=fixed_dofs, motions=tuple(motions), contacts=contacts, loads=tuple(loads),
-                               sensors=tuple(sensors), ties=tuple(ties))
+                               sensors=tuple(sensors), reactions=reactions, ties=tuple(ties))
 
 
 def _profiled_edge(model: fm.Model, block: fm.Block) -> str:
