@@ -15,6 +15,8 @@ import logging
 import os
 import time
 
+from fivid.errors import ConfigError, FividError, Interrupted
+
 __all__ = ["dask_client", "check_scheduler_address", "map_tasks", "SCHEDULER_SCHEMES"]
 
 #: address schemes of dask.distributed's comm backends that reach a scheduler over the network
@@ -47,8 +49,6 @@ def check_scheduler_address(address: str, *, timeout: float = 3.0) -> str:
     """
     import socket
     from urllib.parse import urlsplit
-
-    from fivid.errors import ConfigError
 
     form = "tcp://HOST:PORT, e.g. tcp://10.0.0.5:8786 as 'dask scheduler' prints it"
     text = str(address).strip()
@@ -91,8 +91,6 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
         How long to try reaching ``scheduler`` [s].
     """
     from distributed import Client, LocalCluster
-
-    from fivid.errors import FividError
 
     if scheduler is not None:
         try:
@@ -216,8 +214,6 @@ def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = No
     ``seconds`` is the wall time of the task on its worker, ``pid`` the worker's process id.
     """
     from distributed import as_completed
-
-    from fivid.errors import Interrupted
 
     with dask_client(workers=workers, scheduler=scheduler, connect_timeout=connect_timeout) as client:
         Interrupted.raise_if_received()  # a signal during the cluster's start-up
