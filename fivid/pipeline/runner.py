@@ -210,7 +210,6 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         The content of ``summary.json`` (empty for a dry run).
     """
     if scheduler is not None:  # before any work: a bad address used to fail after three stages
-
         check_scheduler_address(scheduler)
     out = plan.config.output
     check_output_folder(out, force=force)

@@ -71,7 +71,6 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int | Non
     meas = {Path(p).stem: steady(p) for p in measured}
     sims = {Path(p).stem: steady(p) for p in simulated}
     if nperseg is None:  # one segment for the whole condition, so that every PSD is on one grid
-
         rates = {k: sample_rate_of(d["time"].values, label=k) for k, d in {**meas, **sims}.items()}
         fs = min(rates.values())
         nperseg = default_nperseg(fs, min(d.sizes["time"] * fs / rates[k] for k, d in {**meas, **sims}.items()))

@@ -82,7 +82,6 @@ class Ingest:
         cfg = ctx.config
         profile = None
         if cfg.rig_profile is not None:  # keyed by the profile file's content, found by name or path
-
             found = load_rig_profile(cfg.rig_profile).path
             profile = {"profile": cfg.rig_profile, "sha256": file_sha256(found) if found else None}
         tasks, shas = [], {}

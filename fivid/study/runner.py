@@ -86,7 +86,6 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
     from tqdm.auto import tqdm
 
     if scheduler is not None:  # before any work or output
-
         check_scheduler_address(scheduler)
     outdir = Path(outdir)
     started = time.perf_counter()
