@@ -37,6 +37,7 @@ from fivid.friction.amplitude import AMPLITUDE_FORMS
 from fivid.io import load_rig_profile, read_rig_head
 from fivid.io.rig_csv import as_rig_profile
 from fivid.signal.welch import default_nperseg
+from fivid.solver.options import DEFAULT_REDUCED_TOLERANCE, ReducedToleranceField, SolverPathField
 
 __all__ = [
     "STAGE_REQUIRES",
@@ -117,7 +118,7 @@ class RunConfig:
     seeds: tuple[int, ...]
     thresholds: tuple[Threshold, ...]
     solver: str = "auto"
-    reduced_tolerance: float = 0.5
+    reduced_tolerance: float = DEFAULT_REDUCED_TOLERANCE
     data_model: Path | None = None
 
 
@@ -275,11 +276,8 @@ class _Simulate(ConfigModel):
     samples: Annotated[int, AfterValidator(_samples), WithJsonSchema({"anyOf": [
         {"const": 0}, {"type": "integer", "minimum": 2, "maximum": 10000}]})] = Field(
         0, description="Monte-Carlo samples of the law's uncertainty per condition (0: off; docs/uncertainty.md)")
-    solver: Literal["auto", "full", "reduced"] = Field(
-        "auto", description="solver path: auto (reduced when its estimated error in the scoring band is within "
-                            "reduced_tolerance), full or reduced (docs/solver.md)")
-    reduced_tolerance: Annotated[float, Field(ge=0.0)] = Field(
-        0.5, description="largest estimated in-band log-spectral distance [dB] of the reduced path for solver: auto")
+    solver: SolverPathField = "auto"
+    reduced_tolerance: ReducedToleranceField = DEFAULT_REDUCED_TOLERANCE
 
 
 class _Discretisation(ConfigModel):

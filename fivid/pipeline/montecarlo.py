@@ -97,16 +97,10 @@ def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSche
     bar = tqdm(total=len(items), desc="Monte-Carlo", unit="sample", leave=False, disable=None if progress is None
                else not progress)
     try:
-        if workers == 0 and scheduler is None:
-            for name, args in items.items():
-                results[name] = sample_spectrum(*args)
-                bar.update(1)
-        else:
-            for name, out, seconds, pid in map_tasks(sample_spectrum, items, workers=max(int(workers), 1),
-                                                     scheduler=scheduler):
-                log.info("Monte-Carlo %s: %.3g s on worker pid %d", name, seconds, pid)
-                results[name] = out
-                bar.update(1)
+        for name, out, seconds, pid in map_tasks(sample_spectrum, items, workers=int(workers), scheduler=scheduler):
+            log.info("Monte-Carlo %s: %.3g s on worker pid %d", name, seconds, pid)
+            results[name] = out
+            bar.update(1)
     finally:
         bar.close()
     ordered = [results[name] for name in items]  # sample order, whatever the finishing order

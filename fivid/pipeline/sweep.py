@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 
-from fivid.execution.cluster import map_tasks
+from fivid.execution.cluster import call, map_tasks
 from fivid.fe import load_model
 from fivid.friction import load_law
 from fivid.friction.inputs import FrictionInput, OperatingCondition
@@ -57,7 +57,7 @@ def run_simulations(ctx, tasks) -> None:
     bar = tqdm(total=len(tasks), desc="simulate", unit="sim", leave=False,
                disable=None if ctx.progress is None else not ctx.progress)
     try:
-        for name, ds, seconds, pid in map_tasks(_apply, items, workers=ctx.workers, scheduler=ctx.scheduler):
+        for name, ds, seconds, pid in map_tasks(call, items, workers=ctx.workers, scheduler=ctx.scheduler):
             task = by_name[name]
             log.info("simulate/%s computed by worker pid %d", name, pid)
             write_run(ds, task.outputs["sim"], overwrite=True)
@@ -65,7 +65,3 @@ def run_simulations(ctx, tasks) -> None:
             bar.update(1)
     finally:
         bar.close()
-
-
-def _apply(func, *args):
-    return func(*args)

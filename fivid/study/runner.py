@@ -24,7 +24,6 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
 import time
 from pathlib import Path
 
@@ -58,13 +57,6 @@ def _safe_evaluate(kind, system, tasks, conditions):
         return kind.evaluate(system, tasks, conditions), None
     except Exception as exc:  # noqa: BLE001 - any failure of one point is reported, the study goes on
         return None, f"{type(exc).__name__}: {exc}"
-
-
-def _in_process(items: dict):
-    for name, args in items.items():
-        t0 = time.perf_counter()
-        out = _safe_evaluate(*args)
-        yield name, out, time.perf_counter() - t0, os.getpid()
 
 
 def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, progress=None) -> dict:
@@ -103,10 +95,7 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
         log.info("study %s: %d points, %d to compute", study.name, len(table), len(todo))
         timing, failed = {}, {}
         if todo:
-            if workers == 0 and scheduler is None:
-                results = _in_process(todo)
-            else:
-                results = map_tasks(_safe_evaluate, todo, workers=max(workers, 1), scheduler=scheduler)
+            results = map_tasks(_safe_evaluate, todo, workers=workers, scheduler=scheduler)
             with tqdm(total=len(todo), desc=f"study {study.name}", unit="point", leave=False,
                       disable=None if progress is None else not progress) as bar:
                 for i, (ds, error), seconds, pid in results:
