@@ -10,13 +10,16 @@ zero-padded DFT's bin).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from fivid.fe.cea import cea_mode_shapes
+from fivid.fe.cea import Linearisation, cea_mode_shapes, complex_eigenvalue_analysis
 from fivid.fe.modal import modal_analysis
 from fivid.fe.build import load_model
 from fivid.study.kinds.ring import _complex_mac, _phasors, bore_probes
+from fivid.updating.predict import pair_critical_mu
 
 
 def _ring():
@@ -89,11 +92,6 @@ def test_fitted_ring_meets_seed_002s_modal_facts():
     """configs/models/ring.yaml (clamped ring, fitted by fivid update) against seed 002's modal facts with issue
     31's acceptance tolerances: the doublet 6/7 at 10 kHz +- 10 %, its critical mu 0.15 +- 0.05 (prestressed CEA,
     mu 0-1 in 21 steps, Brent-refined), mode 20 within the fit's 5 % of 15 kHz (slow: a CEA, ~30 s)."""
-    from pathlib import Path
-
-    from fivid.fe.cea import Linearisation, complex_eigenvalue_analysis
-    from fivid.updating.predict import pair_critical_mu
-
     model = load_model(Path(__file__).resolve().parents[2] / "configs" / "models" / "ring.yaml")
     f = modal_analysis(model, 24, include_contact=True, prestress=True)["frequency"].values
     assert f[5] == pytest.approx(f[6], rel=1e-9)  # an exact doublet: the clamped ring is axisymmetric
