@@ -27,9 +27,20 @@ The GW surfaces of the ``roughness_ra`` levels come from profiles through the sp
 a Gaussian profile synthesised to the level's Ra (SYNTHETIC, :func:`fivid.surface.gaussian_random_profile`,
 the section's correlation length and seed).
 
+**Settling** (``settle_level``, 40 dB by default): the clamp's displacement ramp rings the beams' modes, and a
+light load's friction cannot drive anything near that ring-down. Each transient's schedule waits
+:func:`settle_time` between the preload ramp and the base ramp (:class:`fivid.solver.RunSchedule`'s
+``settle_time``): the time the slowest reference mode inside the PSD band (the exact decay rate ``-Re(s)`` of
+its Rayleigh damping, :func:`fivid.fe.damping.modal_root`) needs to decay by ``settle_level``; the analysed
+record (the second half of the steady part) then starts that long plus the base ramp and half the record after
+the clamp stopped. The summary's ``settle`` gives the time, the mode and its rate.
+
 What the perturbation adds (``coulomb_reference``): per point the PSD with the law and with Coulomb mu0, split
 into the band of the reference modes (within ``band_width`` of either set) and the rest:
-``gain_modes_db``, ``gain_rest_db``.
+``gain_modes_db``, ``gain_rest_db``; the perturbation's own response (law minus Coulomb on the same start-up)
+in each band, ``power_*_perturbation``, and per unit of its friction force (``A N``, the law's amplitude at
+the point's velocity and roughness times the load), ``transfer_modes_db``, ``transfer_rest_db`` [dB re
+1 (m s-2)^2 N-2]: what the contact passes from the friction force to the sensor, load by load.
 """
 
 from __future__ import annotations
@@ -40,6 +51,8 @@ import numpy as np
 from pydantic import Field
 
 from fivid.config_layer import ConfigModel, Number, Quantity
+from fivid.errors import ConfigError
+from fivid.fe.damping import modal_root
 from fivid.report.html import figure_data_uri, new_figure
 from fivid.signal.peaks import near_frequencies, strongest_peaks
 from fivid.study.axes import AXES
@@ -51,7 +64,7 @@ from fivid.surface.contact_law import gw_parameters
 from fivid.surface.rough_pair import RQ_PER_RA
 
 __all__ = ["WeakStrong", "WeakStrongSettings", "KIND", "transitions", "study_surfaces", "RESPONSE_KEYS", "agreement",
-           "seed_checks", "peak_figure", "dumps_checks", "DEFAULTS"]
+           "seed_checks", "peak_figure", "dumps_checks", "DEFAULTS", "settle_time"]
 
 #: per-point results of the response criterion and the band decomposition copied into summary.json
 RESPONSE_KEYS = (("coupling", "coupling"), ("coupling_response", "coupling_response"),
@@ -60,12 +73,13 @@ RESPONSE_KEYS = (("coupling", "coupling"), ("coupling_response", "coupling_respo
                  ("power_rest", "power_rest"), ("power_rest_coulomb", "power_rest_coulomb"),
                  ("power_modes", "power_modes"), ("power_modes_coulomb", "power_modes_coulomb"),
                  ("power_modes_perturbation", "power_modes_perturbation"),
-                 ("power_rest_perturbation", "power_rest_perturbation"), ("coulomb_decay_db", "coulomb_decay_db"),
+                 ("power_rest_perturbation", "power_rest_perturbation"), ("transfer_modes_db", "transfer_modes_db"),
+                 ("transfer_rest_db", "transfer_rest_db"), ("coulomb_decay_db", "coulomb_decay_db"),
                  ("cea_growth_mu0", "cea_growth_mu0"))
 #: the section's defaults (SI)
 DEFAULTS = {"correlation_length": 10e-6, "profile_length": 4e-3, "profile_step": 0.5e-6, "profile_seed": 1,
             "n_peaks": 5, "prominence_db": 10.0, "reference_modes": 12, "band_width": 0.05, "twin": None,
-            "cea_at_mu0": True}
+            "cea_at_mu0": True, "settle_level": 40.0}
 
 
 class WeakStrongSettings(ConfigModel):
@@ -84,6 +98,9 @@ class WeakStrongSettings(ConfigModel):
     twin: str | None = Field(None, description="folder of the twin's rig CSVs (relative to the study file) for "
                                                "seed 000's checks: amplitude linear in V, Coulomb's broadband level")
     cea_at_mu0: bool | None = Field(None, description="a CEA at the law's mu0 at every point (default true)")
+    settle_level: Annotated[Number, Field(gt=0)] = Field(
+        None, description="decay [dB] of the slowest reference mode in the PSD band before the base ramp starts "
+                          "(default 40): sets each transient's settle_time")
 
 
 class WeakStrong(FeSweep):
@@ -125,11 +142,22 @@ class WeakStrong(FeSweep):
                               surface=None if ra is None else surfaces[ra])
         f0, f1 = reference_frequencies(model, cfg["reference_modes"], float(np.max(loads)))
         out["reference_frequencies"] = {"uncoupled": f0.tolist(), "coupled": f1.tolist()}
+        band = (study.points.get("psd") or {}).get("band", (0.0, np.inf))
+        inside = [f for f in np.concatenate([f0, f1]) if band[0] <= f <= band[1]]
+        out["settle"] = settle_time(inside, model.rayleigh_alpha, model.rayleigh_beta, model.damping_cutoff,
+                                    cfg["settle_level"])
         return out
 
     def evaluate(self, system: dict, tasks: dict, conditions: dict):
         """:func:`fivid.study.tasks.fe_point` and the response criterion on its PSD (module docstring)."""
+        if "settle" in system and "transient" in tasks:
+            tasks = {**tasks, "transient": {**tasks["transient"], "settle_time": system["settle"]["time"]}}
         ds = fe_point(system, tasks, conditions)
+        if "settle" in system and "transient" in tasks:
+            st = system["settle"]
+            ds["settle_time"] = ((), st["time"], {"units": "s", "long_name": "wait between preload and base ramp",
+                                                  "level_db": st["level_db"], "mode_frequency": st["mode_frequency"],
+                                                  "decay_rate": st["decay_rate"], "rule": st["rule"]})
         ref = system.get("reference_frequencies")
         if ref is None or "psd" not in ds:
             return ds
@@ -180,6 +208,13 @@ class WeakStrong(FeSweep):
                 num, den = q[sel].sum(), qc[sel].sum()
                 ds[key] = ((), 10 * np.log10(num / den) if num > 0 and den > 0 else np.nan,
                            {"units": "dB", "long_name": f"law minus Coulomb mu0, power in {what}"})
+        if "power_modes_perturbation" in ds and conditions.get("normal_load"):
+            force = _perturbation_force(tasks, conditions)
+            for part in ("modes", "rest"):
+                q = float(ds[f"power_{part}_perturbation"])
+                ds[f"transfer_{part}_db"] = ((), 10 * np.log10(q / force**2) if q > 0 and force > 0 else np.nan, {
+                    "units": "dB re 1 (m s-2)^2 N-2", "long_name": f"perturbation's response power in the {part} band "
+                    "per unit friction-force power (A N)^2", "force_rms": force})
         return ds
 
     def report(self, page, ds, summary: dict) -> None:
@@ -218,6 +253,12 @@ class WeakStrong(FeSweep):
             ref = {k: ds[f"reference_{k}"] for k in ("uncoupled", "coupled")}
             out["reference_frequencies"] = {k: [float(x) for x in (v.isel(point=0) if "point" in v.dims else v).values]
                                             for k, v in ref.items()}
+        if "settle_time" in ds:
+            st = ds["settle_time"]
+            st = st.isel(point=0) if "point" in st.dims else st
+            out["settle"] = {"time": float(st), **{k: st.attrs[k] for k in ("level_db", "mode_frequency",
+                                                                              "decay_rate", "rule") if k in st.attrs},
+                             "units": {"time": "s", "mode_frequency": "Hz", "decay_rate": "s-1", "level_db": "dB"}}
         out.update(transitions(points))
         modal = transitions(points, key="coupling_modal")
         if modal:
@@ -227,6 +268,46 @@ class WeakStrong(FeSweep):
         cfg["band"] = (study.points.get("psd") or {}).get("band", (100.0, 20e3))
         out["seed_checks"] = seed_checks(points, cfg, out.get("reference_frequencies"), study.source)
         return out
+
+
+def settle_time(frequencies, alpha: float, beta: float, cutoff: float, level_db: float) -> dict:
+    """How long the slowest of ``frequencies`` [Hz] takes to decay by ``level_db`` [dB] under Rayleigh damping.
+
+    The decay rate of a mode is ``-Re(s)`` of its exact root (:func:`fivid.fe.damping.modal_root`: classic or
+    band-limited Rayleigh, ``alpha`` [s-1], ``beta`` [s], ``cutoff`` [Hz]; to first order ``alpha/2 +
+    beta omega^2/2``, the lowest mode slowest); the amplitude falls by ``level_db`` in
+    ``ln(10) level_db / 20 / rate``.
+
+    Returns ``{"time" [s], "level_db", "mode_frequency" [Hz], "decay_rate" [s-1], "rule"}``.
+
+    Examples
+    --------
+    >>> round(settle_time([1000.0], 50.0, 0.0, float("inf"), 40.0)["time"], 4)   # rate alpha/2 = 25 s-1
+    0.1842
+    """
+    f = np.asarray(frequencies, dtype=float)
+    if f.size == 0:
+        raise ConfigError("settle_time needs at least one reference mode inside the PSD band (points.psd.band)",
+                          key="points.psd.band")
+    rates = -np.real(modal_root(f, float(alpha), float(beta), float(cutoff)))
+    i = int(np.argmin(rates))
+    if not rates[i] > 0:
+        raise ConfigError(f"the mode at {f[i]:.6g} Hz has no damping (alpha {alpha!r}, beta {beta!r}): it never "
+                          "settles; give the model damping (model config 'damping')", key="damping")
+    return {"time": float(np.log(10.0) * level_db / 20.0 / rates[i]), "level_db": float(level_db),
+            "mode_frequency": float(f[i]), "decay_rate": float(rates[i]),
+            "rule": "the slowest reference mode in the PSD band decays by level_db (Rayleigh damping's exact rate)"
+                    " between the preload ramp and the base ramp (RunSchedule.settle_time)"}
+
+
+def _perturbation_force(tasks, conditions) -> float:
+    """RMS of the perturbation's friction force [N]: the law's amplitude at the point's velocity and roughness
+    times the normal load (``injection: uniform``: every sliding node's mu_p(t) is the same)."""
+    from fivid.friction import load_law
+
+    law = load_law(tasks["transient"]["law"])
+    a = law.amplitude(conditions.get("sliding_velocity"), conditions.get("roughness_ra"), conditions["normal_load"])
+    return float(a) * float(conditions["normal_load"])
 
 
 def _law_band_top(tasks, guard: float) -> float:
@@ -387,7 +468,6 @@ def study_surfaces(cfg: dict, roughness_levels, source=None) -> dict:
     """
     from pathlib import Path
 
-    from fivid.errors import ConfigError
     from fivid.surface import evaluate_profile
 
     levels = [] if roughness_levels is None else [float(r) for r in np.unique(roughness_levels)]
