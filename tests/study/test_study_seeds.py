@@ -83,6 +83,12 @@ def test_weak_strong_study_quick(tmp_path, capsys):
     assert t["criterion"].startswith("response")
     assert "transition_load_modal" in s and s["coupling_agreement"]["n_points"] == 3
     assert all(np.isfinite(p["gain_modes_db"]) and np.isfinite(p["gain_rest_db"]) for p in pts)
+    assert all(np.isfinite(p["transfer_modes_db"]) and np.isfinite(p["transfer_rest_db"]) for p in pts)
+    # settling: the slowest reference mode in the PSD band is the lowest (Rayleigh's rate grows with frequency);
+    # 40 dB of its decay at the rate reported
+    st = s["settle"]
+    assert st["mode_frequency"] == min(ref["uncoupled"] + ref["coupled"]) and st["level_db"] == 40
+    assert st["time"] == pytest.approx(np.log(100.0) / st["decay_rate"], rel=1e-9)
     checks = s["seed_checks"]
     assert checks["cea_stable_at_mu0"]["n_points"] == 3
     assert checks["amplitude_linear_in_velocity"]["significant"] is False

@@ -229,10 +229,18 @@ class WeakStrong(FeSweep):
                         "peak frequencies against load")
             rows = [[p.get("normal_load"), p.get("roughness_ra"), p.get("coupling"), p.get("coupling_response"),
                      p.get("coupling_modal"), p.get("narrowband_fraction"), p.get("gain_modes_db"),
-                     p.get("gain_rest_db")] for p in summary["points"] if p.get("status") == "done"]
+                     p.get("gain_rest_db"), p.get("transfer_modes_db"), p.get("transfer_rest_db")]
+                    for p in summary["points"] if p.get("status") == "done"]
             page.raw(table(["normal_load [N]", "roughness_ra [m]", "coupling (response)", "coupling_response",
                             "coupling_modal (kappa)", "narrowband_fraction", "gain in modes' band [dB]",
-                            "gain elsewhere [dB]"], rows))
+                            "gain elsewhere [dB]", "perturbation transfer, modes' band [dB re 1 (m s-2)^2 N-2]",
+                            "perturbation transfer elsewhere [dB]"], rows))
+            st = summary.get("settle")
+            if st:
+                page.paragraph(f"Every transient waited {st['time']:.3g} s between the preload ramp and the base "
+                               f"ramp: the {st.get('mode_frequency', float('nan')):.0f} Hz reference mode, the "
+                               f"slowest in the PSD band ({st.get('decay_rate', float('nan')):.3g} s-1), decays by "
+                               f"{st.get('level_db', float('nan')):g} dB in that time.")
             a = summary.get("coupling_agreement") or {}
             if a:
                 page.paragraph(f"Response and modal labels agree at {a['n_agree']} of {a['n_points']} points.")
