@@ -457,7 +457,7 @@ def peak_figure(summary: dict) -> str:
     if t.get("value"):
         ax.axvline(t["value"], color="k", lw=0.8, ls=":", label=f"transition {t['value']:.3g} N")
     ax.set_xscale("log")
-    ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda x, _: f"{x:g}"))  # 0.01, not 0.0
     ax.set_ylim(0, top / 1e3)
     ax.set_xlabel("normal load [N]")
     ax.set_ylabel("frequency [kHz]")
