@@ -19,7 +19,7 @@ MODELS = Path(__file__).resolve().parents[2] / "configs" / "models"
 def test_quick_replaces_a_sweep_axis_whole():
     """weak_strong's quick sweep gives normal_load as values where the full study gives start/stop/num."""
     full, quick = load_study(STUDIES / "weak_strong.yaml"), load_study(STUDIES / "weak_strong.yaml", quick=True)
-    assert full.axes["normal_load"].size == 7 and np.isclose(full.axes["normal_load"][[0, -1]], [3e-3, 300]).all()
+    assert full.axes["normal_load"].size == 11 and np.isclose(full.axes["normal_load"][[0, -1]], [3e-3, 300]).all()
     assert quick.axes["normal_load"].tolist() == [3e-3, 1.0, 300.0]
     ring = load_study(STUDIES / "ring_mu_sweep.yaml")
     assert ring.cea is not None and "normal_load" not in ring.cea  # pressed by its loads: no clamp load needed
