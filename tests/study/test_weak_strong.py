@@ -101,3 +101,14 @@ def test_settle_time_is_the_slowest_modes_decay_to_the_level():
     assert limited["time"] == pytest.approx(np.log(10.0) / rate_bl, rel=1e-3)
     with pytest.raises(ValueError, match="never settles"):
         settle_time([838.0], 0.0, 0.0, float("inf"), 40.0)
+
+
+@pytest.mark.parametrize("regime, growth, decay, expected", [
+    ("mode_coupling", -29.6, 12.6, "stable"),         # stable CEA, Coulomb rings down: forced build-up
+    ("mode_coupling", 5.0, 12.6, "mode_coupling"),    # an unstable CEA: the growth may be the instability
+    ("mode_coupling", -29.6, -3.0, "mode_coupling"),  # Coulomb alone grows: not the law's forcing
+    ("stick_slip", -29.6, 12.6, "stick_slip"), ("stable", -29.6, 12.6, "stable")])
+def test_forced_regime_reads_a_build_up_under_a_stable_cea_as_stable(regime, growth, decay, expected):
+    from fivid.study.kinds.weak_strong import forced_regime
+
+    assert forced_regime(regime, growth, decay) == expected

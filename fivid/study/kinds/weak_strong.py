@@ -41,6 +41,10 @@ into the band of the reference modes (within ``band_width`` of either set) and t
 in each band, ``power_*_perturbation``, and per unit of its friction force (``A N``, the law's amplitude at
 the point's velocity and roughness times the load), ``transfer_modes_db``, ``transfer_rest_db`` [dB re
 1 (m s-2)^2 N-2]: what the contact passes from the friction force to the sensor, load by load.
+
+``regime``: the envelope analysis's label (kept as ``regime_transient``) unless :func:`forced_regime` reads its
+"mode_coupling" as the forced response building up from the settled, quiet start (CEA at mu0 stable, the
+Coulomb record decaying).
 """
 
 from __future__ import annotations
@@ -64,7 +68,8 @@ from fivid.surface.contact_law import gw_parameters
 from fivid.surface.rough_pair import RQ_PER_RA
 
 __all__ = ["WeakStrong", "WeakStrongSettings", "KIND", "transitions", "study_surfaces", "RESPONSE_KEYS", "agreement",
-           "seed_checks", "peak_figure", "dumps_checks", "DEFAULTS", "settle_time"]
+           "seed_checks", "peak_figure", "dumps_checks", "DEFAULTS", "settle_time",
+           "forced_regime"]
 
 #: per-point results of the response criterion and the band decomposition copied into summary.json
 RESPONSE_KEYS = (("coupling", "coupling"), ("coupling_response", "coupling_response"),
@@ -75,6 +80,7 @@ RESPONSE_KEYS = (("coupling", "coupling"), ("coupling_response", "coupling_respo
                  ("power_modes_perturbation", "power_modes_perturbation"),
                  ("power_rest_perturbation", "power_rest_perturbation"), ("transfer_modes_db", "transfer_modes_db"),
                  ("transfer_rest_db", "transfer_rest_db"), ("coulomb_decay_db", "coulomb_decay_db"),
+                 ("regime_transient", "regime_transient"),
                  ("cea_growth_mu0", "cea_growth_mu0"))
 #: the section's defaults (SI)
 DEFAULTS = {"correlation_length": 10e-6, "profile_length": 4e-3, "profile_step": 0.5e-6, "profile_seed": 1,
@@ -201,6 +207,13 @@ class WeakStrong(FeSweep):
         if cfg.get("cea_at_mu0", True) and "transient" in tasks and "law" in tasks["transient"]:
             ds["cea_growth_mu0"] = ((), _cea_growth_at_mu0(system, tasks, conditions), {
                 "units": "s-1", "long_name": "largest CEA real part at the law's mu0 and the point's load"})
+        if "regime" in ds and "cea_growth_mu0" in ds and "coulomb_decay_db" in ds:
+            ds["regime_transient"] = ds["regime"].copy()
+            ds["regime_transient"].attrs["long_name"] = "regime of the law's record by its envelope alone"
+            ds["regime"] = ((), np.array(forced_regime(str(ds["regime"].values), float(ds["cea_growth_mu0"]),
+                                                       float(ds["coulomb_decay_db"])), dtype=object),
+                            {**ds["regime"].attrs, "rule": "forced_regime: a mode_coupling envelope is the forced "
+                             "response building up when the CEA at mu0 is stable and the Coulomb record decays"})
         if "psd_coulomb" in ds:
             q, qc = ds["psd"].values, ds["psd_coulomb"].values
             for key, sel, what in (("gain_modes_db", band, "the reference modes' band"),
@@ -306,6 +319,22 @@ def settle_time(frequencies, alpha: float, beta: float, cutoff: float, level_db:
             "mode_frequency": float(f[i]), "decay_rate": float(rates[i]),
             "rule": "the slowest reference mode in the PSD band decays by level_db (Rayleigh damping's exact rate)"
                     " between the preload ramp and the base ramp (RunSchedule.settle_time)"}
+
+
+def forced_regime(regime: str, cea_growth: float, coulomb_decay_db: float) -> str:
+    """The regime of a point whose friction law forces the response: a "mode_coupling" label of the law's record
+    (its envelope rose and saturated) is the random forcing's response building up from the quiet, settled
+    start when the CEA at mu0 is stable (``cea_growth`` [s-1] < 0) and the same point with Coulomb mu0 alone
+    decays (``coulomb_decay_db`` > 0): then "stable"; otherwise ``regime`` unchanged.
+
+    Examples
+    --------
+    >>> forced_regime("mode_coupling", -29.6, 12.6), forced_regime("mode_coupling", 5.0, 12.6)
+    ('stable', 'mode_coupling')
+    """
+    if regime == "mode_coupling" and cea_growth < 0 and coulomb_decay_db > 0:
+        return "stable"
+    return regime
 
 
 def _perturbation_force(tasks, conditions) -> float:
