@@ -90,7 +90,9 @@ def test_weak_strong_study_quick(tmp_path, capsys):
     assert st["mode_frequency"] == min(ref["uncoupled"] + ref["coupled"]) and st["level_db"] == 40
     assert st["time"] == pytest.approx(np.log(100.0) / st["decay_rate"], rel=1e-9)
     checks = s["seed_checks"]
-    assert checks["cea_stable_at_mu0"]["n_points"] == 3
+    assert checks["cea_stable_at_mu0"]["n_points"] == 3 and checks["cea_stable_at_mu0"]["stable"] is True
+    # stable by CEA and Coulomb rings down: no point is called mode coupling (the law's build-up is forcing)
+    assert all(p["regime"] != "mode_coupling" and p["coulomb_decay_db"] > 0 for p in pts)
     assert checks["amplitude_linear_in_velocity"]["significant"] is False
     assert checks["peaks_follow_load"]["moves_from_uncoupled_to_coupled"] is True
 
