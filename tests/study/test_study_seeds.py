@@ -86,6 +86,8 @@ def test_weak_strong_study_quick(tmp_path, capsys):
     assert all(np.isfinite(p["transfer_modes_db"]) and np.isfinite(p["transfer_rest_db"]) for p in pts)
     # settling: the slowest reference mode in the PSD band is the lowest (Rayleigh's rate grows with frequency);
     # 40 dB of its decay at the rate reported
+    surf = s["surfaces"][repr(1.6e-6)]  # from the synthetic profile through the spectral moments
+    assert "SYNTHETIC" in surf["source"] and "McCool" in surf["source"] and surf["sigma"] > 0
     st = s["settle"]
     assert st["mode_frequency"] == min(ref["uncoupled"] + ref["coupled"]) and st["level_db"] == 40
     assert st["time"] == pytest.approx(np.log(100.0) / st["decay_rate"], rel=1e-9)

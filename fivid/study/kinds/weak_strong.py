@@ -263,7 +263,8 @@ class WeakStrong(FeSweep):
 
     def summarise(self, study, ds, points: list[dict]) -> dict:
         """The transition loads (response and modal), the reference sets, each point's ``peak_frequencies``,
-        where the response and modal labels agree, and the response's power law (``fits.rms``)."""
+        where the response and modal labels agree, the GW ``surfaces`` (per roughness level, with their
+        ``source``), the ``settle`` time and the response's power law (``fits.rms``)."""
         out = super().summarise(study, ds, points)
         if "peak_frequency" in ds:
             pk = ds["peak_frequency"].transpose("point", "peak").values
@@ -286,6 +287,8 @@ class WeakStrong(FeSweep):
             out["transition_load_modal"] = modal["transition_load"]
         out["coupling_agreement"] = agreement(points)
         cfg = {**DEFAULTS, **(study.points.get("weak_strong") or {})}
+        # the GW surface each roughness level's points ran with, and where it came from (a few ms to redo)
+        out["surfaces"] = study_surfaces(cfg, study.axes.get("roughness_ra"), study.source)  # SI
         cfg["band"] = (study.points.get("psd") or {}).get("band", (100.0, 20e3))
         out["seed_checks"] = seed_checks(points, cfg, out.get("reference_frequencies"), study.source)
         return out
