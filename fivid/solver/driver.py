@@ -322,6 +322,13 @@ def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance
                               "run the full model (IntegrationOptions(reduced=None), --full)")
         return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
                       "reason": "the model is prestressed ('prestress: true'), which the reduced basis does not carry"}
+    if model.ties:  # the reduced kernels do not eliminate tied nodes (fivid.fe.transition)
+        if not auto:
+            raise ConfigError("the reduced path does not carry a mesh transition's ties; run the full model "
+                              "(IntegrationOptions(reduced=None), --full)")
+        return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
+                      "reason": "the model has tied mesh transitions (fivid.fe.transition), which the reduced path "
+                                "does not carry"}
     compliant = [c.name for c in model.contacts if getattr(c.law, "is_penalty", False)]
     if auto and compliant:
         # the estimate ties the contact rigidly; a compliant normal law's contact springs act on the mass-scaled
