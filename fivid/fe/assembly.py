@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.model import Material
 
 __all__ = [
     "GAUSS_POINTS_2X2",
@@ -90,8 +91,6 @@ def strain_displacement_q4(dN: np.ndarray) -> np.ndarray:
 
 
 def _elasticity(E: float, nu: float, plane: str) -> np.ndarray:
-    from fivid.fe.model import Material
-
     return Material(E, nu, 1.0).elasticity_matrix(plane)
 
 

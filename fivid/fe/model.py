@@ -45,7 +45,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fivid.contact import RIGID
 from fivid.errors import ConfigError
+from fivid.friction.curve import FrictionCurve
 
 __all__ = [
     "EDGES",
@@ -358,9 +360,6 @@ class ContactPair:
     rigid: object = None
 
     def __post_init__(self):
-        from fivid.contact import RIGID
-        from fivid.friction.curve import FrictionCurve
-
         if self.law is None:
             object.__setattr__(self, "law", RIGID)
         if self.friction is None:

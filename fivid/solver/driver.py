@@ -9,7 +9,6 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +21,7 @@ from fivid.friction.curve import slave_coefficients
 from fivid.friction.injection import FrictionTable, friction_table
 from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.solver.inputs import check_energy_balance, check_simulation_inputs
+from fivid.solver.integrate import integrate
 from fivid.solver.options import (
     DEFAULT_REDUCED_TOLERANCE,
     IntegrationOptions,
@@ -29,11 +29,11 @@ from fivid.solver.options import (
     RunSchedule,
     SimulationInputs,
 )
+from fivid.solver.reduced import ReducedSystem, integrate_reduced, reduced_system
+from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
 from fivid.solver.setup import KernelArrays, LoadingSequence, kernel_arrays
 from fivid.solver.stencil import BlockStencils, block_stencils
-
-if TYPE_CHECKING:  # an annotation of PreparedRun (fivid.solver.reduced imports this module)
-    from fivid.solver.reduced import ReducedSystem
+from fivid.solver.timestep import stable_step, stable_step_of
 
 __all__ = ["IntegrationSettings", "PreparedRun", "simulate", "prepare_run", "AUTO_SCALING_FACTOR",
            "DEFAULT_REDUCED_TOLERANCE"]
@@ -111,13 +111,10 @@ class PreparedRun:
     def run(self, *, progress=None):
         """Integrate and wrap the RunDataset (see :func:`simulate`); ``progress`` (bool or None: only on a
         terminal) overrides ``inputs.output.progress``."""
-        from fivid.solver.integrate import integrate
-        from fivid.solver.output import run_dataset
+        from fivid.solver.output import run_dataset  # lazy: pulls numba
 
         progress = self.inputs.output.progress if progress is None else progress
         if self.reduced is not None:
-            from fivid.solver.reduced import integrate_reduced
-
             raw = integrate_reduced(self.model, self.reduced, self.friction, self.settings, progress=progress)
         else:
             raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
@@ -185,8 +182,6 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
                 schedule: RunSchedule, integration: IntegrationOptions = _INTEGRATION,
                 output: OutputOptions = _OUTPUT) -> PreparedRun:
     """Validate the inputs and build everything :func:`simulate` integrates (same parameters)."""
-    from fivid.solver.timestep import stable_step
-
     if not isinstance(model, Model):
         model = load_model(model)
     for name, value, kind in (("condition", condition, OperatingCondition), ("friction", friction, FrictionInput),
@@ -236,8 +231,6 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
     v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
     rs, choice = _choose_path(model, ka, integration, sliding_distance=v_max * total, sample_rate=sample_rate)
     if rs is not None:
-        from fivid.solver.timestep import stable_step_of
-
         stab = stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
                               float(model.damping_cutoff))
     else:
@@ -300,9 +293,6 @@ def _reduced_options(reduced, reduced_mass_scaling, sample_rate):
 
 def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance, sample_rate):
     """The reduced system to run (None: the full model) and the record of the choice (:func:`choice_attrs`)."""
-    from fivid.solver.reduced import reduced_system
-    from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
-
     reduced, reduced_mass_scaling = integration.reduced, integration.reduced_mass_scaling
     error_band = integration.error_band
     if reduced is None or reduced is False:

@@ -37,6 +37,8 @@ import math
 
 import numpy as np
 
+from fivid.fe.damping import damping_ratio
+
 __all__ = ["DEFAULT_ERROR_BAND", "lorentzian_lsd_integral", "contact_states", "band_error_estimate"]
 
 #: band [Hz] of the estimate when no scoring band is given (that of docs/solver.md's full-vs-reduced checks)
@@ -129,8 +131,6 @@ def band_error_estimate(rs, band, *, alpha: float, beta: float, damping_cutoff: 
         ``largest_shift`` (the largest ``|delta_r|`` [-]).
     """
     from threadpoolctl import threadpool_limits
-
-    from fivid.fe.damping import damping_ratio
 
     lo, hi = float(band[0]), float(band[1])
     if not (0.0 <= lo < hi):

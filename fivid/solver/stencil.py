@@ -40,6 +40,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fivid.fe.assembly import block_element_stiffness
+from fivid.fe.prestress import block_geometric_stiffness
+
 __all__ = ["BlockStencils", "block_stencils", "stencil_index", "apply_stencils"]
 
 # local corner offsets (i, j) of a Q4 element, counter-clockwise from its (i, j) node
@@ -117,7 +120,7 @@ class BlockStencils:
         """The stencil argument of :func:`fivid.solver._stencil_kernels.block_forces` (a
         :class:`fivid.solver._stencil_kernels.StencilArrays`), with its own scratch array (one per call: runs
         sharing these stencils do not share scratch)."""
-        from fivid.solver._stencil_kernels import StencilArrays
+        from fivid.solver._stencil_kernels import StencilArrays  # lazy: pulls numba
 
         return StencilArrays(self.npd, self.blocks, self.c_uni, self.c_map, self.rot, np.zeros(2 * self.npd),
                              self.lst_idx, self.lst_nbr, self.lst_coef, self.tie_s, self.tie_m, self.tie_w)
@@ -231,9 +234,6 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
     ``rotated`` is false; their first and last columns listed) or, failing that, mapped patches with per-node
     coefficients; periodic rings list their two seam columns with explicit neighbours.
     """
-    from fivid.fe.assembly import block_element_stiffness
-    from fivid.fe.prestress import block_geometric_stiffness
-
     pad = max(b.n_cols for b in model.blocks) + 1
     npd = model.n_nodes + 2 * pad
     rows, uni_coef, map_coef, n_map, rot, n_rot = [], [], [], 0, [], 0
@@ -310,7 +310,7 @@ def _tie_arrays(model, pad: int) -> dict:
 
 def apply_stencils(stencils: BlockStencils, w: np.ndarray) -> np.ndarray:
     """``K_blocks @ w`` [N] by the stencil kernel, global dof order in and out; ``w`` [m] (n_dofs,)."""
-    from fivid.solver._stencil_kernels import block_forces
+    from fivid.solver._stencil_kernels import block_forces  # lazy: pulls numba
 
     s = stencils
     wk = s.to_kernel(np.asarray(w, dtype=float))
