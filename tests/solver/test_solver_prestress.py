@@ -9,6 +9,7 @@ the stretch ramp rings at the first bending mode, whose frequency the modal anal
 systems apart by ~60 times the tolerance."""
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -52,10 +53,10 @@ def _ringing_frequency(tmp_path, capsys, cfg) -> tuple[float, int, float]:
     assert main(["simulate", str(path), "--duration", f"{DURATION} s", "--sample-rate", f"{FS} Hz", "-o", str(out),
                  "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
-    # the automatic path: the prestressed strip runs full (the reduced basis has no K_sigma); the plain one, undamped,
-    # gets a finite error estimate (peaks as wide as the PSD's resolution) and runs reduced
-    assert summary["solver_path"] == ("full" if cfg["prestress"] else "reduced")
-    assert cfg["prestress"] or 0.0 <= summary["reduced_error_estimate_db"] < 0.5
+    # the automatic path runs full: the prestressed strip because the reduced basis has no K_sigma; the plain one,
+    # undamped, because its finite error estimate is large (its PSD peaks are the Hann window's own, with nulls)
+    assert summary["solver_path"] == "full"
+    assert cfg["prestress"] or 0.5 < summary["reduced_error_estimate_db"] < math.inf
     with xr.open_dataset(out) as ds:
         t, y = ds["time"].values, ds["sensor_displacement"].values
     keep = t > RAMP + 1e-3
