@@ -53,6 +53,7 @@ switching itself, modes outside the band whose tails reach into it, and the spec
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -104,9 +105,11 @@ def hann_kernel(x, nperseg: int = KERNEL_NPERSEG) -> np.ndarray:
 
 def peak_psd(x, half_width: float) -> np.ndarray:
     """A mode's peak in a Welch PSD at ``x`` bins from the mode [1/bin, unit area]: its Lorentzian of half-width
-    ``half_width`` [bins] (the decay rate ``zeta f`` over the bin width) smoothed by :func:`hann_kernel`. The
-    convolution on a grid of ``min(half_width / 8, 1/32)`` bin (over ``PEAK_REACH + 4`` bins) at the bins within
-    ``PEAK_REACH`` of the mode; beyond, the kernel's sidelobe plus the Lorentzian's tail. Zero width (undamped): the kernel itself."""
+    ``half_width`` [bins] (the decay rate ``zeta f`` over the bin width) smoothed by :func:`hann_kernel`:
+    ``sum_j L(x - u_j) K(u_j) h`` over the kernel on a grid ``u_j`` of step ``h <= min(half_width / 8, 1/32)`` bin
+    (a power of two) within ``PEAK_REACH + 4`` bins, at the bins within ``PEAK_REACH`` of the mode; beyond, and
+    for a peak narrower than ``NARROW_PEAK``, the kernel plus the Lorentzian's tail. Zero width (undamped): the
+    kernel itself."""
     x = np.atleast_1d(np.asarray(x, dtype=float))
     g = float(half_width)
     if g <= 0.0:
@@ -114,11 +117,19 @@ def peak_psd(x, half_width: float) -> np.ndarray:
     out = hann_kernel(x) + (g / math.pi) / (x * x + g * g)
     near = np.abs(x) <= PEAK_REACH
     if near.any() and g >= NARROW_PEAK:  # narrower: the kernel with the Lorentzian's tail in its nulls, as beyond
-        h = min(g / 8.0, 1.0 / 32.0)
-        nu = np.arange(-PEAK_REACH - 4.0, PEAK_REACH + 4.0 + 0.5 * h, h)  # the kernel's main lobe is +-2 bins
-        weights = (g / math.pi) / (nu * nu + g * g) * h
-        out[near] = hann_kernel(x[near, None] - nu[None, :]) @ weights
+        u, ku = _kernel_grid(int(math.floor(math.log2(min(g / 8.0, 1.0 / 32.0)))))
+        d = x[near, None] - u[None, :]
+        out[near] = ((g / math.pi) / (d * d + g * g)) @ ku
     return out
+
+
+@functools.lru_cache(maxsize=16)
+def _kernel_grid(exponent: int):
+    """The :func:`hann_kernel` on a grid of step ``2**exponent`` bin over +-(``PEAK_REACH`` + 4) bins, times the step
+    (the convolution's weights: ``P(x) = sum_j L(x - u_j) K(u_j) h``)."""
+    h = 2.0 ** exponent
+    u = np.arange(-PEAK_REACH - 4.0, PEAK_REACH + 4.0 + 0.5 * h, h)
+    return u, hann_kernel(u) * h
 
 
 def peak_db_error(frequency: float, decay: float, bins, bin_width: float, shift: float = 0.0,
