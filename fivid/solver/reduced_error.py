@@ -37,7 +37,7 @@ move by decibels for a small shift (a run's PSD has these nulls too, filled only
   with the solver's damping (the force from ``q_n + beta v_{n-1/2}``, ``alpha v_{n-1/2}``, the band-limited
   filter) turn a mode's root ``s`` into ``ln(z) / dt``, ``z`` the eigenvalue of its one-mode step
   (:func:`discrete_root`): ``delta_r^dt = (omega_r dt)^2 / 24 + zeta_r omega_r dt / 2`` for classic Rayleigh
-  (dispersion plus the half-step-old damping velocity), and a damping change ``rho_r``. Taken against the exact
+  (dispersion plus the half-step-old damping velocity), and a changed decay rate. Taken against the exact
   root, not against the full run's own step: the full run's error has the same sign and is smaller, so this
   bounds the difference from above.
 
@@ -47,8 +47,11 @@ on its whole 10 mm): open, sliding (normal tied) and stuck (normal and tangentia
 estimate.
 
 **What it leaves out** (measured in docs/solver.md, "The error estimate"): the nonlinear stick/slip and contact
-switching itself, modes outside the band whose tails reach into it, and the spectrum's floor between the peaks,
-60-100 dB below them, where the two runs' small contact-solve differences are not small against the signal.
+switching itself, and the spectrum's troughs between the peaks, 60-100 dB below them, whose level the modal
+picture does not know: there the reduced path's contact solve (its boundary inverse mass couples a node's x and
+y, so Gauss-Seidel iterates and stops with a residual of up to its tolerance, a white contact-force noise) and
+the overlap of neighbouring modes' flanks make the measured distance. On the rigs the estimate is the smaller
+part of the measured distance (docs/solver.md: 3-7 x below it), so it is not a bound.
 """
 
 from __future__ import annotations
