@@ -237,7 +237,8 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
     t_int = 1.0 / (sample_rate * oversample)
     rs, choice = _choose_path(model, ka, integration, sliding_distance=v_max * total, sample_rate=sample_rate,
                               interval=t_int, record_samples=int(round(duration * sample_rate)),
-                              active=preload.active if preload is not None else None)
+                              active=None if preload is None else np.isin(
+                                  ka.slave_global, preload.geometry.slave_node[preload.active]))
     stab = _reduced_stable_step(model, rs) if rs is not None else stable_step(model)
     dt_crit = stab.critical_time_step
     time_step = integration.time_step
