@@ -15,6 +15,7 @@ import math
 
 from numba import njit
 
+import fivid._cache_kernels  # noqa: F401  (cache keyed on every kernel source: these read _layout_kernels' constants)
 from fivid.contact._layout_kernels import LAW_LINEAR, LAW_POWER, LAW_RIGID, MASTER_LINE
 
 __all__ = ["normal_pressure", "normal_energy", "surface_ramp", "circle_radius", "rigid_geometry"]

@@ -32,11 +32,17 @@ Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / i
   and step, not per dof); the smooth ramp is ``r(s) = s - sin(2 pi s)/(2 pi)``.
 
 Nothing is allocated inside the time loop.
+
+On-disk cache (``cache=True``): every kernel of the package is cached in a folder keyed on all ``_*kernels.py``
+sources (:mod:`fivid._cache_kernels`, imported here so that its cache locator is registered before the first
+kernel is decorated): a kernel whose callee lives in another file is recompiled when that file changes.
 """
 
 import math
 
 from numba import njit
+
+import fivid._cache_kernels  # noqa: F401  (registers the kernel-sources cache locator before the decorations)
 
 __all__ = [
     "PARALLEL",

@@ -26,8 +26,8 @@ import numpy as np
 from fivid.errors import ConfigError
 from fivid.fe.damping import scheme_name
 
-__all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step", "stable_step_of",
-           "amplification_matrix"]
+__all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step", "stable_step_bound",
+           "stable_step_of", "amplification_matrix"]
 
 
 @dataclass(frozen=True)
@@ -56,16 +56,9 @@ class StableStep:
     damping_scheme: str = "rayleigh"
 
 
-def max_angular_frequency(model, *, tol: float = 1e-10) -> float:
-    """Largest ``omega`` [rad s-1] of ``K phi = omega^2 M phi`` on the free dofs (springs and point masses in).
-
-    ARPACK Lanczos (``eigsh``, ``which="LA"``) on the symmetric ``M^-1/2 K M^-1/2`` instead of plain power
-    iteration: on a uniform mesh the top of the spectrum is clustered, and power iteration converges
-    like ``(lambda_2/lambda_1)^k``, i.e. it underestimates ``omega_max`` (an unsafe step) for thousands of
-    iterations, while Lanczos resolves the extreme eigenvalue to ``tol`` in tens of iterations.
-    """
+def _scaled_free_stiffness(model):
+    """``M^-1/2 K M^-1/2`` on the free dofs (CSR; springs in, lumped mass with the point masses)."""
     import scipy.sparse as sp
-    from scipy.sparse.linalg import eigsh
 
     from fivid.fe.assembly import lumped_mass, stiffness_matrix
 
@@ -75,7 +68,20 @@ def max_angular_frequency(model, *, tol: float = 1e-10) -> float:
     if np.any(m <= 0.0):
         raise ConfigError(f"{int(np.sum(m <= 0))} free dof(s) have no mass; every node needs mass for the explicit solver")
     s = sp.diags(1.0 / np.sqrt(m))
-    A = (s @ K @ s).tocsr()
+    return (s @ K @ s).tocsr()
+
+
+def max_angular_frequency(model, *, tol: float = 1e-10) -> float:
+    """Largest ``omega`` [rad s-1] of ``K phi = omega^2 M phi`` on the free dofs (springs and point masses in).
+
+    ARPACK Lanczos (``eigsh``, ``which="LA"``) on the symmetric ``M^-1/2 K M^-1/2`` instead of plain power
+    iteration: on a uniform mesh the top of the spectrum is clustered, and power iteration converges
+    like ``(lambda_2/lambda_1)^k``, i.e. it underestimates ``omega_max`` (an unsafe step) for thousands of
+    iterations, while Lanczos resolves the extreme eigenvalue to ``tol`` in tens of iterations.
+    """
+    from scipy.sparse.linalg import eigsh
+
+    A = _scaled_free_stiffness(model)
     v0 = np.random.default_rng(0).standard_normal(A.shape[0])  # fixed start: reproducible step
     lam = eigsh(A, k=1, which="LA", tol=tol, v0=v0, return_eigenvectors=False, maxiter=100 * A.shape[0])
     return float(np.sqrt(max(float(lam[0]), 0.0)))
@@ -139,6 +145,24 @@ def _largest_stable_step(omega_max: float, alpha: float, beta: float, cutoff: fl
 def stable_step(model) -> StableStep:
     """The :class:`StableStep` of ``model`` (Rayleigh ``alpha``, ``beta`` and damping cut-off from the model)."""
     omega = max_angular_frequency(model)
+    step = stable_step_of(omega, float(model.rayleigh_alpha), float(model.rayleigh_beta), float(model.damping_cutoff))
+    dashpots = _dashpot_limit(model)
+    if dashpots < step.critical_time_step:
+        step = dataclasses.replace(step, critical_time_step=dashpots)
+    return step
+
+
+def stable_step_bound(model) -> StableStep:
+    """A :class:`StableStep` of ``model`` whose ``omega_max`` is an upper bound of the true one, hence whose
+    ``critical_time_step`` is a lower bound of :func:`stable_step`'s [s], without an eigenvalue solve.
+
+    ``omega_max^2 <= max_i sum_j |A_ij|``, ``A = M^-1/2 K M^-1/2`` (Gershgorin's theorem: every eigenvalue lies
+    in a disc of a row), and the stable step falls as ``omega_max`` grows. For estimates that need a safe step
+    count cheaply: the memory and work guard of ``fivid simulate`` (on the default rig 1.4 x the true
+    ``omega_max^2``: 18 % more steps than the full model takes).
+    """
+    A = _scaled_free_stiffness(model)
+    omega = float(np.sqrt(max(float(abs(A).sum(axis=1).max()), 0.0)))
     step = stable_step_of(omega, float(model.rayleigh_alpha), float(model.rayleigh_beta), float(model.damping_cutoff))
     dashpots = _dashpot_limit(model)
     if dashpots < step.critical_time_step:

@@ -34,6 +34,8 @@ POSITIVE = {
     "bench_frf.py": ["hbm_frf_s", "arclength_points", "time_domain_s"],
     "bench_ingest.py": ["rows", "rows_per_s", "fivid_ingest_s", "pandas_pyarrow_s", "time_ratio_vs_pandas_pyarrow"],
     "bench_update.py": ["update_params", "update_evaluations", "update_s", "ema_s"],
+    "bench_pipeline.py": ["fine_wall_s", "coarse_wall_s", "fine_vs_coarse_wall_ratio", "fine_cold_wall_s",
+                          "coarse_cold_wall_s", "fine_cpu_s", "fine_cold_cpu_s"],
     "bench_prestress.py": ["ring_dofs", "rig_dofs", "steps", "step_s", "prestress_step_s", "steps_rig", "step_s_rig",
                            "prestress_step_s_rig"],
 }
@@ -47,6 +49,7 @@ EXACT = {
     "bench_ingest.py": {"benchmark": "ingest", "rows": 300_000, "columns": 5},
     "bench_update.py": {"benchmark": "update", "quick": True, "update_converged": True},
     "bench_prestress.py": {"benchmark": "prestress", "quick": True},
+    "bench_pipeline.py": {"benchmark": "pipeline", "quick": True},
 }
 
 

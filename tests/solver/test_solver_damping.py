@@ -7,7 +7,7 @@ from fivid.errors import ConfigError
 from fivid.fe import load_model
 from fivid.fe.damping import damping_ratio, modal_root, rayleigh_through_two_ratios
 from fivid.solver import OutputOptions, RunSchedule, simulate, stable_step
-from fivid.solver.timestep import _largest_stable_step, amplification_matrix
+from fivid.solver.timestep import _largest_stable_step, amplification_matrix, stable_step_bound
 from tests.helpers.solver_models import cantilever
 
 
@@ -128,3 +128,13 @@ def test_band_limited_step_is_longer_and_recorded():
     fast = stable_step(load_model(_with_damping(base, beta="3e-7 s", cutoff="50 kHz")))
     assert classic.damping_scheme == "rayleigh" and fast.damping_scheme == "band_limited"
     assert fast.critical_time_step > 0.9 * fast.undamped_time_step > classic.critical_time_step
+
+
+@pytest.mark.parametrize("name", ["triboair_coarse", "ring"])
+def test_stable_step_bound_is_below_the_stable_step(name):
+    """Gershgorin's bound of omega_max is >= the Lanczos value, so the bounded step is <= the stable step (the
+    memory/work guard of fivid simulate relies on it: never fewer steps than the run takes)."""
+    model = load_model(name)
+    bound, exact = stable_step_bound(model), stable_step(model)
+    assert bound.omega_max >= exact.omega_max * (1.0 - 1e-9)  # Lanczos converged to tol 1e-10
+    assert bound.critical_time_step <= exact.critical_time_step * (1.0 + 1e-9)

@@ -106,7 +106,6 @@ def run(args) -> int:
 
     from fivid.errors import FividError
     from fivid.io import write_run
-    from fivid.execution.resources import check_monte_carlo_size, check_simulation_memory, simulation_memory
     from fivid.solver import simulate
     from fivid.storage import check_writable, dumps_json
 
@@ -120,12 +119,7 @@ def run(args) -> int:
         law, law_file = _law_checked(args, model)
         args.law_domain = law_file.pop("domain")
     inputs = _simulation_inputs(args, law)
-    size = simulation_memory(model, duration=inputs.schedule.duration, sample_rate=inputs.schedule.sample_rate,
-                             time_step=inputs.integration.time_step, law=law)
-    check_simulation_memory(size, n_dofs=2 * model.n_nodes)  # before any allocation: a year of records fails here
-    if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.execution.resources)
-        check_monte_carlo_size(size, samples=args.samples, nperseg=args.nperseg, n_dofs=2 * model.n_nodes,
-                               workers=args.workers)
+    size = _checked_size(args, model, inputs, law)  # before any allocation: a year of records fails here
     if args.dry_run:
         return _dry_run(args, model, size, inputs)
     if args.samples is not None:
@@ -168,6 +162,36 @@ def run(args) -> int:
               f"{summary['mean_normal_force_n']:.4g} N, friction force {summary['mean_friction_force_n']:.4g} N")
         print(f"written {args.output} ({summary['samples']} samples)", file=sys.stderr)
     return 0
+
+
+def _checked_size(args, model, inputs, law):
+    """The run's memory and work estimate (:func:`fivid.execution.resources.simulation_memory`), refused with a
+    ConfigError when too large -- for ``--samples`` the N runs' too.
+
+    Without ``--time-step`` the estimate needs the stable step. Unless ``--dry-run`` prints the estimate, a lower
+    bound of the full model's step (:func:`fivid.solver.timestep.stable_step_bound`, no eigenvalue solve: more
+    steps, hence more work and memory, than the run takes) is tried first; the full model's exact step, whose
+    eigenvalue solve the reduced path does not otherwise need, is computed only when the bound does not pass.
+    """
+    from fivid.errors import ConfigError
+    from fivid.execution.resources import check_monte_carlo_size, check_simulation_memory, simulation_memory
+    from fivid.solver.timestep import stable_step_bound
+
+    def checked(time_step):
+        size = simulation_memory(model, duration=inputs.schedule.duration, sample_rate=inputs.schedule.sample_rate,
+                                 time_step=time_step, law=law)
+        check_simulation_memory(size, n_dofs=2 * model.n_nodes)
+        if args.samples is not None:  # N runs' work and the envelope's PSDs (fivid.execution.resources)
+            check_monte_carlo_size(size, samples=args.samples, nperseg=args.nperseg, n_dofs=2 * model.n_nodes,
+                                   workers=args.workers)
+        return size
+
+    if inputs.integration.time_step is None and not args.dry_run:
+        try:
+            return checked(float(inputs.integration.safety) * stable_step_bound(model).critical_time_step)
+        except ConfigError:
+            pass  # the bound may be too pessimistic: judge by the exact step
+    return checked(inputs.integration.time_step)
 
 
 def _mode_count(text):
