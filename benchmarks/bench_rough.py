@@ -26,6 +26,13 @@ node count, measured in this run, as ``bench_solver.py``'s ``rough_fraction_of_b
 contact pair (``full_scale_no_contact_fraction_of_bare_stencil``: the mapped stencil's own cost), the contact's
 share of the step ``full_scale_contact_share`` and ``full_scale_steps`` of a short preload-and-slide record
 (30 mm/s). With ``--quick`` the full-scale figures come from a 12 mm cut at the same spacing (the smoke run).
+With ``--transition`` the full-scale pair coarsens along x with depth (:mod:`fivid.fe.transition`, as the
+paper-scale study's ``transition: true``) instead: only its surface level has the Rsm/8 columns
+(``full_scale_mesh`` names which).
+
+Idle full-scale figures (issue 26)::
+
+    python benchmarks/bench_rough.py --full-scale-only --transition
 """
 
 from __future__ import annotations
@@ -44,9 +51,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="the quick study's model and shorter runs (noisier)")
     ap.add_argument("--full-scale-only", action="store_true", help="only the full-scale contact figures")
+    ap.add_argument("--transition", action="store_true",
+                    help="the full-scale pair coarsening along x with depth (fivid.fe.transition)")
     args, load = parse_guarded(ap, argv)
     out = {"benchmark": "rough", "quick": bool(args.quick)}
-    out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300, 0.012 if args.quick else 0.12))
+    out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300, 0.012 if args.quick else 0.12,
+                           transition=args.transition))
     if args.full_scale_only:
         out["load_average_1min"] = load
         print(json.dumps(out))
@@ -119,16 +129,17 @@ def main(argv=None) -> int:
     return 0
 
 
-def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12):
+def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12, transition=False):
     """The full-scale rough pair (see the module docstring): ``configs/models/rough_pair.yaml`` with
     ``ceil(length / (rsm / per_rsm))`` divisions along x over ``length`` [m] (0.12: the paper's blocks) and
-    Gaussian profiles of ``ra``, ``rsm`` [m]."""
+    Gaussian profiles of ``ra``, ``rsm`` [m]; ``transition``: coarsening along x with depth."""
     import math
 
     import yaml
 
     from fivid.fe import load_model
     from fivid.fe.rough_pair import rough_pair_config
+    from fivid.fe.transition import transition_model
     from fivid.surface.rough_pair import RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
 
     data = yaml.safe_load((ROOT / "configs/models/rough_pair.yaml").read_text())
@@ -139,11 +150,14 @@ def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12):
         body["corners"] = [[f"{float(str(x).split()[0]) * length / 0.12:.9g} mm", y] for x, y in body["corners"]]
     lower, upper = synthetic_rough_profiles(ra, length, correlation_length=rsm / RSM_PER_CORRELATION_LENGTH,
                                             step=rsm / (2 * per_rsm), seeds=(3, 4))
+    if transition:
+        cfg, info = rough_pair_config(data, lower, upper, sensor_every=64, mesh_step=rsm / per_rsm, transition=True)
+        return transition_model(load_model(cfg), info["transition"])
     cfg, _ = rough_pair_config(data, lower, upper, sensor_every=64)
     return load_model(cfg)
 
 
-def _full_scale(rounds, steps, length=0.12):
+def _full_scale(rounds, steps, length=0.12, transition=False):
     """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run, best of ``rounds``, on
     blocks ``length`` [m] long (``--quick``: a 12 mm cut at the same surface spacing, so the smoke run stays short)."""
     import dataclasses
@@ -156,7 +170,7 @@ def _full_scale(rounds, steps, length=0.12):
     from fivid.solver.stencil import block_stencils
     from fivid.solver.timestep import stable_step
 
-    model = _full_scale_pair(length=length)
+    model = _full_scale_pair(length=length, transition=transition)
     st = block_stencils(load_model(ROOT / "configs/models/triboair.yaml"))
     c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
     bare = _bare_kernels()[0]
@@ -165,6 +179,7 @@ def _full_scale(rounds, steps, length=0.12):
               schedule=RunSchedule(duration=steps * dt, sample_rate=1.0 / (16 * dt), preload_time=2 * dt,
                                    settle_time=0.0, base_ramp_time=2 * dt))
     out = {"full_scale_model": f"configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um), {length * 1e3:g} mm long",
+           "full_scale_mesh": "transition" if transition else "graded",
            "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
            "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt}
     frac, _, _, sweeps, _ = _mapped_fraction(model, c_rect, bare, kw, steps * dt, rounds)

@@ -77,7 +77,7 @@ def _registry_models():
 
     from pydantic import Field, model_validator
 
-    from fivid.config_layer import ConfigModel, fail
+    from fivid.config_layer import ConfigModel, fail  # lazy: pulls pydantic
 
     class VariableSpec(ConfigModel):
         units: str
@@ -114,7 +114,7 @@ def _registry_models():
 @functools.lru_cache(maxsize=None)
 def registry() -> Registry:
     """The parsed registry (read once from the package data file, through :mod:`fivid.config_layer`)."""
-    from fivid.config_layer import ConfigSource, parse_yaml_text, validate
+    from fivid.config_layer import ConfigSource, parse_yaml_text, validate  # lazy: pulls pydantic
 
     text = resources.files("fivid").joinpath("data/variables.yaml").read_text(encoding="utf-8")
     name = "fivid/data/variables.yaml"

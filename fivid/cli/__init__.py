@@ -22,6 +22,7 @@ import pkgutil
 import sys
 
 from fivid import __version__
+from fivid.cli import commands
 from fivid.cli.types import QuantityArgument, in_si, integer_at_least, quantity
 from fivid.errors import FividError, Interrupted, exit_status
 
@@ -54,8 +55,6 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every sub-command found in :mod:`fivid.cli.commands`."""
-    from fivid.cli import commands
-
     parser = _Parser(
         prog="fivid",
         description="fivid: friction-induced vibration identification. From friction test-rig "

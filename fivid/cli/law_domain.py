@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import sys
 
+from fivid.friction import ExtrapolationWarning, domain_from_dataset, load_law, predict_amplitude
+
 __all__ = ["open_law_file", "check_law_condition"]
 
 
@@ -21,8 +23,7 @@ def open_law_file(path):
     a file that records none)."""
     from pathlib import Path
 
-    from fivid.friction import domain_from_dataset, load_law
-    from fivid.io.netcdf import read_run
+    from fivid.io.netcdf import read_run  # lazy: pulls pydantic
 
     law = load_law(path)
     ds = read_run(Path(path), validate=False)
@@ -53,8 +54,6 @@ def check_law_condition(law, domain, velocity, roughness, normal_load=None, *, s
         One condition; ``inside`` and ``messages`` say whether and why it is outside the domain.
     """
     import warnings
-
-    from fivid.friction import ExtrapolationWarning, predict_amplitude
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ExtrapolationWarning)

@@ -10,6 +10,9 @@ import argparse
 import math
 import re
 
+from fivid.errors import FividError
+from fivid.units import parse_quantity
+
 __all__ = ["integer_at_least", "quantity", "QuantityArgument", "in_si"]
 
 # canonical SI unit -> (the physical quantity it measures, units usual on a rig, for the messages)
@@ -80,9 +83,6 @@ def quantity(units: str, *, bare_numbers: bool = True, positive: bool = False, n
                + (f" (a bare number is in {units})" if bare_numbers else ""))
 
     def parse(text: str) -> QuantityArgument:
-        from fivid.errors import FividError
-        from fivid.units import parse_quantity
-
         if not bare_numbers and _BARE_NUMBER.fullmatch(text):
             raise argparse.ArgumentTypeError(f"{text!r} has no unit; write the {name} with one, e.g. "
                                              f"'{text} {usual[0]}' or '{text} {usual[1]}'")

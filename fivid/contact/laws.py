@@ -99,7 +99,7 @@ class NormalLaw:
         return np.ascontiguousarray(self.table, dtype=float) if self.kind == "table" else _NO_TABLE
 
     def _eval(self, d):
-        from fivid.contact._kernels import normal_pressure
+        from fivid.contact._kernels import normal_pressure  # lazy: pulls numba
 
         d = np.asarray(d, dtype=float)
         tab = self.kernel_table
@@ -118,7 +118,7 @@ class NormalLaw:
 
     def energy(self, d):
         """Stored energy per unit area [J m-2] at penetration ``d`` [m] (array)."""
-        from fivid.contact._kernels import normal_energy
+        from fivid.contact._kernels import normal_energy  # lazy: pulls numba
 
         d = np.asarray(d, dtype=float)
         tab = self.kernel_table
@@ -337,7 +337,7 @@ class RigidSurface:
 
     def radius_at(self, t=math.inf) -> float:
         """A circle's radius [m] at time ``t`` [s] (default: after the expansion), ``radius + expansion r(t)``."""
-        from fivid.contact._kernels import circle_radius
+        from fivid.contact._kernels import circle_radius  # lazy: pulls numba
 
         delta = self.expansion if math.isfinite(self.expansion) else 0.0
         return float(circle_radius(self.radius, delta, self.expansion_start, self.expansion_ramp_time, float(t)))
@@ -347,7 +347,7 @@ class RigidSurface:
         [s] (default: full speed) of slave positions ``xy`` (n, 2) whose reference positions are ``reference``
         (default ``xy``; a circle's normal is radial through the reference position, its radius
         :meth:`radius_at` ``t``)."""
-        from fivid.contact._kernels import rigid_geometry, surface_ramp
+        from fivid.contact._kernels import rigid_geometry, surface_ramp  # lazy: pulls numba
 
         cols = self.columns()
         if self.kind == "circle":

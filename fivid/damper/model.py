@@ -21,9 +21,10 @@ from typing import Annotated
 
 from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
 
-from fivid.damper.modal import ModalModel, modal_model_from_matrices
+from fivid.builtin import find_builtin
 from fivid.config_layer import (ConfigModel, Name, Quantity, fail, from_mapping, quantity_parser, quantity_schema,
                                 read_yaml, validate)
+from fivid.damper.modal import ModalModel, modal_model_from_matrices
 from fivid.errors import ConfigError
 from fivid.fe.beam import cantilever_beam
 
@@ -212,8 +213,6 @@ def _build(c: DamperConfig, source: str) -> DamperModel:
 
 def load_damper_model(path) -> DamperModel:
     """Read a damper model YAML file (see the module docstring), or a built-in one by name (``seed004_model1``)."""
-    from fivid.builtin import find_builtin
-
     text = str(path)
     if not Path(path).exists() and not any(c in text for c in "/\\"):
         path = find_builtin("dampers", text) or path

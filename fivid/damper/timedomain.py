@@ -73,7 +73,7 @@ def steady_state_response(modal: ModalModel, contact_stiffness: float, slip_forc
         Steady when the measured displacement over a period changes by less than ``rtol`` times
         its peak from the previous period.
     """
-    from fivid.friction._jenkins_kernels import newmark_jenkins
+    from fivid.friction._jenkins_kernels import newmark_jenkins  # lazy: pulls numba
 
     if not (frequency > 0 and steps_per_period >= 8):
         raise FividError(f"need frequency > 0 Hz and steps_per_period >= 8, got {frequency}, {steps_per_period}")

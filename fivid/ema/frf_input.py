@@ -22,6 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from fivid.errors import FividError, SchemaError, UnitError
+from fivid.io.daq.channels import require
+from fivid.signal import frf
 from fivid.units import is_compatible
 
 __all__ = ["FRFSet", "read_frfs", "frf_form_of_units"]
@@ -136,8 +138,6 @@ def read_frfs(paths, *, form: str | None = None, force: str = "friction_force", 
 
 
 def _read_uff(path: Path, form) -> FRFSet:
-    from fivid.io.daq.channels import require
-
     pyuff = require("pyuff", "pyuff", "UFF58 input")
     try:
         raw = pyuff.UFF(str(path)).read_sets()
@@ -233,8 +233,6 @@ def _read_netcdf(path: Path, form, force: str, response: str, nperseg) -> FRFSet
 
 
 def _run_frfs(ds, path, form, force: str, response: str, nperseg) -> FRFSet:
-    from fivid.signal import frf
-
     for var, what in ((force, "force"), (response, "response")):
         if var not in ds:
             raise SchemaError(f"the run dataset has no {what} variable {var!r}; its variables: "

@@ -17,6 +17,8 @@ import json
 import numpy as np
 
 from fivid.errors import FividError, SchemaError
+from fivid.schema import new_history
+from fivid.storage import atomic_path, write_netcdf
 
 __all__ = ["modes_dataset", "write_modes_file", "read_modes", "modes_json", "stabilisation_figure"]
 
@@ -24,8 +26,6 @@ __all__ = ["modes_dataset", "write_modes_file", "read_modes", "modes_json", "sta
 def modes_dataset(result, frfs, rayleigh=None):
     """The MODES.nc Dataset of an :class:`~fivid.ema.lscf.EMAResult` identified from an :class:`FRFSet`."""
     import xarray as xr
-
-    from fivid.schema import new_history
 
     d = result.diagram
     shape_units = "kg-1/2" if result.mass_normalised else "1"
@@ -69,8 +69,6 @@ def modes_dataset(result, frfs, rayleigh=None):
 
 def write_modes_file(ds, path, *, overwrite: bool = False):
     """Write a MODES.nc Dataset atomically."""
-    from fivid.storage import write_netcdf
-
     return write_netcdf(ds, path, overwrite=overwrite)
 
 
@@ -119,8 +117,6 @@ def stabilisation_figure(ds, path, frfs=None) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from fivid.storage import atomic_path
 
     fig, ax = plt.subplots(figsize=(8, 5))
     st = ds["stab_stable"].values.astype(bool)

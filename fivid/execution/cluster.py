@@ -15,7 +15,9 @@ import logging
 import os
 import time
 
-__all__ = ["dask_client", "check_scheduler_address", "map_tasks", "SCHEDULER_SCHEMES"]
+from fivid.errors import ConfigError, FividError, Interrupted
+
+__all__ = ["dask_client", "check_scheduler_address", "map_tasks", "call", "SCHEDULER_SCHEMES"]
 
 #: address schemes of dask.distributed's comm backends that reach a scheduler over the network
 SCHEDULER_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
@@ -47,8 +49,6 @@ def check_scheduler_address(address: str, *, timeout: float = 3.0) -> str:
     """
     import socket
     from urllib.parse import urlsplit
-
-    from fivid.errors import ConfigError
 
     form = "tcp://HOST:PORT, e.g. tcp://10.0.0.5:8786 as 'dask scheduler' prints it"
     text = str(address).strip()
@@ -91,8 +91,6 @@ def dask_client(*, workers: int = 2, scheduler: str | None = None, connect_timeo
         How long to try reaching ``scheduler`` [s].
     """
     from distributed import Client, LocalCluster
-
-    from fivid.errors import FividError
 
     if scheduler is not None:
         try:
@@ -213,12 +211,17 @@ def _signals_deferred():
 def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = None, connect_timeout: float = 10.0):
     """Run ``func(*args)`` for each ``name -> args`` on dask; yield ``(name, result, seconds, pid)`` as they finish.
 
-    ``seconds`` is the wall time of the task on its worker, ``pid`` the worker's process id.
+    ``seconds`` is the wall time of the task on its worker [s], ``pid`` the worker's process id. With ``workers=0``
+    and no ``scheduler`` the tasks run in this process, one after the other in the order of ``items``, without dask
+    (``pid`` is then this process's); any other ``workers`` below 1 means one worker.
     """
+    if workers == 0 and scheduler is None:
+        for name, args in items.items():
+            yield (name, *_timed_call(func, *args))
+        return
     from distributed import as_completed
 
-    from fivid.errors import Interrupted
-
+    workers = max(int(workers), 1)
     with dask_client(workers=workers, scheduler=scheduler, connect_timeout=connect_timeout) as client:
         Interrupted.raise_if_received()  # a signal during the cluster's start-up
         futures = {client.submit(_timed_call, func, *args, key=f"fivid-{name}-{os.getpid()}-{time.time_ns()}",
@@ -226,6 +229,12 @@ def map_tasks(func, items: dict, *, workers: int = 2, scheduler: str | None = No
         for fut in as_completed(futures):
             result, seconds, pid = fut.result()
             yield futures[fut], result, seconds, pid
+
+
+def call(func, *args):
+    """``func(*args)``: the task function of :func:`map_tasks` when each item carries its own function as its first
+    argument (``name -> (func, *args)``)."""
+    return func(*args)
 
 
 def _timed_call(func, *args):

@@ -14,6 +14,7 @@ import math
 import os
 from dataclasses import dataclass, field
 
+from fivid.builtin import find_builtin
 from fivid.errors import ConfigError
 
 __all__ = ["SimulationSize", "available_memory", "simulation_memory", "check_simulation_memory", "format_bytes",
@@ -139,8 +140,8 @@ def simulation_memory(model, *, duration: float, sample_rate: float, oversample:
     ConfigError
         A duration or sample rate that is not a positive finite number.
     """
-    from fivid.solver._kernels import N_REC
-    from fivid.solver.timestep import stable_step
+    from fivid.solver._kernels import N_REC  # lazy: pulls numba
+    from fivid.solver.timestep import stable_step  # lazy: pulls pydantic
 
     for name, value in (("duration", duration), ("sample_rate", sample_rate)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
@@ -247,8 +248,7 @@ def modal_memory(n_dofs: int, n_modes: int, band: int) -> int:
 
 def _mesh_counts(model_source) -> tuple[int, int] | None:
     """``(nodes, band)`` from a model config's bodies' ``divisions``, read without meshing; None if unreadable."""
-    from fivid.builtin import find_builtin
-    from fivid.config_layer import read_yaml
+    from fivid.config_layer import read_yaml  # lazy: pulls pydantic
 
     path = model_source
     if not os.path.exists(str(path)):

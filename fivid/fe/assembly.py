@@ -5,6 +5,10 @@ Element functions are vectorised: ``xy`` may be one element ``(4, 2)`` or a stac
 Element dofs are ordered ``x0, y0, x1, y1, x2, y2, x3, y3`` for nodes counter-clockwise from the
 element's lower-left node, i.e. natural coordinates ``(-1,-1), (1,-1), (1,1), (-1,1)``.
 
+A model with :class:`fivid.fe.model.Tie` rows (mesh transitions) is assembled on its independent dofs:
+``T^T K T``, ``T^T M T`` and the lumped ``T^T m`` with ``u = T u`` (:func:`tie_matrix`), so the tied dofs'
+rows and columns are zero (they are not in ``Model.free_dofs``).
+
 The explicit solver builds its per-block stencils from :func:`element_stiffness_q4` (and
 :func:`block_element_stiffness`); the sparse matrices here serve modal analysis, CEA and reference checks.
 """
@@ -14,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.model import Material
 
 __all__ = [
     "GAUSS_POINTS_2X2",
@@ -28,6 +33,7 @@ __all__ = [
     "consistent_mass",
     "lumped_mass",
     "damping_matrix",
+    "tie_matrix",
 ]
 
 _G = 1.0 / np.sqrt(3.0)
@@ -85,8 +91,6 @@ def strain_displacement_q4(dN: np.ndarray) -> np.ndarray:
 
 
 def _elasticity(E: float, nu: float, plane: str) -> np.ndarray:
-    from fivid.fe.model import Material
-
     return Material(E, nu, 1.0).elasticity_matrix(plane)
 
 
@@ -180,9 +184,29 @@ def _assemble(model, element_matrices) -> "scipy.sparse.csr_matrix":  # noqa: F8
         cols.append(np.tile(dofs, (1, 8)).ravel())
         vals.append(ke.ravel())
     n = model.n_dofs
-    return sp.coo_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
-    ).tocsr()
+    A = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
+    if model.ties:
+        T = tie_matrix(model)
+        A = (T.T @ A @ T).tocsr()
+    return A
+
+
+def tie_matrix(model) -> "scipy.sparse.csr_matrix":  # noqa: F821
+    """``T`` (n_dofs x n_dofs, scipy.sparse CSR) with ``u = T u`` for the model's ties: identity on untied dofs,
+    a tied (slave) dof's row its interpolation weights on the masters' same component, its column zero."""
+    import scipy.sparse as sp
+
+    n = model.n_dofs
+    keep = np.ones(n, dtype=bool)
+    keep[model.tied_dofs] = False
+    rows, cols, vals = [np.flatnonzero(keep)], [np.flatnonzero(keep)], [np.ones(int(keep.sum()))]
+    for t in model.ties:
+        for c in (0, 1):
+            for i in (0, 1):
+                rows.append(2 * np.asarray(t.slave_nodes) + c)
+                cols.append(2 * np.asarray(t.master_nodes)[:, i] + c)
+                vals.append(np.asarray(t.weights, float)[:, i])
+    return sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)).tocsr()
 
 
 def _springs_coo(model, attribute: str):
@@ -244,12 +268,15 @@ def _point_mass_vector(model) -> np.ndarray:
 
 
 def lumped_mass(model) -> np.ndarray:
-    """Row-sum lumped mass per dof [kg], shape (n_dofs,), point masses included."""
+    """Row-sum lumped mass per dof [kg], shape (n_dofs,), point masses included (tied dofs: 0, their mass on
+    their masters)."""
     m = np.zeros(model.n_dofs)
     for block in model.blocks:
         me = block_element_mass(block, lumped=True).reshape(-1, 8, 8)
         dofs = block.element_dofs().reshape(-1, 8)
         np.add.at(m, dofs.ravel(), np.diagonal(me, axis1=1, axis2=2).ravel())
+    if model.ties:  # a tied node's mass goes to its masters by the interpolation weights (T^T m: mass kept)
+        m = tie_matrix(model).T @ m
     return m + _point_mass_vector(model)
 
 

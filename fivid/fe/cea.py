@@ -25,6 +25,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.assembly import damping_matrix, stiffness_matrix
+from fivid.fe.contact import linearise_preloaded_contact
+from fivid.fe.modal import _contact_state_attrs, _default_shift, constrained_matrices, lowest_modes
+from fivid.fe.prestress import geometric_stiffness_matrix
+from fivid.schema import apply_cf_attrs, new_history
 
 __all__ = ["ModalProjection", "project_on_modes", "complex_eigenvalue_sweep", "Linearisation",
            "complex_eigenvalue_analysis", "cea_mode_shapes", "cea_to_json"]
@@ -120,8 +125,6 @@ def project_on_modes(K, M, C, K_f, n_basis: int | None = None, *, static_loads=N
     """
     import scipy.linalg
     import scipy.sparse as sp
-
-    from fivid.fe.modal import _default_shift, lowest_modes
 
     n = K.shape[0]
     Phi = lowest_modes(K, M, n if n_basis is None else min(n_basis, n), sigma=sigma)[1]
@@ -314,11 +317,6 @@ def _linearised_projection(model, normal_load, n_modes, n_basis, damping, augmen
     contact, state, n_basis)`` (see :func:`complex_eigenvalue_analysis` for the arguments)."""
     import scipy.sparse as sp
 
-    from fivid.fe.assembly import damping_matrix, stiffness_matrix
-    from fivid.fe.contact import linearise_preloaded_contact
-    from fivid.fe.modal import constrained_matrices
-    from fivid.fe.prestress import geometric_stiffness_matrix
-
     if not model.contacts:
         raise ConfigError("CEA needs a contact pair: the model config has no 'contacts'", key="contacts")
     contact, state = linearise_preloaded_contact(model, normal_load, velocities=velocities)
@@ -381,9 +379,6 @@ def _cea_dataset(model, res, n_basis, contact, state, *, normal_load, n_modes, d
     """The CEA sweep ``res`` (:func:`complex_eigenvalue_sweep`) as a Dataset of the lowest ``n_modes`` modes, with
     the model, the basis size ``n_basis``, the contact state and the analysis settings recorded."""
     import xarray as xr
-
-    from fivid.fe.modal import _contact_state_attrs
-    from fivid.schema import apply_cf_attrs, new_history
 
     n = min(n_modes, n_basis)
     lam = res["eigenvalues"][:, :n]

@@ -27,6 +27,7 @@ import numpy as np
 
 from fivid.errors import ConfigError
 from fivid.fe.contact_nodes import node_stiffness
+from fivid.fe.static import contact_geometry, preload_state, pressed_by_itself
 
 __all__ = ["ContactLinearisation", "linearise_contact", "linearise_preloaded_contact", "sliding_directions"]
 
@@ -111,8 +112,6 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
     ConfigError
         A slave node does not project onto its master edge, or the bodies do not slide relative to each other.
     """
-    from fivid.fe.static import contact_geometry
-
     geo = contact_geometry(model)
     n_slave = geo.slave_node.size
     closed = np.ones(n_slave, dtype=bool) if closed is None else np.asarray(closed, dtype=bool)
@@ -171,9 +170,6 @@ def linearise_preloaded_contact(model, normal_load: float | None, *, velocities:
     ConfigError
         ``normal_load`` is None, or the model cannot be preloaded (no load motion or reaction).
     """
-    from fivid.errors import ConfigError
-    from fivid.fe.static import preload_state, pressed_by_itself
-
     if normal_load is None and not pressed_by_itself(model):
         raise ConfigError("linearising the contact needs the normal load: only the slave nodes closed under it "
                           "carry contact springs (give normal_load [N], e.g. --load '5 N')", key="normal_load")

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.assembly import stiffness_matrix
 
 __all__ = ["pressure_forces", "external_load_vector", "static_response"]
 
@@ -60,8 +61,6 @@ def static_response(model, *, imposed: np.ndarray | None = None) -> np.ndarray:
         The constrained model is not fixed against rigid-body motion (``K_ff`` singular).
     """
     import scipy.sparse.linalg as sla
-
-    from fivid.fe.assembly import stiffness_matrix
 
     K = stiffness_matrix(model).tocsc()
     free = model.free_dofs

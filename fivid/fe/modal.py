@@ -15,7 +15,12 @@ from os import PathLike
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.assembly import consistent_mass, lumped_mass, stiffness_matrix
+from fivid.fe.contact import linearise_preloaded_contact
 from fivid.fe.prestress import geometric_stiffness_matrix, static_state
+from fivid.fe.static import contact_geometry
+from fivid.schema import apply_cf_attrs, new_history
+from fivid.storage import check_writable, write_netcdf
 
 __all__ = ["constrained_matrices", "lowest_modes", "modal_analysis", "write_modes", "modes_to_json"]
 
@@ -54,13 +59,9 @@ def constrained_matrices(model, *, mass: str = "consistent", include_contact: bo
     """
     import scipy.sparse as sp
 
-    from fivid.fe.assembly import consistent_mass, lumped_mass, stiffness_matrix
-
     K = stiffness_matrix(model)
     if include_contact and model.contacts:
         if contact is None:
-            from fivid.fe.contact import linearise_preloaded_contact
-
             contact = linearise_preloaded_contact(model, normal_load)[0]
         K = K + contact.normal_stiffness_matrix()
     if prestress is not None:
@@ -181,12 +182,8 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
     """
     import xarray as xr
 
-    from fivid.schema import apply_cf_attrs, new_history
-
     contact = state = None
     if include_contact and model.contacts:
-        from fivid.fe.contact import linearise_preloaded_contact
-
         contact, state = linearise_preloaded_contact(model, normal_load)
     u0 = None
     prestress = model.prestress if prestress is None else bool(prestress)
@@ -238,8 +235,6 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
 
 def _contact_state_attrs(model, state) -> dict:
     """Attributes recording the preloaded contact state a linearisation is about."""
-    from fivid.fe.static import contact_geometry
-
     import json
 
     nodes = contact_geometry(model).slave_node[state.active]
@@ -254,8 +249,6 @@ def _contact_state_attrs(model, state) -> dict:
 
 def write_modes(ds, path: str | PathLike, *, overwrite: bool = False):
     """Write a modal-analysis Dataset to netCDF atomically (refuses to replace a file unless ``overwrite``)."""
-    from fivid.storage import check_writable, write_netcdf
-
     check_writable(path, overwrite=overwrite)
     return write_netcdf(ds, path, overwrite=overwrite)
 

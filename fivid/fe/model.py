@@ -26,6 +26,10 @@ height profile h(x).
 
 Constraints
 -----------
+Blocks of one body may be joined by :class:`Tie` rows (a fine block's edge nodes interpolated on a coarser
+block's edge, :mod:`fivid.fe.transition`): a tied (slave) node's dofs are not independent, so they are not in
+``free_dofs``; assembly (:func:`fivid.fe.assembly.tie_matrix`) and the explicit kernel eliminate them.
+
 ``fixed_dofs`` is every constrained dof: the dofs of clamped edges and the dofs carrying a
 :class:`Motion`. A dof in ``fixed_dofs`` with no motion stays at zero; a dof with a motion follows it.
 A motion on a clamped edge therefore moves the clamp (the moving base, the loading clamp): the other
@@ -41,7 +45,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fivid.contact import RIGID
 from fivid.errors import ConfigError
+from fivid.friction.curve import FrictionCurve
 
 __all__ = [
     "EDGES",
@@ -54,6 +60,7 @@ __all__ = [
     "Sensor",
     "PressureLoad",
     "Reaction",
+    "Tie",
     "Model",
 ]
 
@@ -353,9 +360,6 @@ class ContactPair:
     rigid: object = None
 
     def __post_init__(self):
-        from fivid.contact import RIGID
-        from fivid.friction.curve import FrictionCurve
-
         if self.law is None:
             object.__setattr__(self, "law", RIGID)
         if self.friction is None:
@@ -417,6 +421,29 @@ class Reaction:
 
 
 @dataclass(frozen=True, eq=False)
+class Tie:
+    """Nodes of a fine block's edge that follow a coarser block's edge (a mesh transition, :mod:`fivid.fe.transition`).
+
+    Slave node ``slave_nodes[k]`` moves as ``sum_i weights[k, i] u(master_nodes[k, i])``: linear interpolation
+    along the coarse edge, so the two blocks' displacement fields agree along the whole edge (a conforming
+    joint: Q4 edges are linear between their nodes).
+
+    Attributes
+    ----------
+    name : str
+    slave_nodes : ndarray of int, shape (n,)
+    master_nodes : ndarray of int, shape (n, 2)
+    weights : ndarray, shape (n, 2)
+        Interpolation weights [-], each row summing to 1.
+    """
+
+    name: str
+    slave_nodes: np.ndarray
+    master_nodes: np.ndarray
+    weights: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
 class Model:
     """A 2D finite-element model of a rig (see the module docstring for numbering and constraints).
 
@@ -445,6 +472,8 @@ class Model:
         Vibrations about the prestressed state: the initial-stress stiffness of the static preload
         (:mod:`fivid.fe.prestress`) in the explicit internal force, modes and CEA alike (config key
         ``prestress: true``).
+    ties : tuple of Tie
+        Tied (slave) nodes of mesh transitions (:mod:`fivid.fe.transition`); their dofs are not free.
     """
 
     plane: str
@@ -465,6 +494,7 @@ class Model:
     source: str = ""
     config: dict = field(default_factory=dict)
     prestress: bool = False
+    ties: tuple = ()
 
     @property
     def n_dofs(self) -> int:
@@ -473,10 +503,19 @@ class Model:
 
     @property
     def free_dofs(self) -> np.ndarray:
-        """Sorted dofs not in ``fixed_dofs``."""
+        """Sorted dofs not in ``fixed_dofs`` and not tied (:attr:`tied_dofs`)."""
         mask = np.ones(self.n_dofs, dtype=bool)
         mask[self.fixed_dofs] = False
+        mask[self.tied_dofs] = False
         return np.flatnonzero(mask)
+
+    @property
+    def tied_dofs(self) -> np.ndarray:
+        """Sorted dofs of the tied (slave) nodes of :attr:`ties`."""
+        if not self.ties:
+            return np.zeros(0, dtype=np.int64)
+        nodes = np.concatenate([t.slave_nodes for t in self.ties]).astype(np.int64)
+        return np.unique(np.concatenate([2 * nodes, 2 * nodes + 1]))
 
     @property
     def sha256(self) -> str:

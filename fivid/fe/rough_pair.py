@@ -10,6 +10,7 @@ import numpy as np
 from fivid.config_layer import quantity_at
 from fivid.errors import ConfigError
 from fivid.fe.config import read_config
+from fivid.fe.transition import surface_rows_for, transition_columns
 
 __all__ = ["rough_pair_config", "profiled_length", "graded_divisions", "seating_line"]
 
@@ -51,7 +52,7 @@ def seating_line(x, gap, centre: float) -> tuple[float, float]:
 
 
 def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load: float | None = None,
-                      mesh_step: float | None = None, seat: bool = False):
+                      mesh_step: float | None = None, seat: bool = False, transition: bool = False):
     """A rough-pair model config: ``base`` (path or mapping of a rough_pair-style config) with the profiles.
 
     Parameters
@@ -72,6 +73,11 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
         Re-divide both profiled blocks (:func:`graded_divisions`): columns of ``mesh_step`` [m] along x and as many
         layers (the config's grading ratio, default 1) as make the surface layer about ``mesh_step`` thick.
         None: the config's divisions.
+    transition : bool
+        With ``mesh_step``: divide the profiled edges for a coarsening stack instead (:mod:`fivid.fe.transition`):
+        columns of at most ``mesh_step`` whose number divides by ``2^K`` (:func:`fivid.fe.transition.transition_columns`)
+        and one layer; build the model with :func:`fivid.fe.load_model` and re-mesh both bodies with
+        :func:`fivid.fe.transition.transition_model` (the record's ``transition`` lists them).
     seat : bool
         Seat the upper block on the lower one instead of lifting it to first touch: its profile is lowered by the
         :func:`seating_line` of the gap under its centre, so it starts resting on its two supporting asperities
@@ -99,9 +105,13 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     uc = np.array([[_si(ctx, v, f"bodies.{up_name}.corners") for v in c] for c in up["corners"]])
     length = lc[1, 0] - lc[0, 0]
     if mesh_step is not None:
-        for body, c in ((lo, lc), (up, uc)):
+        for body, c, prof in ((lo, lc, lower), (up, uc, upper)):
             ratio = float((body.get("grading") or {}).get("ratio", 1.0))
             body["divisions"] = graded_divisions(c[1, 0] - c[0, 0], c[2, 1] - c[1, 1], float(mesh_step), ratio)
+            if transition:
+                rows = surface_rows_for(prof.values, float(mesh_step))
+                body["divisions"] = [transition_columns(c[1, 0] - c[0, 0], float(mesh_step), c[2, 1] - c[1, 1],
+                                                        surface_rows=rows), 1]
     nx = int(lo["divisions"][0])
     xn = np.linspace(0.0, length, nx + 1)  # back-face nodes (uniform along x; grading is through the depth)
     nu = int(up["divisions"][0])
@@ -154,7 +164,8 @@ def rough_pair_config(base, lower, upper, *, sensor_every: int = 1, normal_load:
     data["sensors"] = [{"name": f"back_{i:04d}", "body": lo_name, "direction": "y",
                         "at": [f"{float(xn[i] + lc[0, 0])!r} m", f"{float(y0)!r} m"]} for i in range(0, nx + 1, k)]
     data["name"] = f"{data.get('name', 'rough_pair')} (profiles: {lower.attrs.get('source', 'given')})"
-    return data, {"lift": lift, "seated": bool(seat), "divisions": {lo_name: list(lo["divisions"]), up_name: list(up["divisions"])},
+    return data, {"lift": lift, "seated": bool(seat),
+                  "transition": [lo_name, up_name] if (transition and mesh_step is not None) else [], "divisions": {lo_name: list(lo["divisions"]), up_name: list(up["divisions"])},
                   "lower_body": lo_name, "upper_body": up_name,
                   "back_face_sensors": len(data["sensors"]), "sensor_every": k, "base": origin}
 

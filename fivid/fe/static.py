@@ -25,6 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.assembly import stiffness_matrix
+from fivid.fe.contact_nodes import node_stiffness, slave_areas
+from fivid.fe.loads import external_load_vector
 from fivid.friction.curve import slave_coefficients
 
 __all__ = ["ContactGeometry", "contact_geometry", "Preload", "preload_displacement", "preload_state",
@@ -89,8 +92,6 @@ class ContactGeometry:
 
 def contact_geometry(model, u=None) -> ContactGeometry:
     """Project every slave node onto its master edge or rigid surface (in ``coords + u``; ``u`` global, optional)."""
-    from fivid.fe.contact_nodes import slave_areas
-
     x = model.coords if u is None else model.coords + np.asarray(u).reshape(-1, 2)
     nodes, pairs, segs, xis, normals, gaps, ends, vts = [], [], [], [], [], [], [], []
     for p, pair in enumerate(model.contacts):
@@ -187,8 +188,6 @@ class Preload:
         """Per pair: resultant normal force [N], contact length [m], peak and mean pressure [Pa], normal
         stiffness [N m-1] (the tangent of a compliant law summed over the closed nodes; for the rigid law the
         modal penalty ``normal_stiffness x area``), closed nodes."""
-        from fivid.fe.contact_nodes import node_stiffness
-
         out = []
         geo = self.geometry
         k_node = node_stiffness(model, geo, self.penetration)
@@ -254,9 +253,6 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
     mu : ndarray (n_slave,), optional
         Friction coefficient of each slave node (all pairs, in order); None or 0: frictionless.
     """
-    from fivid.fe.assembly import stiffness_matrix
-    from fivid.fe.loads import external_load_vector
-
     geo = contact_geometry(model)
     usable = geo.usable
     if not usable.any():

@@ -16,15 +16,8 @@
 - :mod:`fivid.friction.jenkins` — Jenkins (Masing) and Iwan elements for friction dampers (seed 004).
 """
 
-from fivid.friction.jenkins import (
-    iwan_energy_per_cycle,
-    iwan_force,
-    iwan_uniform_elements,
-    jenkins_energy_per_cycle,
-    jenkins_force,
-    jenkins_periodic_force,
-    loop_energy,
-)
+from fivid.friction.jenkins import (iwan_energy_per_cycle, iwan_force, iwan_uniform_elements, jenkins_energy_per_cycle,
+                                    jenkins_force, jenkins_periodic_force, loop_energy)
 from fivid.friction.amplitude import (AMPLITUDE_FORMS, CATEGORICAL_FORMS, CONTINUOUS_FORMS, INTERACTION_FORMS,
                                       AmplitudeModel, amplitude_design_matrix, coefficient_units)
 from fivid.friction.domain import ConditionDomain

@@ -39,7 +39,7 @@ class FrictionCurve:
 
     def coefficient(self, mu_k, v):
         """Sliding coefficient ``mu(v)`` [-] at slip speed ``v`` [m s-1] (array) over the kinetic ``mu_k``."""
-        from fivid.friction._curve_kernels import friction_coefficient  # numba, on first use
+        from fivid.friction._curve_kernels import friction_coefficient  # lazy: pulls numba
 
         v = np.asarray(v, dtype=float)
         return np.array([friction_coefficient(float(mu_k), self.mu_static_excess, self.stribeck_velocity,

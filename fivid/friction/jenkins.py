@@ -79,7 +79,7 @@ def jenkins_force(displacement, stiffness: float, slip_force: float, initial_for
         raise FividError(f"displacement must be one-dimensional, got shape {x.shape}")
     if abs(initial_force) > fs:
         raise FividError(f"initial_force {initial_force} N exceeds the slip force {fs} N")
-    from fivid.friction._jenkins_kernels import jenkins_march
+    from fivid.friction._jenkins_kernels import jenkins_march  # lazy: pulls numba
 
     force = np.empty((1, x.size))
     anchor = np.empty((1, x.size), dtype=np.int64)
@@ -115,7 +115,7 @@ def jenkins_periodic_force(displacement, stiffness: float, slip_force: float, n_
     """
     k, fs = _check_element(stiffness, slip_force)
     x = np.ascontiguousarray(displacement, dtype=float)
-    from fivid.friction._jenkins_kernels import jenkins_march
+    from fivid.friction._jenkins_kernels import jenkins_march  # lazy: pulls numba
 
     f0 = np.clip(k * (x[:, 0] - x.mean(axis=1)), -fs, fs)
     force = np.empty_like(x)

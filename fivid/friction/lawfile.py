@@ -43,7 +43,9 @@ import numpy as np
 from fivid import __version__
 from fivid.errors import FividError, SchemaError
 from fivid.friction.amplitude import REFERENCE_SCALES, AmplitudeModel, coefficient_units
+from fivid.friction.domain import ConditionDomain
 from fivid.friction.laws import CoulombLaw, PerturbedCoulombLaw
+from fivid.storage import check_writable, write_netcdf
 
 __all__ = ["LAW_FILE_VERSION", "READABLE_VERSIONS", "law_dataset", "law_from_dataset", "load_law", "write_law",
            "domain_from_dataset"]
@@ -163,8 +165,6 @@ def domain_from_dataset(ds):
     Version 2: the ``domain_*`` variables; version 1: the conditions of the used runs of the per-run
     table (``run_*``), when the file has one.
     """
-    from fivid.friction.domain import ConditionDomain
-
     if "domain_sliding_velocity" in ds:
         cols = [ds[f"domain_{name}"].values for name, _ in _CONDITIONS]
     elif "run_sliding_velocity" in ds:
@@ -266,7 +266,7 @@ def load_law(path: str | os.PathLike):
     """
     import hashlib
 
-    from fivid.io.netcdf import read_run
+    from fivid.io.netcdf import read_run  # lazy: pulls pydantic
 
     path = Path(path)
     ds = read_run(path, validate=False)  # the same opening and error messages as a run file
@@ -279,8 +279,6 @@ def write_law(law_or_dataset, path: str | os.PathLike, *, overwrite: bool = Fals
 
     The Dataset is read back into a law object first, so nothing unloadable is ever written.
     """
-    from fivid.storage import check_writable, write_netcdf
-
     ds = law_or_dataset if hasattr(law_or_dataset, "data_vars") else law_dataset(law_or_dataset)
     law_from_dataset(ds, source=str(path))
     check_writable(path, overwrite=overwrite)

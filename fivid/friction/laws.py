@@ -23,6 +23,7 @@ import numpy as np
 
 from fivid.errors import FividError
 from fivid.friction.amplitude import AmplitudeModel
+from fivid.friction.domain import ConditionDomain
 from fivid.friction.synthesis import check_sampling, fft_frequencies, synthesise_perturbation
 
 __all__ = ["FrictionLaw", "FRICTION_LAW_MEMBERS", "CoulombLaw", "PerturbedCoulombLaw", "INJECTION_MODES"]
@@ -195,7 +196,6 @@ class PerturbedCoulombLaw:
         """The shape on ``shape_frequency`` at a condition (interpolated between conditions, renormalised)."""
         if self.condition_shapes is None or roughness is None:
             return self.shape
-        from fivid.friction.domain import ConditionDomain
 
         points, shapes = self.condition_shapes
         s = ConditionDomain(points).interpolate(

@@ -43,15 +43,9 @@ import numpy as np
 
 from fivid.errors import FividError
 from fivid.friction.amplitude import (
-    AMPLITUDE_FORMS,
-    CATEGORICAL_FORMS,
-    CONTINUOUS_FORMS,
-    INTERACTION_FORMS,
-    LOG_FORMS,
-    ROUGHNESS_LEVEL_RTOL,
-    AmplitudeModel,
-    amplitude_design_matrix,
-    coefficient_units,
+    AMPLITUDE_FORMS, CATEGORICAL_FORMS, CONTINUOUS_FORMS, INTERACTION_FORMS, LOG_FORMS, NONLINEAR_FORMS,
+    ROUGHNESS_LEVEL_RTOL, AmplitudeModel, amplitude_design_matrix, coefficient_units, linear_velocity_power_law_names,
+    linear_velocity_power_law_predictor, roughness_level_index,
 )
 
 __all__ = ["FormFit", "fit_amplitude_forms", "choose_form", "not_compared_reason", "constant_law_warning",
@@ -151,7 +145,6 @@ def _design(form, velocity, roughness, load):
     if form in CATEGORICAL_FORMS:
         if not vary["sliding_velocity"]:
             return None, None, f"all runs at one sliding velocity ({v_levels[0]:.4g} m s-1): no velocity dependence"
-        from fivid.friction.amplitude import roughness_level_index
 
         idx = roughness_level_index(roughness, r_levels)
         for r, level in enumerate(r_levels):
@@ -255,8 +248,6 @@ def _regress_linear_power(terms, v, r, fn, y, weights, start):
     """
     from scipy.optimize import least_squares
 
-    from fivid.friction.amplitude import linear_velocity_power_law_predictor
-
     w = np.ones(y.size) if weights is None else np.asarray(weights, float)
     sw = np.sqrt(w)
 
@@ -303,8 +294,6 @@ def _linear_power_start(terms, v, r, fn, a, weights):
 
 def _regress(form, terms, levels, v, r, fn, a, se, weighting):
     """The regression of ``form`` on the runs; (None, reason) when it cannot be done."""
-    from fivid.friction.amplitude import NONLINEAR_FORMS, linear_velocity_power_law_names
-
     log_form = form in LOG_FORMS
     if log_form and np.any(a <= 0):
         return None, "a run has amplitude 0: a law on ln A cannot be fitted"

@@ -34,6 +34,8 @@ import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError, FividError
 from fivid.fe.damping import RayleighFit, fit_rayleigh_least_squares
+from fivid.signal import welch_psd
+from fivid.signal.welch import default_nperseg
 
 __all__ = [
     "ModalPeak",
@@ -241,9 +243,6 @@ def _response_power(units: str) -> int:
 
 def _spectrum_from(source, nperseg):
     """(frequency, power-like spectrum, window, nperseg, q) from runs, a PSD DataArray or a complex FRF."""
-    from fivid.signal import welch_psd
-    from fivid.signal.welch import default_nperseg
-
     if hasattr(source, "dims") and "frequency" in source.dims:
         values = np.asarray(source.values)
         if values.ndim > 1:

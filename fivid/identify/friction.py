@@ -20,13 +20,18 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from fivid.errors import ConfigError, DataQualityError, FividError
-from fivid.friction import AmplitudeModel, ConditionDomain, PerturbedCoulombLaw, coefficient_units, law_dataset
+from fivid.friction import (
+    AmplitudeModel, ConditionDomain, PerturbedCoulombLaw, coefficient_units, law_dataset, write_law,
+)
+from fivid.friction.laws import INJECTION_MODES
 from fivid.identify.amplitude_fit import (COOKS_RULE, SELECTION_RULE, FormFit, akaike_weights, candidate_forms,
                                           choose_form, constant_law_warning, fit_amplitude_forms, influential_runs,
                                           not_compared_reason)
 from fivid.identify.runs import (DEFAULT_BAND_HIGH, DEFAULT_BAND_LOW, NPERSEG_RULE, RunAnalysis,
                                   RunAnalysisSettings, analyse_run)
 from fivid.identify.shape import SpectralShape, identify_shape, shape_dependence
+from fivid.io import read_run
+from fivid.schema import new_history, validate_run
 
 __all__ = ["FrictionIdentification", "identify_friction_law", "ShapeSettings", "AmplitudeSettings",
            "identification_arguments", "load_runs", "SHAPE_METHODS"]
@@ -161,8 +166,6 @@ class FrictionIdentification:
         """The law-file content (:func:`fivid.friction.law_dataset`) plus the per-run and candidate-form tables."""
         import xarray as xr
 
-        from fivid.schema import new_history
-
         conf = self.settings.get("confidence", 0.95)
         attrs = {}
         for k, v in self.settings.items():
@@ -247,8 +250,6 @@ class FrictionIdentification:
 
     def write(self, path, *, overwrite: bool = False):
         """Write the law file atomically (:func:`fivid.friction.write_law`); returns the path."""
-        from fivid.friction import write_law
-
         return write_law(self.to_dataset(), path, overwrite=overwrite)
 
 
@@ -318,9 +319,6 @@ def load_runs(runs) -> list:
     ConfigError
         Two items are the same run (same ``run_id``), naming both.
     """
-    from fivid.io import read_run
-    from fivid.schema import validate_run
-
     out, where = [], {}
     for item in runs:
         if isinstance(item, (str, os.PathLike)):
@@ -524,8 +522,6 @@ def identify_friction_law(runs, *, band=None, analysis: RunAnalysisSettings = Ru
     DataQualityError
         No run is usable (each run's reason is listed).
     """
-    from fivid.friction.laws import INJECTION_MODES
-
     shape_method, smoothing_octaves = shape.method, shape.smoothing_octaves
     forms, interaction, categorical = amplitude.forms, amplitude.interaction, amplitude.categorical
     weighting, confidence, tare = amplitude.weighting, analysis.confidence, analysis.tare

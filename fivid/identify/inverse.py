@@ -25,6 +25,9 @@ import numpy as np
 
 from fivid.errors import ConfigError, FividError
 from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.score import score_runs
+from fivid.signal.steady import steady_part
+from fivid.solver import simulate
 from fivid.solver.options import RunSchedule
 
 __all__ = ["InverseAmplitude", "inverse_amplitude_scale"]
@@ -94,9 +97,6 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
         :class:`fivid.friction.OperatingCondition` and a :class:`fivid.solver.RunSchedule`); default
         :func:`fivid.solver.simulate` on ``model`` (progress bar only on a terminal).
     """
-    from fivid.score import score_runs
-    from fivid.signal.steady import steady_part
-
     if isinstance(max_iterations, bool) or int(max_iterations) != max_iterations or max_iterations < 1:
         raise ConfigError(f"max_iterations (--inverse-iterations) must be an integer >= 1, got {max_iterations!r}",
                           key="max_iterations")
@@ -105,7 +105,6 @@ def inverse_amplitude_scale(law, measured, model=None, *, band, duration: float 
     if simulator is None:
         if model is None:
             raise FividError("the inverse route needs an FE model (model=) to simulate")
-        from fivid.solver import simulate
 
         def simulator(friction, condition, schedule):
             return simulate(model, condition, friction, schedule=schedule)

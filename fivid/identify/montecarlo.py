@@ -27,8 +27,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.friction import PerturbedCoulombLaw
 from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.score.runs import _signal
 from fivid.signal.steady import steady_part
+from fivid.signal.welch import welch_psd
+from fivid.solver import simulate
 from fivid.solver.options import IntegrationOptions, OutputOptions, RunSchedule
 
 __all__ = ["draw_coefficients", "law_with_coefficients", "sample_seeds", "monte_carlo_laws", "sample_spectrum",
@@ -61,8 +65,6 @@ def draw_coefficients(mean, covariance, n: int, rng) -> tuple[np.ndarray, bool]:
 
 def law_with_coefficients(law, coefficients):
     """The law with its amplitude-model coefficients replaced (shape, band, μ0, injection kept)."""
-    from fivid.friction import PerturbedCoulombLaw
-
     model = dataclasses.replace(law.amplitude_model, coefficients=np.asarray(coefficients, dtype=float))
     return PerturbedCoulombLaw(law.mu0, law.shape_frequency, law.shape, model, law.band, injection=law.injection,
                                reference_velocity=law.reference_velocity, source=law.source,
@@ -89,8 +91,6 @@ def monte_carlo_laws(law, n: int, seed: int = 0) -> dict:
     ConfigError
         ``n`` < 2, or a law without a perturbation (Coulomb: nothing to sample).
     """
-    from fivid.friction import PerturbedCoulombLaw
-
     if isinstance(n, bool) or int(n) != n or n < 2:
         raise ConfigError(f"samples = {n!r}; a Monte-Carlo envelope needs an integer number of samples >= 2",
                           key="samples")
@@ -162,10 +162,6 @@ def sample_spectrum(model, friction: FrictionInput, condition: OperatingConditio
         condition [-]), the Welch ``settings``, the simulation's ``transient_end`` [s] and ``solver`` (its
         solver-path attrs: ``solver_path``, ``reduced_error_estimate_db``...).
     """
-    from fivid.score.runs import _signal  # the variable/sensor selection of the scores
-    from fivid.signal.welch import welch_psd
-    from fivid.solver import simulate
-
     law = friction.law
     ds = simulate(model, condition, friction, schedule=schedule, integration=integration,
                   output=OutputOptions(progress=False))

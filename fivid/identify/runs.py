@@ -29,7 +29,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError
+from fivid.identify.glitches import replace_glitches
+from fivid.identify.shape import octave_median
 from fivid.io.plausibility import MU_RANGE
+from fivid.signal import measured_window, welch_psd
 from fivid.signal.welch import NPERSEG_RULE, default_nperseg  # the one segment rule (used by identify.friction)
 
 __all__ = ["RunAnalysisSettings", "RunAnalysis", "analyse_run", "band_weights", "mains_line_bins", "batch_means_interval",
@@ -327,8 +330,6 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
     """
     import xarray as xr
 
-    from fivid.signal import measured_window, welch_psd
-
     run_id = str(ds.attrs.get("run_id", "?"))
     label = f"run {run_id!r}"
     _check_units(ds, label)
@@ -349,7 +350,6 @@ def analyse_run(ds, settings: RunAnalysisSettings, *, band: tuple, transfer_func
     if not res.normal_load > 0:
         res.reason = f"nominal normal load {res.normal_load!r} N is not > 0"
         return res
-    from fivid.identify.glitches import replace_glitches
 
     repair = settings.glitch_repair if settings.glitch_repair is not None else "transient_end" not in ds.attrs
     if repair:
@@ -507,9 +507,6 @@ def _tare_noise_psd(t, ft, fn, mu_mean, fn_mean, f, nperseg, fs, band, settings)
     """
     import xarray as xr
     from scipy import stats
-
-    from fivid.identify.shape import octave_median
-    from fivid.signal import welch_psd
 
     m = nperseg
     while m > 64 and 4 * m > t.size:

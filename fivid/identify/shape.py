@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import FividError
+from fivid.identify.amplitude_fit import condition_groups, distinct_levels
 
 __all__ = ["SpectralShape", "identify_shape", "average_normalised_spectra", "normalised_spectra", "shape_dependence",
            "SHAPE_TEST_ALPHA", "octave_smooth", "octave_median", "fit_rolloff", "rolloff_shape"]
@@ -110,8 +111,6 @@ def shape_dependence(runs, band, *, injection="uniform", reference_velocity=None
         common grid), when the shape depends on the condition.
     """
     import statsmodels.api as sm
-
-    from fivid.identify.amplitude_fit import condition_groups, distinct_levels
 
     out = {"statistic": "log-frequency centroid and spread of the normalised spectrum ~ ln of the varying "
                         "conditions (OLS F-tests, Bonferroni x2)", "alpha": alpha, "depends": None,

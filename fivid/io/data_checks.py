@@ -173,7 +173,7 @@ def time_finding(time: np.ndarray, tolerance: float) -> Finding | None:
     time : ndarray
         Times [s], at least 2.
     tolerance : float
-        The profile's ``checks.sampling_tolerance`` [-].
+        Relative tolerance on the step (the profile's ``checks.sampling_tolerance``) [-].
     """
     if time.size < 3:
         return time_without_resolution(time, tolerance) or time_not_increasing(time)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import SchemaError
+from fivid.io.daq.channels import require
 from fivid.io.rig_profile import RESERVED_ATTRIBUTES
 
 __all__ = ["EXPORT_FORMATS", "check_exportable", "export_csv", "export_dataset", "export_uff58", "uff58_set"]
@@ -105,8 +106,6 @@ def _channels(ds, axis: str):
 
 def export_uff58(ds, path) -> int:
     """Write ``ds`` as UFF dataset-58 channels to ``path`` (replaced); returns the number of channels."""
-    from fivid.io.daq.channels import require
-
     pyuff = require("pyuff", "pyuff", "UFF58 export")
     axis = _axis(ds)
     x = ds[axis].values

@@ -30,6 +30,7 @@ import numpy as np
 
 from fivid.errors import DataQualityError, FividError, SchemaError, UnitError
 from fivid.io.input_files import check_text_input
+from fivid.io.rig_csv import _first_null, _Lines, _parse_columns, _to_si
 from fivid.io.rig_header import RigHead, _head_lines, _split
 from fivid.io.rig_profile import ColumnSpec, RigProfile
 from fivid.units import conversion
@@ -195,8 +196,6 @@ def _si_columns(path: Path, header_line: int, n_fields: int, data_offset: int, c
     """The data of ``columns`` (``(field index, ColumnSpec)``) in SI, parsed as a rig CSV's data are
     (:mod:`fivid.io.rig_csv`: pyarrow from a memory map; a bad value is named by line and column)."""
     import pyarrow as pa
-
-    from fivid.io.rig_csv import _first_null, _Lines, _parse_columns, _to_si
 
     head = RigHead(path, RigProfile(), columns, n_fields, header_line, data_offset, attrs={})
     with pa.memory_map(str(path), "r") as mapped:

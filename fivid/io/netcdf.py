@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from fivid.errors import FividError, SchemaError
-from fivid.schema import apply_cf_attrs, validate_run, with_condition_coords
+from fivid.schema import apply_cf_attrs, registry, validate_run, with_condition_coords
 from fivid.storage import write_netcdf
 
 __all__ = ["open_runs", "read_run", "write_run"]
@@ -86,8 +86,6 @@ def open_runs(paths, *, dim: str = "run", **kwargs):
     >>> runs.sel(sliding_velocity=0.01)["acceleration"].mean("time")  # doctest: +SKIP
     """
     import xarray as xr
-
-    from fivid.schema import registry
 
     if isinstance(paths, (str, os.PathLike)):
         paths = str(paths)

@@ -32,6 +32,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BeforeValidator, Field, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
+from fivid.builtin import builtin_folders
 from fivid.config_layer import (ConfigModel, ConfigSource, Name, Number, Problems, fail, key_loc, read_yaml,
                                 validate)
 from fivid.errors import ConfigError, FividError, UnitError
@@ -139,8 +140,6 @@ class RigProfile:
 def profile_search_path() -> list[Path]:
     """Folders searched for ``<name>.yaml``: ``./configs/rigs``, then the built-in profiles
     (:func:`fivid.builtin.builtin_folders`: the checkout's ``configs/rigs``, the installed copy in a wheel)."""
-    from fivid.builtin import builtin_folders
-
     here = Path.cwd() / "configs" / "rigs"
     builtin = [f for f in builtin_folders("rigs") if f.resolve() != here.resolve()]
     return [here] + builtin

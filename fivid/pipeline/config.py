@@ -31,6 +31,13 @@ from pydantic import AfterValidator, BeforeValidator, Field, WithJsonSchema, mod
 from fivid import config_layer
 from fivid.config_layer import ConfigModel, Name, Number, Problems, Quantity, fail, validate
 from fivid.errors import ConfigError, FividError
+from fivid.execution.resources import check_simulation_memory, simulation_memory
+from fivid.fe import load_model
+from fivid.friction.amplitude import AMPLITUDE_FORMS
+from fivid.io import load_rig_profile, read_rig_head
+from fivid.io.rig_csv import as_rig_profile
+from fivid.signal.welch import default_nperseg
+from fivid.solver.options import DEFAULT_REDUCED_TOLERANCE, ReducedToleranceField, SolverPathField
 
 __all__ = [
     "STAGE_REQUIRES",
@@ -111,7 +118,7 @@ class RunConfig:
     seeds: tuple[int, ...]
     thresholds: tuple[Threshold, ...]
     solver: str = "auto"
-    reduced_tolerance: float = 0.5
+    reduced_tolerance: float = DEFAULT_REDUCED_TOLERANCE
     data_model: Path | None = None
 
 
@@ -222,8 +229,6 @@ class _Analysis(ConfigModel):
 
 
 def _amplitude_form(value):
-    from fivid.friction.amplitude import AMPLITUDE_FORMS
-
     if value not in AMPLITUDE_FORMS:
         raise fail(f"unknown amplitude form {value!r}; expected one of {', '.join(AMPLITUDE_FORMS)}")
     return value
@@ -271,11 +276,8 @@ class _Simulate(ConfigModel):
     samples: Annotated[int, AfterValidator(_samples), WithJsonSchema({"anyOf": [
         {"const": 0}, {"type": "integer", "minimum": 2, "maximum": 10000}]})] = Field(
         0, description="Monte-Carlo samples of the law's uncertainty per condition (0: off; docs/uncertainty.md)")
-    solver: Literal["auto", "full", "reduced"] = Field(
-        "auto", description="solver path: auto (reduced when its estimated error in the scoring band is within "
-                            "reduced_tolerance), full or reduced (docs/solver.md)")
-    reduced_tolerance: Annotated[float, Field(ge=0.0)] = Field(
-        0.5, description="largest estimated in-band log-spectral distance [dB] of the reduced path for solver: auto")
+    solver: SolverPathField = "auto"
+    reduced_tolerance: ReducedToleranceField = DEFAULT_REDUCED_TOLERANCE
 
 
 class _Discretisation(ConfigModel):
@@ -344,8 +346,6 @@ class RunConfigModel(ConfigModel):
 
 def _nperseg(cfg: RunConfigModel) -> int:
     """analysis.nperseg, or the one default rule on the simulated steady part (duration less settle)."""
-    from fivid.signal.welch import default_nperseg
-
     a, sim = cfg.analysis, cfg.simulate
     if a.nperseg is not None:
         return a.nperseg
@@ -420,8 +420,6 @@ def load_run_config(path: str | os.PathLike | None, *, output: str | os.PathLike
 
 def _check_simulation_size(cfg: RunConfig, model) -> None:
     """Refuse, at plan time, a simulate stage whose runs cannot fit in memory or time (fivid.execution.resources)."""
-    from fivid.execution.resources import check_simulation_memory, simulation_memory
-
     try:
         size = simulation_memory(model, duration=cfg.duration, sample_rate=cfg.sample_rate)
         runs = len(cfg.seeds) * max(1, len(cfg.input_files))  # every test condition with every seed
@@ -437,9 +435,6 @@ def _check_bands_against_inputs(cfg: RunConfig, stages) -> None:
     Only the files' heads are read (:func:`fivid.io.read_rig_head`); a file whose head is bad, or that
     states no sample rate, is left to the ingest stage to report.
     """
-    from fivid.io import read_rig_head
-    from fivid.io.rig_csv import as_rig_profile
-
     profile = as_rig_profile(cfg.rig_profile)
     rates = {}
     for path in cfg.input_files:
@@ -494,17 +489,10 @@ def load_plan(recipe: str | os.PathLike, config: str | os.PathLike | None = None
         _check_bands_against_inputs(cfg, stages)
     if cfg.rig_profile is not None and "ingest" in stages:
         try:
-            from fivid.io import load_rig_profile
-        except ImportError:  # pragma: no cover - ingest not installed
-            raise ConfigError("this fivid has no rig profiles (fivid.io.load_rig_profile)", file=config,
-                              key="inputs.rig_profile") from None
-        try:
             load_rig_profile(cfg.rig_profile)
         except FividError as exc:
             raise ConfigError(f"rig profile {cfg.rig_profile!r}: {exc}", file=config, key="inputs.rig_profile") from None
     if any(s in stages for s in ("modal", "simulate")):
-        from fivid.fe import load_model
-
         try:
             model = load_model(cfg.model)
         except FividError as exc:

@@ -40,10 +40,14 @@ from pathlib import Path
 
 import numpy as np
 
+from fivid.fe import load_model
 from fivid.pipeline.cache import file_sha256
 from fivid.signal.compare import band_distance, band_levels_db
 from fivid.signal.levels import bin_weights, third_octave_weights
+from fivid.storage import write_json
+from fivid.study import load_study
 from fivid.study.convergence import BAND_LEVEL_REFERENCE, observed_order
+from fivid.study.tasks import element_size, refined_model
 
 __all__ = ["DEFAULT_TABLE", "discretisation_estimate", "model_mesh", "write_convergence_table"]
 
@@ -57,9 +61,6 @@ H_TOLERANCE = 1e-6
 
 def model_mesh(model_path) -> dict:
     """The model the pipeline simulates with: name, path, sha256, largest element side [m], dofs."""
-    from fivid.fe import load_model
-    from fivid.study.tasks import element_size
-
     model = load_model(model_path)
     name = model.config.get("name") if isinstance(model.config, dict) else None
     return {"name": name or Path(model_path).stem, "path": str(model_path), "sha256": file_sha256(model_path),
@@ -180,8 +181,6 @@ def write_convergence_table(study_dir, out, models: dict[str, dict]) -> Path:
     """
     import xarray as xr
 
-    from fivid.storage import write_json
-
     summary = json.loads((Path(study_dir) / "summary.json").read_text(encoding="utf-8"))
     if "convergence" not in summary:
         raise ValueError(f"{study_dir}/summary.json has no 'convergence' block: not a mesh or time-step study")
@@ -203,10 +202,6 @@ def write_convergence_table(study_dir, out, models: dict[str, dict]) -> Path:
 
 def main(argv=None) -> Path:
     """``python -m fivid.pipeline.discretisation``: write the convergence table; returns its path (logged)."""
-    from fivid.fe import load_model
-    from fivid.study import load_study
-    from fivid.study.tasks import element_size, refined_model
-
     p = argparse.ArgumentParser(prog="python -m fivid.pipeline.discretisation",
                                 description="Write the pipeline's convergence table from a finished mesh/time-step study.")
     p.add_argument("study", help="the study config, e.g. configs/studies/convergence.yaml")

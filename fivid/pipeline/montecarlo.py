@@ -15,8 +15,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fivid.errors import ConfigError, FividError
+from fivid.execution.cluster import check_scheduler_address, map_tasks
 from fivid.friction.inputs import FrictionInput, OperatingCondition
 from fivid.identify.montecarlo import NOT_SAMPLED, SAMPLED, EnvelopeSpectrum, monte_carlo_laws, sample_spectrum
+from fivid.score.envelope import envelope_dataset
 from fivid.solver.options import IntegrationOptions, RunSchedule
 
 __all__ = ["run_monte_carlo", "SampleExecution"]
@@ -76,8 +78,6 @@ def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSche
     """
     from tqdm.auto import tqdm
 
-    from fivid.score.envelope import envelope_dataset
-
     duration, sample_rate = schedule.duration, schedule.sample_rate
     nperseg, settle = spectrum.nperseg, spectrum.settle
     workers, scheduler, progress = execution.workers, execution.scheduler, execution.progress
@@ -87,8 +87,6 @@ def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSche
                           f"{n_steady} samples, fewer than one Welch segment (nperseg {int(nperseg)}); lengthen the "
                           "duration or lower nperseg", key="nperseg")
     if scheduler is not None:
-        from fivid.execution.cluster import check_scheduler_address
-
         check_scheduler_address(scheduler)
     draws = monte_carlo_laws(law, samples, seed)
     schedule = replace(schedule, duration=float(duration), sample_rate=float(sample_rate))
@@ -99,18 +97,10 @@ def run_monte_carlo(model, law, condition: OperatingCondition, schedule: RunSche
     bar = tqdm(total=len(items), desc="Monte-Carlo", unit="sample", leave=False, disable=None if progress is None
                else not progress)
     try:
-        if workers == 0 and scheduler is None:
-            for name, args in items.items():
-                results[name] = sample_spectrum(*args)
-                bar.update(1)
-        else:
-            from fivid.execution.cluster import map_tasks
-
-            for name, out, seconds, pid in map_tasks(sample_spectrum, items, workers=max(int(workers), 1),
-                                                     scheduler=scheduler):
-                log.info("Monte-Carlo %s: %.3g s on worker pid %d", name, seconds, pid)
-                results[name] = out
-                bar.update(1)
+        for name, out, seconds, pid in map_tasks(sample_spectrum, items, workers=int(workers), scheduler=scheduler):
+            log.info("Monte-Carlo %s: %.3g s on worker pid %d", name, seconds, pid)
+            results[name] = out
+            bar.update(1)
     finally:
         bar.close()
     ordered = [results[name] for name in items]  # sample order, whatever the finishing order

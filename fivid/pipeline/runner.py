@@ -24,11 +24,13 @@ from pathlib import Path
 
 from fivid import __version__
 from fivid.errors import FividError, Interrupted, exit_status
-from fivid.pipeline.cache import Task, TaskCache
-from fivid.pipeline.config import Plan
+from fivid.execution.cluster import check_scheduler_address
 from fivid.execution.lock import OutputLock
+from fivid.pipeline.cache import Task, TaskCache
+from fivid.pipeline.config import STAGE_REQUIRES, Plan
 from fivid.pipeline.output import (check_inside, check_output_folder, remove_stale_temporaries,
                                    write_output_manifest)
+from fivid.pipeline.stages import STAGES, evaluate_thresholds
 from fivid.storage import check_folder_writable, write_json
 
 __all__ = ["Context", "StageStats", "run_pipeline", "EXIT_PASS", "EXIT_FAILURE", "EXIT_BAD_INPUT",
@@ -102,8 +104,6 @@ class Context:
 
 def _upstream(name: str) -> set:
     """Every stage ``name`` needs, directly or through others."""
-    from fivid.pipeline.config import STAGE_REQUIRES
-
     out: set = set()
     todo = list(STAGE_REQUIRES[name])
     while todo:
@@ -116,8 +116,6 @@ def _upstream(name: str) -> set:
 
 def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
     """Plan, look up and run one stage; returns dry-run lines."""
-    from fivid.pipeline.stages import STAGES
-
     stage = STAGES[name]
     t0 = time.perf_counter()
     # the report shows every earlier stage's outputs (modal too, which it does not require)
@@ -167,8 +165,6 @@ def _run_stage(ctx: Context, name: str, stats: StageStats) -> list[str]:
 
 def _evaluate(ctx: Context) -> tuple[list[dict], bool]:
     """Check every condition's scores against the thresholds; returns (checks, all passed)."""
-    from fivid.pipeline.stages import evaluate_thresholds
-
     checks = evaluate_thresholds(ctx.data.get("scores", {}), ctx.config.thresholds)
     return checks, all(c["pass"] for c in checks)
 
@@ -214,8 +210,6 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         The content of ``summary.json`` (empty for a dry run).
     """
     if scheduler is not None:  # before any work: a bad address used to fail after three stages
-        from fivid.execution.cluster import check_scheduler_address
-
         check_scheduler_address(scheduler)
     out = plan.config.output
     check_output_folder(out, force=force)

@@ -11,7 +11,13 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.errors import DataQualityError
+from fivid.io import read_run
 from fivid.schema import new_history
+from fivid.score import score_runs, scores_to_json
+from fivid.signal import welch_psd
+from fivid.signal.sampling import sample_rate_of
+from fivid.signal.steady import steady_part
+from fivid.signal.welch import default_nperseg
 
 __all__ = ["score_condition", "acceleration_psd"]
 
@@ -27,8 +33,6 @@ def _acceleration(ds):
 
 def acceleration_psd(ds, *, nperseg: int):
     """Welch PSD of the acceleration (first sensor) with χ² 95 % bounds."""
-    from fivid.signal import welch_psd
-
     return welch_psd(_acceleration(ds), nperseg=nperseg, window="hann", detrend="constant", confidence=0.95)
 
 
@@ -61,19 +65,12 @@ def score_condition(measured: list, simulated: list, *, band, nperseg: int | Non
 
     import xarray as xr
 
-    from fivid.io import read_run
-    from fivid.score import score_runs, scores_to_json
-    from fivid.signal.steady import steady_part
-
     def steady(p):  # a measured run without a steady-sliding window is used whole (logged)
         return steady_part(read_run(p), label=Path(p).name, settle=settle, whole_record_if_none=True)
 
     meas = {Path(p).stem: steady(p) for p in measured}
     sims = {Path(p).stem: steady(p) for p in simulated}
     if nperseg is None:  # one segment for the whole condition, so that every PSD is on one grid
-        from fivid.signal.sampling import sample_rate_of
-        from fivid.signal.welch import default_nperseg
-
         rates = {k: sample_rate_of(d["time"].values, label=k) for k, d in {**meas, **sims}.items()}
         fs = min(rates.values())
         nperseg = default_nperseg(fs, min(d.sizes["time"] * fs / rates[k] for k, d in {**meas, **sims}.items()))

@@ -25,8 +25,21 @@ import logging
 import time
 from pathlib import Path
 
-from fivid.errors import FividError
+from fivid.errors import ConfigError, FividError
+from fivid.fe import load_model
+from fivid.fe.modal import modal_analysis
+from fivid.friction import load_law
+from fivid.identify import identification_arguments, identify_friction_law
+from fivid.identify.montecarlo import EnvelopeSpectrum
+from fivid.io import load_rig_profile, read_rig_csv, read_run, write_run
 from fivid.pipeline.cache import Task, file_sha256
+from fivid.pipeline.discretisation import DEFAULT_TABLE, discretisation_estimate
+from fivid.pipeline.montecarlo import SampleExecution, run_monte_carlo
+from fivid.pipeline.scoring import score_condition
+from fivid.pipeline.sweep import run_simulations, simulation_inputs
+from fivid.report import render_report
+from fivid.schema import new_history
+from fivid.storage import write_json, write_netcdf
 
 __all__ = ["STAGES", "condition_name", "evaluate_thresholds", "solver_path"]
 
@@ -69,8 +82,6 @@ class Ingest:
         cfg = ctx.config
         profile = None
         if cfg.rig_profile is not None:  # keyed by the profile file's content, found by name or path
-            from fivid.io import load_rig_profile
-
             found = load_rig_profile(cfg.rig_profile).path
             profile = {"profile": cfg.rig_profile, "sha256": file_sha256(found) if found else None}
         tasks, shas = [], {}
@@ -84,8 +95,6 @@ class Ingest:
         return tasks
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.io import read_rig_csv, write_run
-
         (ctx.out / "runs").mkdir(parents=True, exist_ok=True)
         rejected = []
         for task in _progress(ctx, tasks, "ingest", len(tasks)):
@@ -135,10 +144,6 @@ class Identify:
                      {"law": str(ctx.out / "law.nc"), "json": str(ctx.out / "law.json")})]
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.identify import identification_arguments, identify_friction_law
-        from fivid.io import read_run
-        from fivid.storage import write_json
-
         task = tasks[0]
 
         def work():
@@ -175,10 +180,6 @@ class Modal:
         return tasks
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.fe import load_model
-        from fivid.fe.modal import modal_analysis
-        from fivid.storage import write_netcdf
-
         model = load_model(ctx.config.model)
         for task in tasks:
             _timed(ctx, task, lambda t=task: write_netcdf(
@@ -197,8 +198,6 @@ def envelope_samples(config) -> int:
     node = config.raw.get("simulate") or {}
     value = node.get("samples", 0) if isinstance(node, dict) else 0
     if isinstance(value, bool) or not isinstance(value, int) or not (value == 0 or 2 <= value <= 10000):
-        from fivid.errors import ConfigError
-
         raise ConfigError(f"simulate.samples must be 0 (off) or an integer in [2, 10000], got {value!r}",
                           file=getattr(config, "path", None), key="simulate.samples")
     return value
@@ -244,8 +243,6 @@ class Simulate:
         return tasks
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.pipeline.sweep import run_simulations
-
         (ctx.out / "sims").mkdir(parents=True, exist_ok=True)
         sims = [t for t in tasks if "sim" in t.outputs]
         if sims:
@@ -268,14 +265,6 @@ class Simulate:
 
 def _envelope(ctx, task) -> None:
     """One condition's Monte-Carlo envelope, written to the task's output."""
-    from fivid.fe import load_model
-    from fivid.friction import load_law
-    from fivid.identify.montecarlo import EnvelopeSpectrum
-    from fivid.pipeline.montecarlo import SampleExecution, run_monte_carlo
-    from fivid.pipeline.sweep import simulation_inputs
-    from fivid.schema import new_history
-    from fivid.storage import write_netcdf
-
     p = dict(task.params)
     law_path = ctx.data["law_path"]
     condition, schedule, integration = simulation_inputs(p)
@@ -309,9 +298,6 @@ class Score:
         return tasks
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.pipeline.scoring import score_condition
-        from fivid.storage import write_json, write_netcdf
-
         (ctx.out / "scores").mkdir(parents=True, exist_ok=True)
         for task in _progress(ctx, tasks, "score", len(tasks)):
             c = ctx.data["conditions"][task.name]
@@ -351,10 +337,6 @@ class Report:
                      {"html": str(ctx.out / "report.html"), "discretisation": str(ctx.out / "discretisation.json")})]
 
     def execute(self, ctx, tasks) -> None:
-        from fivid.pipeline.discretisation import discretisation_estimate
-        from fivid.report import render_report
-        from fivid.storage import write_json
-
         task = tasks[0]
         checks = evaluate_thresholds(ctx.data.get("scores", {}), ctx.config.thresholds)
 
@@ -404,8 +386,6 @@ def model_error_estimate(est: dict, cfg, sims: dict, checks: list) -> dict:
       comparison) and the level threshold, and ``consistent``: whether the estimate is below that threshold (a
       model error the size of the threshold would decide the verdict, not the model's physics).
     """
-    from fivid.pipeline.cache import file_sha256
-
     red = _reduction_record([p for paths in sims.values() for p in paths])
     mesh = est.get("band_level_error_db") if est.get("covered") else None
     same = cfg.data_model is not None and file_sha256(cfg.data_model) == file_sha256(cfg.model)
@@ -430,8 +410,6 @@ def model_error_estimate(est: dict, cfg, sims: dict, checks: list) -> dict:
 def convergence_table(cfg) -> Path | None:
     """The convergence table of the run: ``discretisation.convergence`` of the run configuration (relative to it;
     null: none), by default ``convergence.json`` next to it (:mod:`fivid.pipeline.discretisation`)."""
-    from fivid.pipeline.discretisation import DEFAULT_TABLE
-
     node = cfg.raw.get("discretisation") or {}
     name = node.get("convergence", DEFAULT_TABLE) if isinstance(node, dict) else DEFAULT_TABLE
     if name is None:

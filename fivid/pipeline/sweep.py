@@ -16,8 +16,12 @@ from __future__ import annotations
 
 import logging
 
-from fivid.execution.cluster import map_tasks
+from fivid.execution.cluster import call, map_tasks
+from fivid.fe import load_model
+from fivid.friction import load_law
 from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.io import write_run
+from fivid.solver import simulate
 from fivid.solver.options import IntegrationOptions, OutputOptions, RunSchedule
 
 __all__ = ["simulation_inputs", "simulate_condition", "run_simulations"]
@@ -37,8 +41,6 @@ def simulation_inputs(params: dict) -> tuple[OperatingCondition, RunSchedule, In
 def simulate_condition(model, law, params: dict):
     """One simulation (runs on a worker) of a simulate task's ``params`` (:func:`simulation_inputs`, ``seed`` of
     the law's synthesis, ``run_id``) with ``law``."""
-    from fivid.solver import simulate
-
     condition, schedule, integration = simulation_inputs(params)
     return simulate(model, condition, FrictionInput(law=law, seed=params["seed"]), schedule=schedule,
                     integration=integration, output=OutputOptions(run_id=params["run_id"], progress=False))
@@ -48,10 +50,6 @@ def run_simulations(ctx, tasks) -> None:
     """Run the simulate stage's tasks on dask, writing each result and its cache record as it arrives."""
     from tqdm.auto import tqdm
 
-    from fivid.fe import load_model
-    from fivid.friction import load_law
-    from fivid.io import write_run
-
     model = load_model(ctx.config.model)
     law = load_law(ctx.data["law_path"])
     by_name = {t.name: t for t in tasks}
@@ -59,7 +57,7 @@ def run_simulations(ctx, tasks) -> None:
     bar = tqdm(total=len(tasks), desc="simulate", unit="sim", leave=False,
                disable=None if ctx.progress is None else not ctx.progress)
     try:
-        for name, ds, seconds, pid in map_tasks(_apply, items, workers=ctx.workers, scheduler=ctx.scheduler):
+        for name, ds, seconds, pid in map_tasks(call, items, workers=ctx.workers, scheduler=ctx.scheduler):
             task = by_name[name]
             log.info("simulate/%s computed by worker pid %d", name, pid)
             write_run(ds, task.outputs["sim"], overwrite=True)
@@ -67,7 +65,3 @@ def run_simulations(ctx, tasks) -> None:
             bar.update(1)
     finally:
         bar.close()
-
-
-def _apply(func, *args):
-    return func(*args)

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from fivid import __version__
+from fivid.friction import coefficient_units, law_from_dataset
 from fivid.report.figures import (
     amplitude_figure,
     law_shape_figure,
@@ -24,6 +25,7 @@ from fivid.report.figures import (
     psd_overlay_figure,
 )
 from fivid.report.html import Page, fmt, table
+from fivid.score.envelope import band_levels_of_samples, envelope_coverage, read_envelope
 from fivid.storage import write_text
 
 __all__ = ["render_report", "measured_peaks", "amplitude_interval", "PEAK_PAIRING_TOLERANCE"]
@@ -88,8 +90,6 @@ def measured_peaks(frequency, psd, band, *, prominence_db: float = 6.0, max_peak
 def _law_section(page: Page, inputs: dict) -> None:
     import xarray as xr
 
-    from fivid.friction import law_from_dataset
-
     page.heading("Identified friction law")
     path = inputs.get("law_path")
     if not path:
@@ -141,7 +141,6 @@ def _law_section(page: Page, inputs: dict) -> None:
                     f"fitted {model.form} law (lines) with its pointwise 95 % interval (bands, from the "
                     f"coefficient covariance) and the per-run estimates (circles, ±1.96 standard errors); normal load {load:g} N.",
                     "amplitude against velocity")
-    from fivid.friction import coefficient_units
 
     lower = ds["amplitude_ci_lower"].values if "amplitude_ci_lower" in ds else np.full(len(model.names), np.nan)
     upper = ds["amplitude_ci_upper"].values if "amplitude_ci_upper" in ds else np.full(len(model.names), np.nan)
@@ -291,8 +290,6 @@ def _law_band_note(law_band, frequency, band) -> str:
 def _envelope_figure(page: Page, cond: str, path, frequency, measured: list[dict], band, units: str) -> None:
     """The condition's Monte-Carlo envelope with its measured PSDs, and per 1/3-octave band whether each
     measured level is inside the samples' 5-95 % band levels (:func:`fivid.score.envelope.envelope_coverage`)."""
-    from fivid.score.envelope import band_levels_of_samples, envelope_coverage, read_envelope
-
     env = read_envelope(path).load()
     n = int(env.sizes["sample"])
     page.figure(psd_envelope_figure(env["frequency"].values, env["psd_p05"].values, env["psd_median"].values,

@@ -19,8 +19,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid import __version__
 from fivid.errors import ConfigError, SchemaError
+from fivid.friction import coefficient_units
+from fivid.schema import new_history
+from fivid.score.runs import _BAND_HIGH_FRACTION, _BAND_LOW_BINS
 from fivid.signal.levels import bin_weights, third_octave_weights
+from fivid.units import power_units
 
 __all__ = ["QUANTILES", "psd_quantiles", "envelope_dataset", "band_levels_of_samples", "envelope_coverage",
            "add_envelope_coverage", "read_envelope", "ENVELOPE_TITLE"]
@@ -75,10 +80,6 @@ def envelope_dataset(frequency, psd_samples, units: str, *, band=None, seeds=Non
     """
     import xarray as xr
 
-    from fivid.schema import new_history
-    from fivid.score.runs import _BAND_HIGH_FRACTION, _BAND_LOW_BINS
-    from fivid.units import power_units
-
     f = np.asarray(frequency, dtype=float)
     p = np.asarray(psd_samples, dtype=float)
     if p.ndim != 2 or p.shape[1] != f.size:
@@ -122,8 +123,6 @@ def envelope_dataset(frequency, psd_samples, units: str, *, band=None, seeds=Non
         "band_upper": ("band_centre", bands["upper"], {"units": "Hz", "long_name": "upper band-edge frequency"}),
     }
     if coefficients is not None and names:
-        from fivid.friction import coefficient_units
-
         data["sample_coefficient"] = (("sample", "coefficient"), np.asarray(coefficients, float).reshape(n, len(names)),
                                       {"long_name": "amplitude-law coefficients drawn for the sample"})
         data["coefficient_units"] = ("coefficient", np.array([coefficient_units(c) for c in names], dtype=object),
@@ -146,7 +145,6 @@ def envelope_dataset(frequency, psd_samples, units: str, *, band=None, seeds=Non
     }
     if "history" not in ds.attrs:
         ds.attrs["history"] = new_history(f"envelope of {n} Monte-Carlo PSDs")
-    from fivid import __version__
 
     ds.attrs["fivid_version"] = __version__
     return ds
@@ -156,7 +154,7 @@ def read_envelope(path):
     """An envelope file (netCDF) as a Dataset; a file that is not one is a SchemaError naming it."""
     from pathlib import Path
 
-    from fivid.io.netcdf import read_run
+    from fivid.io.netcdf import read_run  # lazy: pulls pydantic
 
     ds = read_run(Path(path), validate=False)
     missing = [v for v in ("psd_sample", "psd_p05", "psd_p95", "psd_median") if v not in ds]

@@ -30,6 +30,7 @@ from fivid.signal.sampling import run_label, sample_rate_of
 from fivid.signal.spectral import bin_correlation, bin_degrees_of_freedom, check_nperseg, segment_window
 from fivid.signal.steady import steady_part
 from fivid.signal.welch import NPERSEG_RULE, default_nperseg, welch_psd
+from fivid.units import power_units
 
 __all__ = ["score_runs", "WelchOptions", "PeakMatching"]
 
@@ -349,8 +350,6 @@ def _significant(score: str, side: str = "above") -> dict:
 
 def _assemble(v: dict, *, measured, simulated, variable, units):
     import xarray as xr
-
-    from fivid.units import power_units
 
     psd_units = power_units(units)
     db = {"units": "dB"}

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import DataQualityError
+from fivid.signal.welch import default_nperseg
 
 __all__ = ["GrowthFit", "envelope_growth_rate", "growth_phase", "envelope", "dominant_frequency_track",
            "narrowband_fraction"]
@@ -196,8 +197,6 @@ def dominant_frequency_track(x, fs: float, *, nperseg: int | None = None, noverl
         Its PSD value [units^2 Hz-1].
     """
     from scipy.signal import spectrogram
-
-    from fivid.signal.welch import default_nperseg
 
     x = np.asarray(x, dtype=float)
     nperseg = default_nperseg(fs, x.size) if nperseg is None else int(nperseg)

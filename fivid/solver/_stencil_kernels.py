@@ -1,5 +1,5 @@
-"""Internal forces of the explicit solver (layer L0): the per-block 3x3 stencils ``f = K w`` and the discrete
-springs and dashpots. Layout and indexing: :mod:`fivid.solver._kernels`."""
+"""Internal forces of the explicit solver (layer L0): the per-block 3x3 stencils ``f = K w`` (with the tied
+nodes of mesh transitions eliminated, ``f = T^T K T w``) and the discrete springs and dashpots. Layout and indexing: :mod:`fivid.solver._kernels`."""
 
 from collections import namedtuple
 
@@ -12,7 +12,7 @@ __all__ = ["StencilArrays", "block_forces", "spring_forces"]
 #: the stencil argument of :func:`block_forces` (``block_forces(w, f, stencil)``), built by
 #: :attr:`fivid.solver.stencil.BlockStencils.kernel_args`
 StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "rot", "wr", "lst_idx", "lst_nbr",
-                                             "lst_coef"])
+                                             "lst_coef", "tie_s", "tie_m", "tie_w"])
 
 
 @fma_kernel
@@ -232,12 +232,22 @@ def block_forces(w, f, stencil):
         x-indices of their 3x3 neighbours, row-major from ``(-1, -1)``.
     lst_coef : ndarray (n_list, 36)
         Their stencils [N m-1].
+    tie_s, tie_m, tie_w : int64 ndarray (n_tie,), int64 ndarray (n_tie, 2), ndarray (n_tie, 2)
+        Tied nodes of mesh transitions (:class:`fivid.fe.model.Tie`): x-index, masters' x-indices, weights.
+        Their ``w`` is first set from the masters' (``w_s = sum weights w_m``, written into ``w``), and their
+        forces are finally moved to the masters (``f_m += weights f_s``, ``f_s = 0``): ``f = T^T K T w``.
     """
-    npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef = stencil
+    npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef, tie_s, tie_m, tie_w = stencil
     wx = w[:npd]
     wy = w[npd:]
     fx = f[:npd]
     fy = f[npd:]
+    for r in range(tie_s.shape[0]):
+        s = tie_s[r]
+        a = tie_m[r, 0]
+        b = tie_m[r, 1]
+        wx[s] = tie_w[r, 0] * wx[a] + tie_w[r, 1] * wx[b]
+        wy[s] = tie_w[r, 0] * wy[a] + tie_w[r, 1] * wy[b]
     for b in range(blocks.shape[0]):
         kind = blocks[b, 4]
         if kind == 3:
@@ -269,6 +279,14 @@ def block_forces(w, f, stencil):
             sy += lst_coef[r, k + 2] * ax + lst_coef[r, k + 3] * ay
         fx[p] = sx
         fy[p] = sy
+    for r in range(tie_s.shape[0]):
+        s = tie_s[r]
+        for k in range(2):
+            q = tie_m[r, k]
+            fx[q] += tie_w[r, k] * fx[s]
+            fy[q] += tie_w[r, k] * fy[s]
+        fx[s] = 0.0
+        fy[s] = 0.0
 
 
 @kernel

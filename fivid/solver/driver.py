@@ -9,7 +9,6 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,7 +20,9 @@ from fivid.fe.static import Preload, preload_state
 from fivid.friction.curve import slave_coefficients
 from fivid.friction.injection import FrictionTable, friction_table
 from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.signal.welch import default_nperseg
 from fivid.solver.inputs import check_energy_balance, check_simulation_inputs
+from fivid.solver.integrate import integrate
 from fivid.solver.options import (
     DEFAULT_REDUCED_TOLERANCE,
     IntegrationOptions,
@@ -29,11 +30,11 @@ from fivid.solver.options import (
     RunSchedule,
     SimulationInputs,
 )
+from fivid.solver.reduced import ReducedSystem, integrate_reduced, reduced_system
+from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
 from fivid.solver.setup import KernelArrays, LoadingSequence, kernel_arrays
 from fivid.solver.stencil import BlockStencils, block_stencils
-
-if TYPE_CHECKING:  # an annotation of PreparedRun (fivid.solver.reduced imports this module)
-    from fivid.solver.reduced import ReducedSystem
+from fivid.solver.timestep import stable_step, stable_step_of
 
 __all__ = ["IntegrationSettings", "PreparedRun", "simulate", "prepare_run", "AUTO_SCALING_FACTOR",
            "DEFAULT_REDUCED_TOLERANCE"]
@@ -111,13 +112,10 @@ class PreparedRun:
     def run(self, *, progress=None):
         """Integrate and wrap the RunDataset (see :func:`simulate`); ``progress`` (bool or None: only on a
         terminal) overrides ``inputs.output.progress``."""
-        from fivid.solver.integrate import integrate
-        from fivid.solver.output import run_dataset
+        from fivid.solver.output import run_dataset  # lazy: pulls numba
 
         progress = self.inputs.output.progress if progress is None else progress
         if self.reduced is not None:
-            from fivid.solver.reduced import integrate_reduced
-
             raw = integrate_reduced(self.model, self.reduced, self.friction, self.settings, progress=progress)
         else:
             raw = integrate(self.model, self.stencils, self.arrays, self.friction, self.settings, progress=progress)
@@ -185,8 +183,6 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
                 schedule: RunSchedule, integration: IntegrationOptions = _INTEGRATION,
                 output: OutputOptions = _OUTPUT) -> PreparedRun:
     """Validate the inputs and build everything :func:`simulate` integrates (same parameters)."""
-    from fivid.solver.timestep import stable_step
-
     if not isinstance(model, Model):
         model = load_model(model)
     for name, value, kind in (("condition", condition, OperatingCondition), ("friction", friction, FrictionInput),
@@ -302,8 +298,6 @@ def _step_in_interval(interval, dt_max):
 
 def _reduced_stable_step(model, rs):
     """The :class:`fivid.solver.timestep.StableStep` of the reduced system ``rs`` under ``model``'s damping."""
-    from fivid.solver.timestep import stable_step_of
-
     return stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
                           float(model.damping_cutoff))
 
@@ -314,10 +308,6 @@ def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance
     ``interval`` [s]: the recording interval (the reduced step is fitted into it); ``record_samples``: the steady
     record's length (the scored PSD's resolution, :func:`fivid.signal.welch.default_nperseg`); ``active``: the slaves
     closed after the preload (the estimate's contact states)."""
-    from fivid.signal.welch import default_nperseg
-    from fivid.solver.reduced import reduced_system
-    from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
-
     reduced, reduced_mass_scaling = integration.reduced, integration.reduced_mass_scaling
     error_band = integration.error_band
     if reduced is None or reduced is False:
@@ -337,6 +327,13 @@ def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance
                               "run the full model (IntegrationOptions(reduced=None), --full)")
         return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
                       "reason": "the model is prestressed ('prestress: true'), which the reduced basis does not carry"}
+    if model.ties:  # the reduced kernels do not eliminate tied nodes (fivid.fe.transition)
+        if not auto:
+            raise ConfigError("the reduced path does not carry a mesh transition's ties; run the full model "
+                              "(IntegrationOptions(reduced=None), --full)")
+        return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
+                      "reason": "the model has tied mesh transitions (fivid.fe.transition), which the reduced path "
+                                "does not carry"}
     compliant = [c.name for c in model.contacts if getattr(c.law, "is_penalty", False)]
     if auto and compliant:
         # the estimate ties the contact rigidly; a compliant normal law's contact springs act on the mass-scaled

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.contact._layout_kernels import N_CNODE, N_GEO
+from fivid.errors import SimulationDiverged
 
 __all__ = ["RawRecords", "integrate", "loop_arguments", "loop_state", "velocity_filter_gain", "chunked",
            "shortest_master_segment", "RUNAWAY_FACTOR"]
@@ -50,7 +51,7 @@ def loop_arguments(model, st, ka, fric, dt: float, gs_max_iterations: int, gs_to
     """The argument groups of :func:`fivid.solver._loop_kernels.run_steps` that describe the model and stay
     fixed over a run: ``(stencil, structure, motions, loads, contact, friction)`` (the motions' and loads'
     scratch arrays are allocated here). ``gs_tol`` [m] is the absolute Gauss-Seidel tolerance."""
-    from fivid.solver import _loop_kernels as L
+    from fivid.solver import _loop_kernels as L  # lazy: pulls numba
 
     structure = L.Structure(ka.mass, ka.minv, ka.spr_dof, ka.spr_kc, float(model.rayleigh_alpha),
                             float(model.rayleigh_beta), velocity_filter_gain(model.damping_cutoff, dt))
@@ -67,8 +68,8 @@ def loop_arguments(model, st, ka, fric, dt: float, gs_max_iterations: int, gs_to
 def loop_state(st, ka, u, v, beta: float):
     """The state groups of :func:`fivid.solver._loop_kernels.run_steps` at displacement ``u`` and velocity ``v``
     (kernel layout; updated in place by the loop): ``(contact state, state)``; ``vf = v``, ``w = u + beta v``."""
-    from fivid.solver import _kernels as K
-    from fivid.solver import _loop_kernels as L
+    from fivid.solver import _kernels as K  # lazy: pulls numba
+    from fivid.solver import _loop_kernels as L  # lazy: pulls numba
 
     ns = ka.slave_node.size
     cs = L.ContactState(ka.seg.copy(), np.zeros((ns, N_GEO)), np.zeros((ns, 2)), np.zeros(ns, dtype=np.int64),
@@ -80,9 +81,8 @@ def loop_state(st, ka, u, v, beta: float):
 
 def integrate(model, st, ka, fric, settings, *, progress=None) -> RawRecords:
     """Run the time loop of ``settings.n_intervals`` output intervals; :class:`SimulationDiverged` on failure."""
-    from fivid.solver import _kernels as K
-    from fivid.solver import _loop_kernels as L
-    from fivid.errors import SimulationDiverged
+    from fivid.solver import _kernels as K  # lazy: pulls numba
+    from fivid.solver import _loop_kernels as L  # lazy: pulls numba
 
     dt = settings.time_step
     n_sub = settings.steps_per_interval

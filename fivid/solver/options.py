@@ -11,6 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from os import PathLike
+from typing import Annotated, Literal
+
+from pydantic import Field
 
 from fivid.friction.inputs import FrictionInput, OperatingCondition
 
@@ -18,6 +21,16 @@ __all__ = ["RunSchedule", "IntegrationOptions", "OutputOptions", "SimulationInpu
 
 #: largest estimated in-band error [dB] for which ``reduced="auto"`` takes the reduced path
 DEFAULT_REDUCED_TOLERANCE = 0.5
+
+#: the ``solver`` key of the run and study configs (a pydantic field type; default ``"auto"``)
+SolverPathField = Annotated[Literal["auto", "full", "reduced"], Field(
+    description="solver path: auto (reduced when its estimated error in the scoring band is within "
+                "reduced_tolerance, as fivid simulate), full or reduced (docs/solver.md)")]
+
+#: the ``reduced_tolerance`` key of the run and study configs [dB] (default :data:`DEFAULT_REDUCED_TOLERANCE`)
+ReducedToleranceField = Annotated[float, Field(
+    ge=0.0, description="largest estimated in-band log-spectral distance [dB] of the reduced path that solver: auto "
+                        "accepts")]
 
 
 @dataclass(frozen=True)

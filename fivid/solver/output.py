@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.fe.damping import scheme_name
+from fivid.schema import apply_cf_attrs, new_history, with_condition_coords
 from fivid.solver import _kernels as K
 
 __all__ = ["run_dataset"]
@@ -59,8 +60,6 @@ def run_dataset(model, raw, settings, loading, fric, preload, inputs):
     :class:`fivid.solver.SimulationInputs` (``condition.sliding_velocity`` the magnitude run [m s-1]).
     """
     import xarray as xr
-
-    from fivid.schema import apply_cf_attrs, with_condition_coords
 
     normal_load, roughness_ra = inputs.condition.normal_load, inputs.condition.roughness_ra
     sample_rate = inputs.schedule.sample_rate
@@ -175,8 +174,6 @@ def _describe_variables(ds, sensors):
 def _run_attrs(model, raw, settings, loading, fric, inputs, *, normal_load) -> dict:
     """The run's attrs: conditions (``normal_load`` the target or the mean transducer force of the steady part
     [N]), provenance, the integration settings, damping and contact method, Gauss-Seidel statistics."""
-    from fivid.schema import new_history
-
     seed, run_id = inputs.friction.seed, inputs.output.run_id
     roughness_ra = inputs.condition.roughness_ra
     q = settings.oversample

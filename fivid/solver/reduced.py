@@ -43,7 +43,12 @@ import numpy as np
 
 from fivid.contact._layout_kernels import N_CNODE, N_GEO
 
-from fivid.errors import ConfigError
+from fivid.errors import ConfigError, SimulationDiverged
+from fivid.fe.assembly import lumped_mass, stiffness_matrix
+from fivid.solver.basis_cache import basis_key, cached_basis
+from fivid.solver.integrate import RUNAWAY_FACTOR, RawRecords, chunked, shortest_master_segment, velocity_filter_gain
+from fivid.solver.setup import KIND_FIXED
+from fivid.solver.timestep import stable_step_of
 
 __all__ = ["ReducedSystem", "MassScaling", "reduced_system", "scale_high_modes", "prepare_reduced", "integrate_reduced"]
 
@@ -161,8 +166,6 @@ class ReducedSystem:
 def _groups(ka):
     """Group coordinates of the constrained dofs: ``(dof lists, motion parameters, transducer weights)``;
     clamped dofs outside the transducer are eliminated (empty group list for them)."""
-    from fivid.solver.setup import KIND_FIXED
-
     keys = {}
     for c, d in enumerate(ka.con_global):
         g = int(ka.con_grp[c])
@@ -217,9 +220,6 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
     cache_dir : path-like, optional
         Cache folder (default :func:`fivid.solver.basis_cache.cache_dir`).
     """
-    from fivid.fe.assembly import lumped_mass, stiffness_matrix
-    from fivid.solver.basis_cache import basis_key, cached_basis
-
     if any(s.damping > 0.0 for s in model.springs):
         raise ConfigError("the reduced path does not integrate dashpots (springs with damping); run the full model")
     if model.loads:
@@ -468,8 +468,6 @@ def prepare_reduced(prep, *, n_modes: int | None = None, cutoff: float | None = 
     Same schedule, preload, friction table and records. ``mass_scaling`` [Hz]: :func:`scale_high_modes`."""
     import dataclasses
 
-    from fivid.solver.timestep import stable_step_of
-
     model, s = prep.model, prep.settings
     fs = float(prep.inputs.schedule.sample_rate)
     t_int = 1.0 / (s.oversample * fs)
@@ -516,16 +514,8 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
     """Run the reduced time loop of ``settings.n_intervals`` output intervals (see
     :func:`fivid.solver.integrate.integrate`); returns :class:`fivid.solver.integrate.RawRecords` with the
     final state expanded to the global dofs."""
-    from fivid.solver import _kernels as K
-    from fivid.solver._reduced_kernels import run_reduced_steps
-    from fivid.errors import SimulationDiverged
-    from fivid.solver.integrate import (
-        RUNAWAY_FACTOR,
-        RawRecords,
-        chunked,
-        shortest_master_segment,
-        velocity_filter_gain,
-    )
+    from fivid.solver import _kernels as K  # lazy: pulls numba
+    from fivid.solver._reduced_kernels import run_reduced_steps  # lazy: pulls numba
 
     a = rs.kernel
     dt = settings.time_step
@@ -586,8 +576,6 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
 
 
 def _lumped(model):
-    from fivid.fe.assembly import lumped_mass
-
     return lumped_mass(model)
 
 

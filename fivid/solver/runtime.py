@@ -12,13 +12,13 @@ import dataclasses
 import math
 import time
 
+from fivid.solver.integrate import integrate
+from fivid.solver.reduced import integrate_reduced
+
 __all__ = ["estimate_run_time"]
 
 
 def _integrate(prep, n_intervals: int) -> float:
-    from fivid.solver.integrate import integrate
-    from fivid.solver.reduced import integrate_reduced
-
     settings = dataclasses.replace(prep.settings, n_intervals=int(n_intervals))
     t0 = time.perf_counter()
     if prep.reduced is not None:

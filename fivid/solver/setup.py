@@ -13,7 +13,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fivid.contact import kernel_row, kernel_tables
+from fivid.contact._layout_kernels import NPAR
 from fivid.errors import ConfigError
+from fivid.fe.assembly import lumped_mass
+from fivid.fe.contact_nodes import slave_areas
+from fivid.fe.loads import pressure_forces
+from fivid.fe.prestress import geometric_stiffness_matrix
 from fivid.solver.stencil import BlockStencils
 
 __all__ = ["LoadingSequence", "KernelArrays", "kernel_arrays", "KIND_FIXED", "KIND_DISPLACEMENT", "KIND_VELOCITY"]
@@ -109,8 +115,6 @@ def kernel_arrays(model, st: BlockStencils, loading: LoadingSequence, *, tangent
     ``K_sigma u0`` becomes one more load, ramped over ``[0, ramp_end]``, so the internal force is
     ``K w + K_sigma (w - r(t) u0)``.
     """
-    from fivid.fe.assembly import lumped_mass
-
     mass = st.to_kernel(lumped_mass(model))
     minv = np.zeros_like(mass)
     minv[mass > 0] = 1.0 / mass[mass > 0]
@@ -188,10 +192,6 @@ def _transducer_weights(model, con_global, tangential_sign: float, normal_sign: 
 def _contact_arrays(model, st: BlockStencils) -> dict:
     """The contact fields of :class:`KernelArrays`: slaves, master segments, contact nodes, initial segments,
     the pairs' law rows and tables, the slaves' tributary areas."""
-    from fivid.contact import kernel_row, kernel_tables
-    from fivid.contact._layout_kernels import NPAR
-    from fivid.fe.contact_nodes import slave_areas
-
     slave_nodes, slave_pair, master, ptr = [], [], [], [0]
     for p, pair in enumerate(model.contacts):
         slave_nodes.extend(int(s) for s in pair.slave_nodes)
@@ -228,9 +228,6 @@ def _load_arrays(model, st: BlockStencils, prestress=None) -> dict:
     """The pressure-load fields of :class:`KernelArrays`: the non-zero nodal forces of each load and its ramp;
     with ``prestress`` ``(u0, ramp_end)`` one more group, the prestress term's reference force ``K_sigma u0``
     (see :func:`kernel_arrays`)."""
-    from fivid.fe.loads import pressure_forces
-    from fivid.fe.prestress import geometric_stiffness_matrix
-
     forces = [pressure_forces(model, load) for load in model.loads]
     par = [[float(ld.start), float(ld.ramp_time)] for ld in model.loads]
     if prestress is not None:

@@ -36,9 +36,12 @@ symmetric stencil (+5-10 %, results change at 1e-16).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+from fivid.fe.assembly import block_element_stiffness
+from fivid.fe.prestress import block_geometric_stiffness
 
 __all__ = ["BlockStencils", "block_stencils", "stencil_index", "apply_stencils"]
 
@@ -90,6 +93,12 @@ class BlockStencils:
         block: any in-bounds index, their coefficients are zero).
     lst_coef : ndarray, shape (n_list, 36)
         Their stencils [N m-1].
+    tie_s : ndarray of int64, shape (n_tie,)
+        x-index of every tied node of the model's mesh transitions (:class:`fivid.fe.model.Tie`).
+    tie_m : ndarray of int64, shape (n_tie, 2)
+        x-indices of its two masters.
+    tie_w : ndarray, shape (n_tie, 2)
+        Their interpolation weights [-].
     """
 
     n_nodes: int
@@ -102,16 +111,19 @@ class BlockStencils:
     lst_idx: np.ndarray
     lst_nbr: np.ndarray
     lst_coef: np.ndarray
+    tie_s: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    tie_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    tie_w: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def kernel_args(self):
         """The stencil argument of :func:`fivid.solver._stencil_kernels.block_forces` (a
         :class:`fivid.solver._stencil_kernels.StencilArrays`), with its own scratch array (one per call: runs
         sharing these stencils do not share scratch)."""
-        from fivid.solver._stencil_kernels import StencilArrays
+        from fivid.solver._stencil_kernels import StencilArrays  # lazy: pulls numba
 
         return StencilArrays(self.npd, self.blocks, self.c_uni, self.c_map, self.rot, np.zeros(2 * self.npd),
-                             self.lst_idx, self.lst_nbr, self.lst_coef)
+                             self.lst_idx, self.lst_nbr, self.lst_coef, self.tie_s, self.tie_m, self.tie_w)
 
     def dof_index(self, dof) -> np.ndarray:
         """Flat kernel index of global dof(s) ``2*node + c``."""
@@ -207,7 +219,8 @@ def _rotated_rows(block, c: np.ndarray, i0: int, i1: int, tol: float):
 
 
 def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStencils:
-    """Stencil coefficients of every block of ``model`` (springs and constraints not included).
+    """Stencil coefficients of every block of ``model`` (springs and constraints not included; the model's ties
+    are, as ``tie_*``: the kernel eliminates the tied nodes).
 
     ``prestress`` (n_dofs,), optional: a static state [m] whose initial-stress stiffness
     (:func:`fivid.fe.prestress.block_geometric_stiffness`) is added to each element's elastic stiffness, so the
@@ -221,9 +234,6 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
     ``rotated`` is false; their first and last columns listed) or, failing that, mapped patches with per-node
     coefficients; periodic rings list their two seam columns with explicit neighbours.
     """
-    from fivid.fe.assembly import block_element_stiffness
-    from fivid.fe.prestress import block_geometric_stiffness
-
     pad = max(b.n_cols for b in model.blocks) + 1
     npd = model.n_nodes + 2 * pad
     rows, uni_coef, map_coef, n_map, rot, n_rot = [], [], [], 0, [], 0
@@ -284,12 +294,23 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
         lst_idx=np.concatenate(lst_idx).astype(np.int64),
         lst_nbr=np.ascontiguousarray(np.concatenate(lst_nbr), dtype=np.int64).reshape(-1, 9),
         lst_coef=np.ascontiguousarray(np.concatenate(lst_coef), dtype=float).reshape(-1, 36),
+        **_tie_arrays(model, pad),
     )
+
+
+def _tie_arrays(model, pad: int) -> dict:
+    """``tie_s``, ``tie_m``, ``tie_w`` of :class:`BlockStencils` from the model's ties (x-indices: ``pad + node``)."""
+    ties = getattr(model, "ties", ())
+    if not ties:
+        return {}
+    return {"tie_s": np.ascontiguousarray(pad + np.concatenate([t.slave_nodes for t in ties]), dtype=np.int64),
+            "tie_m": np.ascontiguousarray(pad + np.concatenate([t.master_nodes for t in ties]), dtype=np.int64),
+            "tie_w": np.ascontiguousarray(np.concatenate([t.weights for t in ties]), dtype=float)}
 
 
 def apply_stencils(stencils: BlockStencils, w: np.ndarray) -> np.ndarray:
     """``K_blocks @ w`` [N] by the stencil kernel, global dof order in and out; ``w`` [m] (n_dofs,)."""
-    from fivid.solver._stencil_kernels import block_forces
+    from fivid.solver._stencil_kernels import block_forces  # lazy: pulls numba
 
     s = stencils
     wk = s.to_kernel(np.asarray(w, dtype=float))

@@ -24,7 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.assembly import lumped_mass, stiffness_matrix
+from fivid.fe.build import load_model
 from fivid.fe.damping import scheme_name
+from fivid.solver.integrate import velocity_filter_gain
 
 __all__ = ["StableStep", "max_angular_frequency", "critical_time_step", "stable_step", "stable_step_bound",
            "stable_step_of", "amplification_matrix"]
@@ -60,8 +63,6 @@ def _scaled_free_stiffness(model):
     """``M^-1/2 K M^-1/2`` on the free dofs (CSR; springs in, lumped mass with the point masses)."""
     import scipy.sparse as sp
 
-    from fivid.fe.assembly import lumped_mass, stiffness_matrix
-
     free = model.free_dofs
     K = stiffness_matrix(model, include_springs=True)[free][:, free]
     m = lumped_mass(model)[free]
@@ -89,8 +90,6 @@ def max_angular_frequency(model, *, tol: float = 1e-10) -> float:
 
 def _dashpot_limit(model) -> float:
     """``min 2 m / c`` over dofs loaded by dashpots [s] (inf without dashpots)."""
-    from fivid.fe.assembly import lumped_mass
-
     m = lumped_mass(model)
     c = np.zeros(model.n_dofs)
     for s in model.springs:
@@ -111,8 +110,6 @@ def amplification_matrix(omega, dt: float, alpha: float, beta: float, cutoff: fl
     ``v' = (1 - alpha dt) v - dt omega^2 (u + beta vf)``, ``u' = u + dt v'``, ``vf' = vf + a (v' - vf)`` with
     ``a = 1 - exp(-2 pi cutoff dt)`` (1 for classic Rayleigh, ``cutoff`` inf: then ``vf`` is ``v``).
     """
-    from fivid.solver.integrate import velocity_filter_gain
-
     w2 = np.asarray(omega, dtype=float)[..., None] ** 2
     a = velocity_filter_gain(cutoff, dt)
     zero = np.zeros_like(w2)
@@ -202,7 +199,5 @@ def critical_time_step(model) -> float:
     A 1-DOF mass-spring has ``omega_max = sqrt(k/m)`` and ``dt_crit = 2/omega`` without damping.
     """
     if not hasattr(model, "blocks"):
-        from fivid.fe.build import load_model
-
         model = load_model(model)
     return stable_step(model).critical_time_step

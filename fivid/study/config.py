@@ -50,6 +50,7 @@ from fivid.config_layer import (
     validate,
 )
 from fivid.errors import ConfigError
+from fivid.solver.options import DEFAULT_REDUCED_TOLERANCE, ReducedToleranceField, SolverPathField
 from fivid.study.axes import AXES
 from fivid.study.kind import guess_kind, registered_kinds, study_kind
 from fivid.study.kinds import BUILTIN_KINDS  # noqa: F401  (importing it registers the shipped kinds)
@@ -262,11 +263,8 @@ class _Transient(ConfigModel):
     perturbation: Quantity("m", bare_is_si=True) | None = None
     law: str | None = Field(None, description="friction law file (netCDF), relative to the study file")
     coulomb_reference: bool = False
-    solver: Literal["auto", "full", "reduced"] = Field(
-        "auto", description="solver path: auto (reduced when its error estimate is within reduced_tolerance, as "
-                            "fivid simulate), full or reduced")
-    reduced_tolerance: Annotated[float, Field(ge=0.0)] = Field(
-        0.5, description="largest estimated in-band error [dB] of the reduced path that solver: auto accepts")
+    solver: SolverPathField = "auto"
+    reduced_tolerance: ReducedToleranceField = DEFAULT_REDUCED_TOLERANCE
 
 
 class _Psd(ConfigModel):

@@ -24,6 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.fe.contact import linearise_contact
+from fivid.fe.modal import constrained_matrices, lowest_modes
+from fivid.fe.static import contact_geometry, preload_state
+
 __all__ = ["coupling_bounds", "coupling_indicator", "reference_frequencies", "peak_positions", "response_coupling",
            "WEAK_STRONG_THRESHOLD"]
 
@@ -32,8 +36,6 @@ WEAK_STRONG_THRESHOLD = 0.5
 
 
 def _frequencies(K, M, n_modes):
-    from fivid.fe.modal import lowest_modes
-
     lam = lowest_modes(K, M, n_modes)[0]
     return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi)
 
@@ -46,11 +48,6 @@ def coupling_bounds(model, n_modes: int, *, penalty: float = 1e4, closed=None):
     (bool per slave node, e.g. ``preload_state(model, load).active``): tie only these (default: every slave node).
     """
     from dataclasses import replace
-
-    from fivid.fe.contact import linearise_contact
-    from fivid.fe.modal import constrained_matrices
-
-    from fivid.fe.static import contact_geometry
 
     K0, M, free = constrained_matrices(model)
     f0 = _frequencies(K0, M, n_modes)
@@ -89,8 +86,6 @@ def reference_frequencies(model, n_modes: int, normal_load: float) -> tuple[np.n
     would over-constrain a beam end that touches only along part of the nominal interface: on the two-beam rig
     the rigid limit of the preloaded modes is 1445 Hz, the all-tied bound 2147 Hz.
     """
-    from fivid.fe.static import preload_state
-
     closed = preload_state(model, float(normal_load)).active
     f0, f_tied = coupling_bounds(model, n_modes, closed=closed)
     return f0, f_tied

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fivid.errors import ConfigError
+from fivid.fe.cea import complex_eigenvalue_sweep, project_on_modes
 
 __all__ = ["HoffmannSystem"]
 
@@ -92,8 +93,6 @@ class HoffmannSystem:
 
     def cea(self, mu) -> dict:
         """Complex eigenvalue analysis over ``mu`` (increasing), by :func:`fivid.fe.cea.complex_eigenvalue_sweep`."""
-        from fivid.fe.cea import complex_eigenvalue_sweep, project_on_modes
-
         K, M, C, Kf = self.matrices()
         return complex_eigenvalue_sweep(project_on_modes(K, M, C, Kf), np.asarray(mu, dtype=float))
 
@@ -113,7 +112,7 @@ class HoffmannSystem:
         """
         import xarray as xr
 
-        from fivid.study._kernels import hoffmann_steps
+        from fivid.study._kernels import hoffmann_steps  # lazy: pulls numba
 
         mu_s = mu if mu_static is None else float(mu_static)
         if not (mu >= 0 and mu_s >= mu):

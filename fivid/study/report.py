@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fivid.report.html import Page, figure_data_uri, new_figure, table
+from fivid.storage import write_text
 from fivid.study.axes import AXES
 from fivid.study.kind import study_kind
 
@@ -127,8 +128,6 @@ def study_section(page: Page, ds, summary: dict, kind=None) -> None:
 
 def render_study_report(path, study, ds, summary: dict):
     """Write ``report.html`` for a study (atomically); returns the path."""
-    from fivid.storage import write_text
-
     page = Page(f"fivid study report: {study.name}")
     study_section(page, ds, summary, study.kind)
     return write_text(path, page.render())

@@ -18,6 +18,7 @@ import numpy as np
 from fivid.fe import load_model
 from fivid.fe.config import read_config
 from fivid.fe.rough_pair import profiled_length, rough_pair_config
+from fivid.fe.transition import transition_model
 from fivid.score.roughness import (
     LV_REFERENCE,
     SHOCK_BASELINE,
@@ -94,7 +95,7 @@ RSM_LEVELS = (200e-6, 300e-6)
 ROUGHNESS_TASK = {"correlation_length": None, "rsm": RSM_LEVELS, "profile_step": 5e-6, "seeds": (3, 4),
                   "sensor_every": 4, "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.05e-3,
                   "surfaces": "rsm_levels", "nodes_per_rsm": None, "sensor_spacing": None, "profile_files": None,
-                  "seat": False}
+                  "seat": False, "transition": False}
 
 
 def point_profiles_design(spec: dict, conditions: dict) -> dict:
@@ -139,7 +140,9 @@ def build_point_model(model_path, spec: dict, conditions: dict):
     With ``nodes_per_rsm`` both blocks are re-divided at ``Rsm / nodes_per_rsm`` (the point's surface Rsm:
     :func:`fivid.fe.rough_pair.rough_pair_config`'s ``mesh_step``); with ``sensor_spacing`` [m] the back-face
     sensors sit on every ``round(sensor_spacing / mesh step)``-th node (``sensor_every`` otherwise); with ``seat``
-    the upper block starts seated on its two supporting asperities (``rough_pair_config``'s ``seat``)."""
+    the upper block starts seated on its two supporting asperities (``rough_pair_config``'s ``seat``); with
+    ``transition`` (and ``nodes_per_rsm``) both blocks coarsen along x with depth
+    (:func:`fivid.fe.transition.transition_model`: only the surface level has columns of the mesh step)."""
     spec = {**ROUGHNESS_TASK, **spec}
     length = profiled_length(model_path)
     design = point_profiles_design(spec, conditions)
@@ -152,8 +155,12 @@ def build_point_model(model_path, spec: dict, conditions: dict):
     design["mesh_step"] = mesh_step
     load = float(conditions["normal_load"]) if "normal_load" in conditions else None
     cfg, info = rough_pair_config(model_path, lower, upper, sensor_every=every, normal_load=load,
-                                  mesh_step=mesh_step, seat=bool(spec.get("seat")))
-    return load_model(cfg), lower, info, design
+                                  mesh_step=mesh_step, seat=bool(spec.get("seat")),
+                                  transition=bool(spec.get("transition")))
+    model = load_model(cfg)
+    if info["transition"]:
+        model = transition_model(model, info["transition"])
+    return model, lower, info, design
 
 
 def _point_condition(conditions: dict, roughness_ra: float) -> OperatingCondition:
@@ -271,7 +278,7 @@ def roughness_settings(study) -> dict:
                  for name, b in data["bodies"].items()},
         "surfaces": spec.get("surfaces") or "rsm_levels",
         "nodes_per_rsm": spec.get("nodes_per_rsm"), "sensor_spacing": spec.get("sensor_spacing"),
-        "seat": bool(spec.get("seat")),
+        "seat": bool(spec.get("seat")), "transition": bool(spec.get("transition")),
         "profile_files": spec.get("profile_files"),
         "profiles": {"generator": "fivid.surface.gaussian_random_profile", "acf": "gaussian",
                      "rq_per_ra": RQ_PER_RA,

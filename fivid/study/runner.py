@@ -24,13 +24,17 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
 import time
 from pathlib import Path
 
 import numpy as np
 
+from fivid import __version__
 from fivid.errors import FividError
+from fivid.execution.cluster import check_scheduler_address, map_tasks
+from fivid.execution.lock import OutputLock
+from fivid.schema import new_history
+from fivid.storage import write_json, write_netcdf
 from fivid.study.axes import AXES
 from fivid.study.report import render_study_report
 
@@ -55,13 +59,6 @@ def _safe_evaluate(kind, system, tasks, conditions):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def _in_process(items: dict):
-    for name, args in items.items():
-        t0 = time.perf_counter()
-        out = _safe_evaluate(*args)
-        yield name, out, time.perf_counter() - t0, os.getpid()
-
-
 def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, progress=None) -> dict:
     """Run ``study`` into ``outdir``; returns the summary (also written to ``outdir/summary.json``).
 
@@ -80,12 +77,7 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
     """
     from tqdm.auto import tqdm
 
-    from fivid.execution.lock import OutputLock
-    from fivid.storage import write_json, write_netcdf
-
     if scheduler is not None:  # before any work or output
-        from fivid.execution.cluster import check_scheduler_address
-
         check_scheduler_address(scheduler)
     outdir = Path(outdir)
     started = time.perf_counter()
@@ -103,12 +95,7 @@ def run_study(study, outdir, *, workers: int = 2, scheduler: str | None = None, 
         log.info("study %s: %d points, %d to compute", study.name, len(table), len(todo))
         timing, failed = {}, {}
         if todo:
-            if workers == 0 and scheduler is None:
-                results = _in_process(todo)
-            else:
-                from fivid.execution.cluster import map_tasks
-
-                results = map_tasks(_safe_evaluate, todo, workers=max(workers, 1), scheduler=scheduler)
+            results = map_tasks(_safe_evaluate, todo, workers=workers, scheduler=scheduler)
             with tqdm(total=len(todo), desc=f"study {study.name}", unit="point", leave=False,
                       disable=None if progress is None else not progress) as bar:
                 for i, (ds, error), seconds, pid in results:
@@ -189,8 +176,6 @@ def _assemble(study, table, files, done, cea):
                                {"units": "Hz", "long_name": "damped frequency of the CEA mode"})
         ds["cea_critical_mu"] = (("cea_mode",), np.asarray(cea["critical_mu"], dtype=float),
                                  {"units": "1", "long_name": "friction coefficient at which the mode turns unstable"})
-    from fivid import __version__
-    from fivid.schema import new_history
 
     ds.attrs.update({"Conventions": "CF-1.8", "title": f"fivid study {study.name}", "study": study.name, "description": study.description,
                      "source": study.source, "quick": int(study.quick), "fivid_version": __version__,
@@ -219,8 +204,6 @@ def _scalar(ds, name, i):
 
 
 def _summary(study, table, ds, done, failed, cea, timing, wall, workers) -> dict:
-    from fivid import __version__
-
     points = []
     for i, cond in enumerate(table):
         p = {k: (int(v) if k == "seed" else float(v)) for k, v in cond.items()}

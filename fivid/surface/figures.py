@@ -4,6 +4,8 @@ from __future__ import annotations
 
 
 from fivid.storage import atomic_path
+from fivid.surface.profile import make_profile
+from fivid.surface.statistics import profile_psd
 
 __all__ = ["plot_evaluation"]
 
@@ -15,9 +17,6 @@ def plot_evaluation(profile, evaluation, path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from fivid.surface.profile import make_profile
-    from fivid.surface.statistics import profile_psd
 
     ev, s = evaluation, evaluation.settings
     fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(8, 9))

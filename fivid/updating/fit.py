@@ -26,9 +26,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fivid.config_layer import read_yaml
+from fivid.builtin import find_builtin
+from fivid.config_layer import parse_yaml_text, read_yaml
 from fivid.errors import ConfigError, UnitError
-from fivid.units import conversion
+from fivid.units import conversion, unit_registry
 from fivid.updating.paths import get_path, replace_values, set_path
 from fivid.updating.predict import predictor_for
 from fivid.updating.targets import Targets
@@ -179,16 +180,12 @@ def _resolve(path):
     """A model file path, or the shipped config of that name (``configs/models``, ``configs/dampers``)."""
     from pathlib import Path
 
-    from fivid.builtin import find_builtin
-
     if Path(path).exists() or any(c in str(path) for c in "/\\"):
         return path
     return find_builtin("models", str(path)) or find_builtin("dampers", str(path)) or path
 
 
 def _to_si(unit: str):
-    from fivid.units import unit_registry
-
     q = unit_registry().Quantity(1.0, unit)
     return conversion(unit, str(q.to_base_units().units))
 
@@ -354,6 +351,4 @@ def _updated_text(msrc, params, values, targets, result) -> str:
 
 
 def _parse(text):
-    from fivid.config_layer import parse_yaml_text
-
     return parse_yaml_text(text)

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from fivid.config_layer import ConfigSource, read_yaml
+from fivid.ema.modes_file import read_modes
 from fivid.errors import FividError, UnitError
 from fivid.units import parse_quantity
 
@@ -196,8 +197,6 @@ def _list(src: ConfigSource, value, key: str, *, min_length: int = 0) -> list:
 
 
 def _shape(src: ConfigSource, spec, key: str, base: Path):
-    from fivid.ema.modes_file import read_modes
-
     s = _mapping(src, spec, key, _SHAPE, _SHAPE, "a shape target needs file, mode and sensors")
     path = Path(str(s["file"]))
     path = path if path.is_absolute() else base / path

@@ -13,7 +13,7 @@ import os
 import time
 from pathlib import Path
 
-from fivid.execution.cluster import check_scheduler_address, map_tasks
+from fivid.execution.cluster import call, check_scheduler_address, map_tasks
 from fivid.verify.case import Case, Result
 
 __all__ = ["run_cases", "evaluate_case", "find_real_data", "default_real_data_folders"]
@@ -90,10 +90,7 @@ def run_cases(cases: list[Case], *, quick: bool = False, workers: int = 2, sched
         log.warning("verify: dask.distributed is not installed (pip install 'fivid[sweep]'): the cases run one after "
                     "the other in this process")
         workers = 0
-    if workers == 0 and scheduler is None:
-        stream = ((name, _apply(*args), None, os.getpid()) for name, args in items.items())
-    else:
-        stream = map_tasks(_apply, items, workers=max(workers, 1), scheduler=scheduler)
+    stream = map_tasks(call, items, workers=workers, scheduler=scheduler)
     with tqdm(total=len(items), desc="verify", unit="case", leave=False,
               disable=None if progress is None else not progress) as bar:
         for name, result, _seconds, pid in stream:
@@ -101,7 +98,3 @@ def run_cases(cases: list[Case], *, quick: bool = False, workers: int = 2, sched
             results[name] = result
             bar.update(1)
     return [results[c.name] for c in cases]
-
-
-def _apply(func, *args):
-    return func(*args)

@@ -157,7 +157,7 @@ def test_utf16_rig_csv_names_its_encoding(tmp_path, capsys):
 def test_summary_exit_code_is_the_exit_status(tmp_path, root, monkeypatch, capsys, raised, expected):
     import json
 
-    import fivid.io
+    import fivid.pipeline.stages
 
     data = tmp_path / "data"
     data.mkdir()
@@ -169,7 +169,7 @@ def test_summary_exit_code_is_the_exit_status(tmp_path, root, monkeypatch, capsy
     def read(*args, **kwargs):
         raise raised
 
-    monkeypatch.setattr(fivid.io, "read_rig_csv", read)
+    monkeypatch.setattr(fivid.pipeline.stages, "read_rig_csv", read)  # where the ingest stage looks it up
     status = main(["run", str(tmp_path / "recipe.yaml"), "--config", str(tmp_path / "run.yaml"), "--no-progress"])
     err = capsys.readouterr().err
     assert status == expected, err

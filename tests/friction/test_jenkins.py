@@ -4,15 +4,8 @@ import numpy as np
 import pytest
 
 from fivid.errors import FividError
-from fivid.friction.jenkins import (
-    iwan_energy_per_cycle,
-    iwan_force,
-    iwan_uniform_elements,
-    jenkins_energy_per_cycle,
-    jenkins_force,
-    jenkins_periodic_force,
-    loop_energy,
-)
+from fivid.friction import (iwan_energy_per_cycle, iwan_force, iwan_uniform_elements, jenkins_energy_per_cycle,
+                            jenkins_force, jenkins_periodic_force, loop_energy)
 
 
 def _naive_jenkins(x, k, fs):

@@ -31,6 +31,20 @@ def test_sweep_on_two_local_worker_processes_matches_serial():
         np.testing.assert_array_equal(results[f"seed{s}"], law.sample(0.05, 51200.0, 0.01, 1e-6, s))
 
 
+def test_no_workers_runs_the_tasks_here_in_order_and_call_applies_each_items_own_function():
+    """``workers=0``: the tasks run in this process, in the items' order, with the results dask would give; ``call``
+    runs items that carry their own function (the pipeline's simulations, the verification cases)."""
+    from fivid.execution.cluster import call, map_tasks
+
+    law = _law()
+    items = {f"seed{s}": (law.sample, 0.05, 51200.0, 0.01, 1e-6, s) for s in (3, 1, 2)}
+    out = list(map_tasks(call, items, workers=0))
+    assert [name for name, *_ in out] == list(items)
+    for name, mu_p, seconds, pid in out:
+        assert pid == os.getpid() and seconds >= 0
+        np.testing.assert_array_equal(mu_p, law.sample(*items[name][1:]))
+
+
 def test_unreachable_scheduler_is_a_clear_input_error():
     from fivid.errors import FividError
     from fivid.execution.cluster import map_tasks

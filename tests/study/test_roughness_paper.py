@@ -159,18 +159,23 @@ def test_the_pooled_replicate_scatter_recovers_the_generator_sigma():
 QUICK = ROOT / "configs/models/rough_pair_paper_quick.yaml"
 
 
-def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations():
+@pytest.mark.parametrize("transition", [False, True], ids=["graded", "transition"])
+def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations(transition):
     """One point of the 12 x 2 mm cut (Table 1's Ra 26 um at Rsm/4, 12.5 cm/s, 0.45 ms): the power the drive and
     the load put in over the steady window equals friction + vibratory (damping) + impact power + the rate of
     change of the stored energies, to the solver's energy-balance error (its change over the window); each
     dissipation is >= 0; the shock intensity is the vibratory energy per shock (P = n_c E). (Friction power = mu Fn V
-    is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.)"""
+    is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.) Both meshes:
+    graded through the depth, and coarsening along x with depth (fivid.fe.transition: tied levels, whose kernel
+    elimination must keep the balance)."""
     from fivid.score.roughness import dissipation_rate, roughness_metrics
     from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
     from fivid.study.roughness import build_point_model
 
-    model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3},
+    model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3,
+                                               "transition": transition},
                                        {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0})
+    assert bool(model.ties) == transition
     ds = simulate(model, OperatingCondition(sliding_velocity=0.125, roughness_ra=26e-6),
                   schedule=RunSchedule(duration=0.45e-3, sample_rate=2e6, settle_time=0.05e-3),
                   integration=IntegrationOptions(gs_tolerance=1e-6, gs_max_iterations=30),
@@ -241,3 +246,37 @@ def test_a_seated_pair_rests_on_two_asperities_about_its_centre():
         assert zero.size == touching
         if seat:
             assert xs[zero[0]] < 0.006 < xs[zero[-1]]
+
+
+def test_the_transition_mesh_keeps_the_surfaces_loads_and_clamps_of_the_pair():
+    """The quick pair re-meshed by fivid.fe.transition: the lower surface's nodes lie on the profile (as the graded
+    mesh's do), the contact's slaves and masters are the two surface levels' edges, the dead load sums to the same force, both side edges of
+    the lower block stay clamped over the whole depth, and the drive moves the upper block's whole left edge."""
+    from fivid.fe.loads import external_load_vector
+    from fivid.study.roughness import build_point_model
+
+    spec = {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3, "seat": True}
+    cond = {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0}
+    tr, lower_profile, info, _ = build_point_model(QUICK, {**spec, "transition": True}, cond)
+    assert info["transition"] == ["lower", "upper"] and tr.ties
+    ref, _, _, _ = build_point_model(QUICK, spec, cond)
+    # the lower surface is the profile at the transition's columns, exactly as the graded mesh has it at its own
+    b = tr.block("lower")
+    z = np.interp(b.coords[-1, :, 0], lower_profile["x"].values, lower_profile.values)
+    assert np.abs(b.coords[-1, :, 1] - 2e-3 - z).max() <= 1e-15
+    assert b.nx % 2 ** (len([t for t in tr.ties if t.name.startswith("lower")])) == 0
+    c = tr.contacts[0]
+    assert set(c.slave_nodes) <= set(tr.block("upper").edge_nodes("bottom"))
+    assert set(c.master_nodes) == set(tr.block("lower").edge_nodes("top"))
+    fy = external_load_vector(tr)[1::2].sum()
+    assert fy == pytest.approx(external_load_vector(ref)[1::2].sum(), rel=1e-12)
+    assert fy == pytest.approx(-1.0, rel=1e-9)
+    x, y = tr.coords.T
+    lower = np.concatenate([b.node_numbers().ravel() for b in tr.blocks if b.name.split("~")[0] == "lower"])
+    tied = tr.tied_dofs[::2] // 2
+    for side, col in ((0.0, 0), (12e-3, -1)):
+        edge = np.setdiff1d(lower[np.abs(x[lower] - side) < 1e-12], tied)
+        assert np.isin(np.concatenate([2 * edge, 2 * edge + 1]), tr.fixed_dofs).all()
+        assert y[edge].min() == 0.0 and y[edge].max() == b.coords[-1, col, 1]  # back face to surface
+    drive = tr.motion("base")
+    assert np.ptp(y[drive.nodes]) == pytest.approx(2e-3, rel=0.05) and not np.isin(drive.nodes, tied).any()

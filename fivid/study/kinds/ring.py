@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fivid.errors import ConfigError
 from fivid.fe.cea import Linearisation, cea_mode_shapes, complex_eigenvalue_analysis
 from fivid.fe.modal import modal_analysis
 from fivid.report.html import figure_data_uri, table
@@ -59,8 +60,6 @@ def bore_probes(model) -> list[dict]:
     rigid circle: ``bore_r###`` along the radius, ``bore_t###`` along the counter-clockwise tangent."""
     c = model.contacts[0]
     if c.rigid is None or c.rigid.kind != "circle":
-        from fivid.errors import ConfigError
-
         raise ConfigError("the ring kind probes the bore of a rigid circle contact: the model's first contact "
                           f"{c.name!r} has no rigid circle master", key="contacts[0].rigid")
     out = []

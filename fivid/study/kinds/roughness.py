@@ -45,6 +45,8 @@ class RoughnessSettings(ConfigModel):
     nodes_per_rsm: Annotated[int, Field(ge=2)] = Field(None, description="re-divide the blocks at Rsm / this")
     sensor_spacing: Quantity("m", positive=True, bare_is_si=True) = None
     seat: bool = Field(None, description="start the upper block seated on its two supporting asperities")
+    transition: bool = Field(None, description="with nodes_per_rsm: coarsen both blocks along x with depth "
+                                               "(fivid.fe.transition; only the surface level at Rsm / nodes_per_rsm)")
     profile_files: Annotated[list[str], Field(min_length=2, max_length=2, description="lower, upper profile files "
                                                                                        "(surfaces: measured)")] = None
 

@@ -40,13 +40,18 @@ import numpy as np
 from pydantic import Field
 
 from fivid.config_layer import ConfigModel, Number, Quantity
-from fivid.report.html import figure_data_uri, new_figure
+from fivid.errors import ConfigError
+from fivid.fe.cea import complex_eigenvalue_analysis
+from fivid.friction import load_law
+from fivid.report.html import figure_data_uri, new_figure, table
 from fivid.signal.peaks import near_frequencies, strongest_peaks
+from fivid.storage import dumps_json
 from fivid.study.axes import AXES
 from fivid.study.coupling import WEAK_STRONG_THRESHOLD, peak_positions, reference_frequencies, response_coupling
 from fivid.study.kinds.sweep import FeSweep
+from fivid.study.seed_checks import twin_amplitude_linearity, twin_broadband_levels
 from fivid.study.tasks import COUPLING_KEYS, TRANSIENT_KEYS, fe_point, refined_model
-from fivid.surface import gaussian_random_profile, read_profile
+from fivid.surface import evaluate_profile, gaussian_random_profile, read_profile
 from fivid.surface.contact_law import gw_parameters
 from fivid.surface.rough_pair import RQ_PER_RA
 
@@ -185,8 +190,6 @@ class WeakStrong(FeSweep):
     def report(self, page, ds, summary: dict) -> None:
         """The peak frequencies over load with the reference sets (seed 001's figure), where the response and
         modal labels agree, and the seed checks."""
-        from fivid.report.html import table
-
         if summary.get("reference_frequencies") and any(p.get("peak_frequencies") for p in summary["points"]):
             page.heading("Weak and strong contact by the response", 3)
             page.figure(peak_figure(summary), "PSD peak frequencies (marker size: strongest largest) against the "
@@ -235,7 +238,6 @@ def _law_band_top(tasks, guard: float) -> float:
     tr = tasks.get("transient") or {}
     if "law" not in tr:
         return np.inf
-    from fivid.friction import load_law
 
     band = getattr(load_law(tr["law"]), "band", None)
     return np.inf if band is None else (1.0 - guard) * float(band[1])
@@ -244,9 +246,6 @@ def _law_band_top(tasks, guard: float) -> float:
 def _cea_growth_at_mu0(system, tasks, conditions) -> float:
     """The largest real part [s-1] of the CEA (:func:`fivid.fe.cea.complex_eigenvalue_analysis`) at the law's mu0
     about the point's preload: seed 000's rig is stable there (< 0)."""
-    from fivid.fe.cea import complex_eigenvalue_analysis
-    from fivid.friction import load_law
-
     ra = conditions.get("roughness_ra")
     model = refined_model(system["model_path"], conditions.get("mesh", 1.0), ra,
                           surface=None if ra is None else system.get("surfaces", {}).get(repr(float(ra))))
@@ -259,8 +258,6 @@ def seed_checks(points, cfg: dict, reference: dict | None, source=None) -> dict:
     """Seeds 000/001's four checks from the points (and the twin, ``cfg["twin"]``; :mod:`fivid.study.seed_checks`):
     ``cea_stable_at_mu0``, ``amplitude_linear_in_velocity``, ``coulomb_broadband``, ``peaks_follow_load``."""
     from pathlib import Path
-
-    from fivid.study.seed_checks import twin_amplitude_linearity, twin_broadband_levels
 
     out = {}
     growth = [p["cea_growth_mu0"] for p in points if p.get("cea_growth_mu0") is not None]
@@ -290,8 +287,6 @@ def seed_checks(points, cfg: dict, reference: dict | None, source=None) -> dict:
 
 def dumps_checks(checks: dict) -> str:
     """The seed checks as indented JSON (the report's block)."""
-    from fivid.storage import dumps_json
-
     return dumps_json(checks)
 
 
@@ -386,9 +381,6 @@ def study_surfaces(cfg: dict, roughness_levels, source=None) -> dict:
     Gaussian ACF of ``correlation_length``, ``profile_length`` every ``profile_step``, ``profile_seed``).
     """
     from pathlib import Path
-
-    from fivid.errors import ConfigError
-    from fivid.surface import evaluate_profile
 
     levels = [] if roughness_levels is None else [float(r) for r in np.unique(roughness_levels)]
     out = {}
