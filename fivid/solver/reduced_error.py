@@ -51,7 +51,7 @@ switching itself, and the spectrum's troughs between the peaks, 60-100 dB below 
 picture does not know: there the reduced path's contact solve (its boundary inverse mass couples a node's x and
 y, so Gauss-Seidel iterates and stops with a residual of up to its tolerance, a white contact-force noise) and
 the overlap of neighbouring modes' flanks make the measured distance. On the rigs the estimate is the smaller
-part of the measured distance (docs/solver.md: 3-7 x below it), so it is not a bound.
+part of the measured distance (docs/solver.md: 11-106 x below it on the rigs), so it is not a bound.
 """
 
 from __future__ import annotations

@@ -152,9 +152,9 @@ def test_estimate_against_measured_full_vs_reduced_distance(model):
     master segment (the Gauss-Seidel residual's share). What is asserted is what the method guarantees: the
     automatic choice is right (estimate and measurement on the same side of the 0.5 dB tolerance; the rough
     contact is refused up front, and its forced reduction is indeed off), and the estimate is a positive part of
-    the measured distance. The figures (docs/solver.md) show the estimate 4-8 x below the measurement on the rigid
-    rigs: the measured distance sits in the spectrum's troughs, 60-100 dB below the peaks, which the modal
-    estimate does not see."""
+    the measured distance. The figures (docs/solver.md) show the estimate 11-106 x below the measurement on the
+    rigid rigs: the measured distance sits in the spectrum's troughs, 60-100 dB below the peaks, and in the start's
+    transient, which the modal estimate does not see."""
     from fivid.fe import load_model
     from fivid.signal.compare import band_distance, steady_psds
     from fivid.solver import simulate
