@@ -11,7 +11,7 @@ from fivid.errors import OutputExistsError
 from fivid.fe import consistent_mass, load_model, stiffness_matrix
 from fivid.fe.modal import modal_analysis, modes_to_json, write_modes
 from fivid.verify import evaluate_case, select_cases
-from fivid.verify.cases.fe_cantilever_convergence import cantilever_model as _cantilever
+from fivid.verify.cases.fe_beam_convergence import cantilever_model as _cantilever, free_beam_model as _free_beam
 from tests.helpers.convergence import assert_order
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -123,20 +123,13 @@ def test_observed_convergence_order_of_the_first_elastic_frequency():
     assert_order(H / np.array(divisions[:-1], float), -np.diff(f), 2.0)
 
 
-def test_the_cantilever_convergence_case_passes():
-    """The verification manual's case cantilever_convergence_order (its own tolerance basis) passes, monotone from
+def test_the_beam_convergence_case_passes():
+    """The verification manual's case beam_convergence_order (its own tolerance basis) passes, monotone from
     above."""
-    (case,) = select_cases(["cantilever_convergence_order"])
+    (case,) = select_cases(["beam_convergence_order"])
     result = evaluate_case(case, False, None)
     assert result.status == "passed", result
     assert result.outcome.details["monotone from above"]
-
-
-def _free_beam(length, ny):
-    """A free steel beam ``length`` x :data:`H` (thickness 10 mm), square Q4 with ``ny`` through the depth."""
-    return load_model({"bodies": {"beam": {"corners": [[0, 0], [length, 0], [length, H], [0, H]],
-                                           "divisions": [int(round(ny * length / H)), ny], "material": STEEL,
-                                           "thickness": 0.01}}})
 
 
 @pytest.mark.parametrize("divisions", [[12, 6], [40, 12]], ids=["dense-path", "shift-invert-path"])

@@ -29,7 +29,8 @@ def test_impacting_bars_carpenter():
 
 
 def test_impact_loss_converges_at_first_order():
-    """Case impact_loss_order: observed order 1 +- 0.1 on 10-80 elements per bar, a positive loss."""
+    """Case impact_loss_order: observed order 1 within the fit's 95 % interval on 10-80 elements per bar, a positive
+    loss."""
     assert _run("impact_loss_order").details["loss on the finest mesh"] > 0.0
 
 
