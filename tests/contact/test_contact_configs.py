@@ -37,9 +37,9 @@ def test_ring_preload_gives_seed_002s_contact_pressure(capsys):
     j = _modes(capsys, str(MODELS / "ring.yaml"), "-n", "4", "--contact")
     (c,) = j["contact"]
     assert c["mean_pressure_pa"] == pytest.approx(40e6, rel=1e-8)
-    assert c["closed_nodes"] == 180 and c["contact_length_m"] == pytest.approx(2 * np.pi * 0.0375, rel=1e-4)
+    assert c["closed_nodes"] == 180 and c["contact_length_m"] == pytest.approx(2 * np.pi * 0.065, rel=1e-4)
     assert main(["modes", str(MODELS / "ring.yaml"), "-n", "4"]) == 0  # and without the contact: a held ring
-    first = capsys.readouterr().out.splitlines()[-4]  # its four supports hold it in x and y: no rigid-body mode
+    first = capsys.readouterr().out.splitlines()[-4]  # its outer edge is clamped (the fixed frame): no rigid-body mode
     assert float(first.split()[1]) > 100.0
     assert main(["cea", str(MODELS / "triboair_rough.yaml"), "--mu", "0", "1", "3"]) == 2  # needs --load
     assert "--load" in capsys.readouterr().err

@@ -19,7 +19,7 @@ MODELS = Path(__file__).resolve().parents[2] / "configs" / "models"
 def test_quick_replaces_a_sweep_axis_whole():
     """weak_strong's quick sweep gives normal_load as values where the full study gives start/stop/num."""
     full, quick = load_study(STUDIES / "weak_strong.yaml"), load_study(STUDIES / "weak_strong.yaml", quick=True)
-    assert full.axes["normal_load"].size == 7 and np.isclose(full.axes["normal_load"][[0, -1]], [3e-3, 300]).all()
+    assert full.axes["normal_load"].size == 11 and np.isclose(full.axes["normal_load"][[0, -1]], [3e-3, 300]).all()
     assert quick.axes["normal_load"].tolist() == [3e-3, 1.0, 300.0]
     ring = load_study(STUDIES / "ring_mu_sweep.yaml")
     assert ring.cea is not None and "normal_load" not in ring.cea  # pressed by its loads: no clamp load needed
@@ -83,8 +83,18 @@ def test_weak_strong_study_quick(tmp_path, capsys):
     assert t["criterion"].startswith("response")
     assert "transition_load_modal" in s and s["coupling_agreement"]["n_points"] == 3
     assert all(np.isfinite(p["gain_modes_db"]) and np.isfinite(p["gain_rest_db"]) for p in pts)
+    assert all(np.isfinite(p["transfer_modes_db"]) and np.isfinite(p["transfer_rest_db"]) for p in pts)
+    # settling: the slowest reference mode in the PSD band is the lowest (Rayleigh's rate grows with frequency);
+    # 40 dB of its decay at the rate reported
+    surf = s["surfaces"][repr(1.6e-6)]  # from the synthetic profile through the spectral moments
+    assert "SYNTHETIC" in surf["source"] and "McCool" in surf["source"] and surf["sigma"] > 0
+    st = s["settle"]
+    assert st["mode_frequency"] == min(ref["uncoupled"] + ref["coupled"]) and st["level_db"] == 40
+    assert st["time"] == pytest.approx(np.log(100.0) / st["decay_rate"], rel=1e-9)
     checks = s["seed_checks"]
-    assert checks["cea_stable_at_mu0"]["n_points"] == 3
+    assert checks["cea_stable_at_mu0"]["n_points"] == 3 and checks["cea_stable_at_mu0"]["stable"] is True
+    # stable by CEA and Coulomb rings down: no point is called mode coupling (the law's build-up is forcing)
+    assert all(p["regime"] != "mode_coupling" and p["coulomb_decay_db"] > 0 for p in pts)
     assert checks["amplitude_linear_in_velocity"]["significant"] is False
     assert checks["peaks_follow_load"]["moves_from_uncoupled_to_coupled"] is True
 
@@ -92,13 +102,17 @@ def test_weak_strong_study_quick(tmp_path, capsys):
 @pytest.mark.slow
 def test_ring_study_quick(tmp_path, capsys):
     """Seed 002's mu sweep (--quick: 126 x 7 mesh): stable at 0.01, mode coupling at 0.3 (growth, onset, limit
-    cycle), stick-slip at 1; the CEA's critical mu lies below 0.3, and the stable point decays at the CEA's rate
-    (transient -102 vs CEA -108 1/s on this mesh: within 15 %, the envelope fit's spread over 40 ms)."""
+    cycle); at 1 unstable with more of the bore sticking than at 0.3 (the paper's gross stick-slip is not reached
+    on the clamped ring in 40 ms: docs/studies.md); the CEA's critical mu lies below 0.3, and the stable point
+    decays at the CEA's rate (transient -377 vs CEA -382 1/s on this mesh: within 15 %, the envelope fit's spread
+    over 40 ms), ringing in that CEA mode (the preload rings it: MAC 1 to the phasor's leakage)."""
     assert main(["study", str(STUDIES / "ring_mu_sweep.yaml"), "-o", str(tmp_path / "ring"), "--quick",
                  "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
     by_mu = {p["mu"]: p for p in s["points"]}
-    assert [by_mu[m]["regime"] for m in (0.01, 0.3, 1.0)] == ["stable", "mode_coupling", "stick_slip"]
+    assert [by_mu[m]["regime"] for m in (0.01, 0.3)] == ["stable", "mode_coupling"]
+    assert by_mu[1.0]["regime"] != "stable" and by_mu[1.0]["stick_fraction"] > by_mu[0.3]["stick_fraction"]
+    assert by_mu[0.01]["mac_with_cea"] > 0.99
     assert by_mu[0.3]["growth_rate"] > 0 and by_mu[0.3]["onset_time"] > 0
     assert s["critical_mu"]["value"] < 0.3
     assert by_mu[0.01]["growth_rate"] == pytest.approx(by_mu[0.01]["cea_growth_rate"], rel=0.15)

@@ -17,6 +17,10 @@ radius and its counter-clockwise tangent, added after the model's own sensors (t
     the analytic signal's phasor at that frequency) is compared with the complex MAC ``|phi^H v|^2 /
     (|phi|^2 |v|^2)``, which takes the best phase (and scale) automatically. Growth window: the 1 ms before
     ``onset_time`` (10 periods at 10 kHz); without an onset (stable, stick-slip) the record's last 1 ms.
+``best_cea_mac``, ``best_cea_frequency``, ``best_cea_growth_rate``
+    Which CEA mode the transient grows: the largest MAC of the same phasor with any mode unstable at the point's
+    mu, and that mode's frequency and real part (several pairs may grow at nearly the same rate; the nonlinear
+    transient -- partial stick during growth, its start from the preload's ringing -- need not pick the fastest).
 ``contact_state(map_time, bore_angle)``
     0 stick, 1 slip, 2 open at each bore node over the steady part (at most ``MAP_SAMPLES`` times): open where
     the node's radial displacement exceeds the smallest one around the bore (the closed nodes' common radius: the
@@ -92,6 +96,12 @@ def _phasors(v, fs: float, lo: float = 1e3, hi: float = 25e3):
     return float(f[k]), spec[k]
 
 
+def _complex_mac(phi, v) -> float:
+    """Complex MAC ``|phi^H v|^2 / (|phi|^2 |v|^2)`` [1] of a (complex) mode shape and a field phasor: 1 when they
+    are the same shape whatever the complex scale (phase) between them."""
+    return float(abs(np.vdot(phi, v)) ** 2 / np.real(np.vdot(phi, phi) * np.vdot(v, v)))
+
+
 def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = True) -> None:
     """The per-point variables of the module docstring, into ``data``/``coords``."""
     c = model.contacts[0]
@@ -134,9 +144,23 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     tan = np.stack([-rad[:, 1], rad[:, 0]], axis=1)
     sh = shapes[k][c.slave_nodes]
     phi = np.concatenate([np.sum(sh * rad, axis=1), np.sum(sh * tan, axis=1)])
-    mac = abs(np.vdot(phi, ods)) ** 2 / np.real(np.vdot(phi, phi) * np.vdot(ods, ods))
+    mac = _complex_mac(phi, ods)
     data["mac_with_cea"] = ((), float(mac), {"units": "1", "long_name": "MAC of the CEA's most unstable mode "
                                                 "and the transient's bore velocity field during growth"})
+    # which CEA mode the transient grows: the best MAC among the modes unstable at this mu (several pairs may grow
+    # at nearly the same rate; the transient need not pick the fastest)
+    macs = np.array([_complex_mac(np.concatenate([np.sum(shapes[j][c.slave_nodes] * rad, axis=1),
+                                                  np.sum(shapes[j][c.slave_nodes] * tan, axis=1)]), ods)
+                     if lam[j].real > 0 else -1.0 for j in range(lam.size)])
+    best = int(np.argmax(macs))
+    for key, value, unit, text in (
+            ("best_cea_mac", max(float(macs[best]), 0.0), "1", "best MAC of the transient's bore velocity field "
+                                                                "with a CEA mode unstable at this mu"),
+            ("best_cea_frequency", float(lam[best].imag / (2 * np.pi)) if macs[best] >= 0 else np.nan, "Hz",
+             "frequency of that best-matching unstable CEA mode"),
+            ("best_cea_growth_rate", float(lam[best].real) if macs[best] >= 0 else np.nan, "s-1",
+             "real part of that best-matching unstable CEA mode")):
+        data[key] = ((), value, {"units": unit, "long_name": text})
     data["ods_frequency"] = ((), f_ods, {"units": "Hz", "long_name": "dominant frequency of the bore velocity "
                                                                       "field in the growth window"})
     data["cea_mode_frequency"] = ((), float(lam[k].imag / (2 * np.pi)), {
@@ -212,6 +236,8 @@ class RingRegimes(FeSweep):
     description = "instability regimes over mu (seed 002): transients classified and compared with the CEA"
     point_keys = FeSweep.point_keys + (("mac_with_cea", "mac_with_cea"), ("ods_frequency", "ods_frequency"),
                                        ("cea_mode_frequency", "cea_mode_frequency"), ("amplitude", "amplitude"),
+                                       ("best_cea_mac", "best_cea_mac"), ("best_cea_frequency", "best_cea_frequency"),
+                                       ("best_cea_growth_rate", "best_cea_growth_rate"),
                                        ("vibration_to_sliding_speed", "vibration_to_sliding_speed"))
 
     def guess(self, data: dict) -> bool:
@@ -249,8 +275,8 @@ class RingRegimes(FeSweep):
         """Each transient's regime, frequency and MAC beside the CEA's at the same mu; contact-state maps and
         velocity snapshots."""
         rows = [[p.get("mu"), p.get("regime"), p.get("growth_rate"), p.get("cea_growth_rate"), p.get("frequency"),
-                 p.get("cea_frequency"), p.get("ods_frequency"), p.get("mac_with_cea"), p.get("amplitude"),
-                 p.get("vibration_to_sliding_speed")]
+                 p.get("cea_frequency"), p.get("ods_frequency"), p.get("mac_with_cea"), p.get("best_cea_frequency"),
+                 p.get("best_cea_mac"), p.get("amplitude"), p.get("vibration_to_sliding_speed")]
                 for p in summary["points"] if "regime" in p and "mu" in p]
         if not rows:
             return
@@ -259,6 +285,7 @@ class RingRegimes(FeSweep):
                        "(seed 002: 20).")
         page.raw(table(["mu", "regime", "growth rate [1/s]", "CEA growth rate [1/s]", "frequency [Hz]",
                         "CEA frequency [Hz]", "growth-window frequency [Hz]", "MAC with CEA",
+                        "best-matching unstable CEA mode [Hz]", "its MAC",
                         "limit-cycle RMS [m/s²]", "vibration / sliding speed"], rows))
         if "contact_state" in ds:
             page.figure(_state_map_figure(ds, summary), "Contact state along the bore (stick / slip / open) against "
