@@ -20,6 +20,7 @@ from fivid.fe.static import Preload, preload_state
 from fivid.friction.curve import slave_coefficients
 from fivid.friction.injection import FrictionTable, friction_table
 from fivid.friction.inputs import FrictionInput, OperatingCondition
+from fivid.signal.welch import default_nperseg
 from fivid.solver.inputs import check_energy_balance, check_simulation_inputs
 from fivid.solver.integrate import integrate
 from fivid.solver.options import (
@@ -229,12 +230,12 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
     ka = kernel_arrays(model, st, loading, tangential_sign=signs[0], normal_sign=signs[1], prestress=prestress)
     base = model.motion("base")
     v_max = abs(sliding_velocity if sliding_velocity is not None else base.amplitude if base else 0.0)
-    rs, choice = _choose_path(model, ka, integration, sliding_distance=v_max * total, sample_rate=sample_rate)
-    if rs is not None:
-        stab = stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
-                              float(model.damping_cutoff))
-    else:
-        stab = stable_step(model)
+    t_int = 1.0 / (sample_rate * oversample)
+    rs, choice = _choose_path(model, ka, integration, sliding_distance=v_max * total, sample_rate=sample_rate,
+                              interval=t_int, record_samples=int(round(duration * sample_rate)),
+                              active=None if preload is None else np.isin(
+                                  ka.slave_global, preload.geometry.slave_node[preload.active]))
+    stab = _reduced_stable_step(model, rs) if rs is not None else stable_step(model)
     dt_crit = stab.critical_time_step
     time_step = integration.time_step
     if time_step is not None:
@@ -249,9 +250,7 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
         dt_max = time_step
     else:
         dt_max = float(safety) * dt_crit
-    t_int = 1.0 / (sample_rate * oversample)
-    n_sub = max(1, math.ceil(t_int / dt_max * (1.0 - 1e-12)))
-    dt = t_int / n_sub
+    dt, n_sub = _step_in_interval(t_int, dt_max)
 
     v_signed = (sliding_velocity if sliding_velocity is not None else abs(base.amplitude) if base else 0.0)
     if base is not None and base.amplitude < 0:
@@ -291,8 +290,24 @@ def _reduced_options(reduced, reduced_mass_scaling, sample_rate):
     return n_modes, scaling, scaling
 
 
-def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance, sample_rate):
-    """The reduced system to run (None: the full model) and the record of the choice (:func:`choice_attrs`)."""
+def _step_in_interval(interval, dt_max):
+    """``(dt, n_sub)``: the largest step <= ``dt_max`` [s] that fits a whole number of times in ``interval`` [s]."""
+    n_sub = max(1, math.ceil(interval / dt_max * (1.0 - 1e-12)))
+    return interval / n_sub, n_sub
+
+
+def _reduced_stable_step(model, rs):
+    """The :class:`fivid.solver.timestep.StableStep` of the reduced system ``rs`` under ``model``'s damping."""
+    return stable_step_of(rs.omega_max(), float(model.rayleigh_alpha), float(model.rayleigh_beta),
+                          float(model.damping_cutoff))
+
+
+def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance, sample_rate, interval=None,
+                 record_samples=None, active=None):
+    """The reduced system to run (None: the full model) and the record of the choice (:func:`choice_attrs`).
+    ``interval`` [s]: the recording interval (the reduced step is fitted into it); ``record_samples``: the steady
+    record's length (the scored PSD's resolution, :func:`fivid.signal.welch.default_nperseg`); ``active``: the slaves
+    closed after the preload (the estimate's contact states)."""
     reduced, reduced_mass_scaling = integration.reduced, integration.reduced_mass_scaling
     error_band = integration.error_band
     if reduced is None or reduced is False:
@@ -335,8 +350,15 @@ def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance
             raise
         return None, {"path": "full", "choice": "auto", "estimate": None, "tolerance": tolerance, "band": band,
                       "reason": f"the model cannot be reduced: {exc}"}
+    if integration.time_step is not None:
+        step = float(integration.time_step)
+    else:
+        step = float(integration.safety) * _reduced_stable_step(model, rs).critical_time_step
+    step = _step_in_interval(interval if interval is not None else 1.0 / sample_rate, step)[0]
+    n_rec = int(record_samples) if record_samples is not None else 256
     est = band_error_estimate(rs, band, alpha=float(model.rayleigh_alpha), beta=float(model.rayleigh_beta),
-                              damping_cutoff=float(model.damping_cutoff))
+                              damping_cutoff=float(model.damping_cutoff), time_step=step,
+                              bin_width=sample_rate / default_nperseg(sample_rate, max(n_rec, 1)), active=active)
     record = {"choice": "auto" if auto else "requested", "estimate": est, "tolerance": tolerance, "band": band}
     if auto and est["lsd_db"] > tolerance:
         return None, {**record, "path": "full", "reason": f"estimated in-band error {est['lsd_db']:.3g} dB > "
@@ -359,7 +381,7 @@ def choice_attrs(choice) -> dict:
         out["reduced_error_estimate_state"] = est["state"]
         out["reduced_error_estimate_states"] = "; ".join(
             f"{k}: {v['lsd_db']:.3g} dB (truncation {v['truncation_db']:.3g}, mass scaling {v['mass_scaling_db']:.3g}, "
-            f"{v['modes']} modes)" for k, v in est["states"].items())
+            f"time step {v['time_step_db']:.3g}, {v['modes']} modes)" for k, v in est["states"].items())
     if "band" in choice:
         out["reduced_error_band"] = [float(b) for b in choice["band"]]
         out["reduced_error_band_units"] = "Hz"

@@ -1,18 +1,27 @@
 """Estimated in-band error of a Craig-Bampton reduced run (issue 30 item 2), from the reduced system alone.
 
-The acceleration PSD of a lightly damped structure is, near each of its modes ``r`` (frequency ``f_r``, damping
-ratio ``zeta_r``), a Lorentzian of half-width ``zeta_r f_r``: ``P(f) ~ 1 / (1 + u^2)``, ``u = (f - f_r) /
-(zeta_r f_r)``. A reduction that moves the mode by a relative ``delta_r`` moves the Lorentzian by
-``d_r = delta_r / zeta_r`` half-widths, and the log-spectral distance of the two PSDs over a band of width ``B``
-(the RMS over frequency of ``10 log10(P_red / P_full)``) is, summing the modes' disjoint contributions,
+**What is estimated.** The log-spectral distance (LSD, the RMS over the band's bins of ``10 log10(P_red / P_full)``)
+between the acceleration PSDs of the reduced and the full run, scored as the pipeline scores them: Welch PSD,
+bins of width ``Delta f = fs / nperseg`` over a band ``[f_lo, f_hi]`` of width ``B``.
 
-    LSD^2 = (1 / B) sum_r zeta_r f_r g(delta_r / zeta_r),
-    g(d)  = integral over u of [10 log10((1 + (u - d)^2) / (1 + u^2))]^2 du  (~ 2 pi (10 / ln 10)^2 d^2 for d << 1).
+**Peaks.** Near a mode ``r`` (frequency ``f_r``, decay rate ``gamma_r = zeta_r f_r`` [Hz]) the expected Welch PSD is
+the mode's Lorentzian of half-width ``gamma_r`` convolved with the Hann window's spectral window ``|W|^2``
+(:func:`hann_kernel`, main lobe +-2 bins, nulls at the integers beyond): :func:`peak_psd`. On the rigs ``gamma`` is
+5-100 Hz against 200 Hz bins, so the window shapes the peaks, and their flanks are far steeper than a Lorentzian
+of the same width (the first version, a Lorentzian of half-width ``gamma``, read a shift 2-40 x too weakly, and
+divided by zero without damping). A mode moved by ``delta_r f_r`` [Hz] (and its decay rate changed) changes the
+bin ``k`` by ``e_rk = 10 log10(P_r'(f_k) / P_r(f_k))`` (:func:`peak_db_error`), and
 
-So an in-band relative frequency error is amplified by ``1 / zeta``: 1e-4 on a mode with 0.5 % damping is
-``d = 0.02``. The two sources of ``delta_r`` on this path:
+    LSD^2 = (1 / n_bins) sum_k sum_r e_rk^2
 
-- **truncated modes' static contribution**: the fixed-interface modes ``j`` left out would add
+over the band's bins and every mode up to 1.5 x the band's top (the flank of one just above it reaches in).
+Summing the squares treats each bin as if every mode dominated it: an upper bound where peaks overlap. An
+undamped model gets the kernel itself: a finite estimate, but a large one, since its bins near the kernel's nulls
+move by decibels for a small shift (a run's PSD has these nulls too, filled only by what else is in the signal).
+
+**Sources of ``delta_r``**, first order each, so they add per mode (first-order perturbations of one eigenvalue):
+
+- *truncated modes' static contribution*: the fixed-interface modes ``j`` left out would add
   ``-omega^4 L_j L_j^T / (omega_j^2 - omega^2)`` to the boundary's dynamic stiffness (``L_j = phi_j^T M_II Psi``,
   the inertial coupling of boundary motion into mode ``j``). Dropping them is a Rayleigh-Ritz restriction: the
   reduced frequencies err high, by ``Delta(omega_r^2) = omega_r^4 x_b^T G x_b`` to first order with
@@ -20,60 +29,156 @@ So an in-band relative frequency error is amplified by ``1 / zeta``: 1e-4 on a m
   Lambda_k^-1 Phi_k^T) M_II Psi`` is the truncated modes' static contribution (computed with the basis from the
   static-correction residual) and ``x_b`` the mode's boundary displacement (mass-normalised): ``delta_r^trunc =
   omega_r^2 x_b^T G x_b / 2``;
-- **mass-scaled modes' frequency shift**: the selective scaling keeps the *free* reduced system's modes below
+- *mass-scaled modes' frequency shift*: the selective scaling keeps the *free* reduced system's modes below
   the target exactly, but the contact ties boundary nodes together and the tied system's modes mix in the scaled
   ones. ``delta_r^scale`` is computed directly: the tied system's in-band frequencies with the scaled mass over
-  those with the unscaled one (small dense eigenproblems on the reduced coordinates).
+  those with the unscaled one (small dense eigenproblems on the reduced coordinates);
+- *the step the scaling buys*: the reduced run steps at ``dt`` several times the full run's. Central differences
+  with the solver's damping (the force from ``q_n + beta v_{n-1/2}``, ``alpha v_{n-1/2}``, the band-limited
+  filter) turn a mode's root ``s`` into ``ln(z) / dt``, ``z`` the eigenvalue of its one-mode step
+  (:func:`discrete_root`): ``delta_r^dt = (omega_r dt)^2 / 24 + zeta_r omega_r dt / 2`` for classic Rayleigh
+  (dispersion plus the half-step-old damping velocity), and a changed decay rate. Taken against the exact
+  root, not against the full run's own step: the full run's error has the same sign and is smaller, so this
+  bounds the difference from above.
 
-The contact state changes the modes, so the estimate is taken for three linear states of every slave against
-the master segment under it (:func:`contact_states`): open, sliding (normal tied) and stuck (normal and
-tangential tied); the largest is the run's estimate. What it leaves out: the nonlinear stick/slip switching
-itself (resolved by the step, not the basis), and modes outside the band whose tails reach into it.
+**Contact states.** The contact state changes the modes, so the estimate is taken for three linear states of the
+slaves closed after the preload (:func:`contact_states`; on the rigs the upper beam rests on one corner node, not
+on its whole 10 mm): open, sliding (normal tied) and stuck (normal and tangential tied); the largest is the run's
+estimate.
+
+**What it leaves out** (measured in docs/solver.md, "The error estimate"): the nonlinear stick/slip and contact
+switching itself, and the spectrum's troughs between the peaks, 60-100 dB below them, whose level the modal
+picture does not know: there the reduced path's contact solve (its boundary inverse mass couples a node's x and
+y, so Gauss-Seidel iterates and stops with a residual of up to its tolerance, a white contact-force noise) and
+the overlap of neighbouring modes' flanks make the measured distance. On the rigs the estimate is the smaller
+part of the measured distance (docs/solver.md: 11-106 x below it on the rigs), so it is not a bound.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from fivid.fe.damping import damping_ratio
+from fivid.fe.damping import modal_root
+from fivid.solver.integrate import velocity_filter_gain
 
-__all__ = ["DEFAULT_ERROR_BAND", "lorentzian_lsd_integral", "contact_states", "band_error_estimate"]
+__all__ = ["DEFAULT_ERROR_BAND", "DEFAULT_BIN_WIDTH", "hann_kernel", "peak_psd", "peak_db_error", "discrete_root",
+           "contact_states", "band_error_estimate"]
 
 #: band [Hz] of the estimate when no scoring band is given (that of docs/solver.md's full-vs-reduced checks)
 DEFAULT_ERROR_BAND = (200.0, 10000.0)
 
+#: PSD resolution [Hz] when none is given: Welch segments of 256 samples at 51.2 kHz (fivid's shortest default)
+DEFAULT_BIN_WIDTH = 200.0
+
+#: modes up to this factor times the band's top enter the estimate (the flank of one just above it reaches in)
+OUTSIDE_REACH = 1.5
+
+#: [bins] a peak narrower than this is the kernel plus its Lorentzian's tail (no grid finer than this / 8)
+NARROW_PEAK = 1.0 / 256.0
+
+#: Welch segment length of the kernel's shape (in bins it hardly depends on it above ~64)
+KERNEL_NPERSEG = 256
+
+#: [bins] within this distance of a mode its peak is convolved on a grid (beyond: sidelobe plus Lorentzian tail)
+PEAK_REACH = 6.0
+
 _DB = 10.0 / math.log(10.0)
 
 
-def lorentzian_lsd_integral(d: float) -> float:
-    """``g(d) = integral of [10 log10((1 + (u - d)^2) / (1 + u^2))]^2 du`` over the real line [dB^2], the squared
-    log-spectral distance (times the band, per half-width) of a Lorentzian peak moved by ``d`` half-widths."""
-    from scipy.integrate import quad
+def hann_kernel(x, nperseg: int = KERNEL_NPERSEG) -> np.ndarray:
+    """The Hann window's spectral window ``|W(x)|^2`` at ``x`` bins from its centre, normalised to unit area in bins
+    (peak ``1 / 1.5``, the window's equivalent noise bandwidth): what a Welch PSD of ``nperseg``-sample periodic-Hann
+    segments makes of a spectral line. Closed form, ``W = D(x) / 2 - D(x - 1) / 4 - D(x + 1) / 4`` with the
+    Dirichlet kernel ``D(x) = sum_n exp(-2 pi i x n / N)``."""
+    def dirichlet(y):
+        s = np.sin(np.pi * y / nperseg)
+        small = np.abs(s) < 1e-12
+        ratio = np.where(small, nperseg * np.cos(np.pi * y) / np.where(small, np.cos(np.pi * y / nperseg), 1.0),
+                         np.sin(np.pi * y) / np.where(small, 1.0, s))
+        return ratio * np.exp(-1j * np.pi * y * (nperseg - 1) / nperseg)
 
-    d = abs(float(d))
-    if d == 0.0:
-        return 0.0
-    half = 50.0 + 2.0 * d
-
-    def f(u):
-        return (_DB * math.log((1.0 + (u - d) ** 2) / (1.0 + u * u))) ** 2
-
-    inner, _ = quad(f, -half, half, points=[0.0, d], limit=200)
-    # tails: ln ratio ~ -2 d / u for |u| >> d, so each side adds (10/ln10)^2 4 d^2 / half
-    return inner + 2.0 * _DB ** 2 * 4.0 * d * d / half
+    x = np.asarray(x, dtype=float)
+    w = 0.5 * dirichlet(x) - 0.25 * dirichlet(x - 1.0) - 0.25 * dirichlet(x + 1.0)
+    return np.abs(w) ** 2 / (0.375 * nperseg * nperseg)
 
 
-def contact_states(rs) -> dict:
+def peak_psd(x, half_width: float) -> np.ndarray:
+    """A mode's peak in a Welch PSD at ``x`` bins from the mode [1/bin, unit area]: its Lorentzian of half-width
+    ``half_width`` [bins] (the decay rate ``zeta f`` over the bin width) smoothed by :func:`hann_kernel`:
+    ``sum_j L(x - u_j) K(u_j) h`` over the kernel on a grid ``u_j`` of step ``h <= min(half_width / 8, 1/32)`` bin
+    (a power of two) within ``PEAK_REACH + 4`` bins, at the bins within ``PEAK_REACH`` of the mode; beyond, and
+    for a peak narrower than ``NARROW_PEAK``, the kernel plus the Lorentzian's tail. Zero width (undamped): the
+    kernel itself."""
+    x = np.atleast_1d(np.asarray(x, dtype=float))
+    g = float(half_width)
+    if g <= 0.0:
+        return hann_kernel(x)
+    out = hann_kernel(x) + (g / math.pi) / (x * x + g * g)
+    near = np.abs(x) <= PEAK_REACH
+    if near.any() and g >= NARROW_PEAK:  # narrower: the kernel with the Lorentzian's tail in its nulls, as beyond
+        u, ku = _kernel_grid(int(math.floor(math.log2(min(g / 8.0, 1.0 / 32.0)))))
+        d = x[near, None] - u[None, :]
+        out[near] = ((g / math.pi) / (d * d + g * g)) @ ku
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _kernel_grid(exponent: int):
+    """The :func:`hann_kernel` on a grid of step ``2**exponent`` bin over +-(``PEAK_REACH`` + 4) bins, times the step
+    (the convolution's weights: ``P(x) = sum_j L(x - u_j) K(u_j) h``)."""
+    h = 2.0 ** exponent
+    u = np.arange(-PEAK_REACH - 4.0, PEAK_REACH + 4.0 + 0.5 * h, h)
+    return u, hann_kernel(u) * h
+
+
+def peak_db_error(frequency: float, decay: float, bins, bin_width: float, shift: float = 0.0,
+                  decay_after: float | None = None) -> np.ndarray:
+    """``10 log10(P' / P)`` [dB] at the PSD's ``bins`` [Hz] of a mode's :func:`peak_psd` (``frequency`` [Hz], decay
+    rate ``decay = zeta f`` [Hz]) moved by ``shift`` [Hz] and with the decay rate ``decay_after`` [Hz] (None: the same)."""
+    bins = np.asarray(bins, dtype=float)
+    before = peak_psd((bins - frequency) / bin_width, decay / bin_width)
+    after = peak_psd((bins - frequency - shift) / bin_width, (decay if decay_after is None else decay_after) / bin_width)
+    return 10.0 * np.log10(after / before)
+
+
+def discrete_root(frequency: float, alpha: float, beta: float, cutoff: float | None, dt: float) -> complex:
+    """The complex root ``s = ln(z) / dt`` [rad s-1] (upper half-plane) that the solver's central-difference step
+    ``dt`` [s] gives a mode of undamped ``frequency`` [Hz] under the damping scheme (``alpha`` [s-1], ``beta`` [s],
+    velocity-filter ``cutoff`` [Hz], None/inf: classic Rayleigh): ``z`` the eigenvalue of the one-mode step of
+    :mod:`fivid.solver._reduced_kernels` (state ``q_n``, ``v_{n-1/2}``, filtered ``v``):
+    ``v' = v - dt (omega^2 (q + beta v_f) + alpha v)``, ``q' = q + dt v'``, ``v_f' = v_f + a (v' - v_f)`` with
+    ``a = 1 - exp(-2 pi cutoff dt)`` (``v_f = v``, classic). Against :func:`fivid.fe.damping.modal_root` it gives
+    the step's frequency error (``(omega dt)^2 / 24`` of central differences plus ``zeta omega dt / 2`` of the
+    damping force's half-step-old velocity) and its damping error."""
+    w2 = (2.0 * math.pi * float(frequency)) ** 2
+    a = velocity_filter_gain(math.inf if cutoff is None else float(cutoff), float(dt))
+    vrow = np.array([-dt * w2, 1.0 - dt * alpha, -dt * w2 * beta])
+    qrow = np.array([1.0, 0.0, 0.0]) + dt * vrow
+    if a >= 1.0:  # classic Rayleigh: w = q + beta v
+        amp = np.array([[qrow[0], qrow[1] + qrow[2]], [vrow[0], vrow[1] + vrow[2]]])
+    else:
+        amp = np.array([qrow, vrow, a * vrow + np.array([0.0, 0.0, 1.0 - a])])
+    s = np.log(np.linalg.eigvals(amp).astype(complex)) / dt
+    return complex(s[np.argmax(s.imag)])
+
+
+def contact_states(rs, active=None) -> dict:
     """Constraint rows (``(n_rows, n_free)``) of the three linear contact states of the reduced system ``rs``:
-    ``open`` (none), ``sliding`` (each slave's normal gap to the master segment under it tied) and ``stuck``
-    (normal and tangential tied). Rigid masters are skipped (their motion is imposed, not a reduced coordinate)."""
+    ``open`` (none), ``sliding`` (each closed slave's normal gap to the master segment under it tied) and ``stuck``
+    (normal and tangential tied). ``active`` (bool per slave, e.g. the preload's ``Preload.active``): the slaves
+    closed in the run (None: all). Rigid masters are skipped (their motion is imposed, not a reduced coordinate)."""
     a = rs.kernel
     nb, nf = int(a["nb"]), rs.n_free
     X = np.column_stack([a["X"][:nb], a["X"][nb:]])
     normal, tangential = [], []
+    closed = np.ones(len(a["slave_node"]), dtype=bool) if active is None else np.asarray(active, dtype=bool)
     for k, s in enumerate(a["slave_node"]):
+        if not closed[k]:
+            continue
         p = int(a["slave_pair"][k])
         mm = a["master_nodes"][a["master_ptr"][p]:a["master_ptr"][p + 1]]
         if mm.size < 2:
@@ -110,7 +215,8 @@ def _tied_modes(k, m, rows, omega2_max):
     return lam, (y if z is None else z @ y)
 
 
-def band_error_estimate(rs, band, *, alpha: float, beta: float, damping_cutoff: float | None = None) -> dict:
+def band_error_estimate(rs, band, *, alpha: float, beta: float, damping_cutoff: float | None = None,
+                        time_step: float | None = None, bin_width: float = DEFAULT_BIN_WIDTH, active=None) -> dict:
     """Estimated log-spectral distance [dB] between the reduced and the full run's PSDs over ``band`` (module
     docstring).
 
@@ -121,52 +227,70 @@ def band_error_estimate(rs, band, *, alpha: float, beta: float, damping_cutoff: 
     band : (float, float)
         Scoring band [Hz].
     alpha, beta, damping_cutoff
-        The model's Rayleigh damping [s-1, s, Hz] (``fivid.fe.damping.damping_ratio``).
+        The model's Rayleigh damping [s-1, s, Hz] (``fivid.fe.damping.damping_ratio``); zero damping is allowed
+        (the peaks' width is then the PSD's resolution).
+    time_step : float, optional
+        The reduced run's step [s] (None: the step's error left out).
+    bin_width : float
+        Frequency resolution of the scored Welch PSD, ``sample_rate / nperseg`` [Hz] (> 0).
+    active : array of bool, optional
+        The slaves closed in the run (the preload's ``Preload.active``; None: all).
 
     Returns
     -------
     dict
         ``lsd_db`` (the largest over the contact states), ``state`` (which one), ``band`` [Hz], and per state
-        ``lsd_db``, ``truncation_db`` and ``mass_scaling_db`` (each source alone), ``modes`` (in the band) and
-        ``largest_shift`` (the largest ``|delta_r|`` [-]).
+        ``lsd_db``, ``truncation_db``, ``mass_scaling_db`` and ``time_step_db`` (each source alone), ``modes`` (in
+        the band) and ``largest_shift`` (the largest ``|delta_r|`` [-]).
     """
-    from threadpoolctl import threadpool_limits
-
     lo, hi = float(band[0]), float(band[1])
     if not (0.0 <= lo < hi):
         raise ValueError(f"band must be (low, high) with 0 <= low < high, got {band!r}")
-    nf, nb2 = rs.n_free, 2 * int(rs.kernel["nb"])
+    if not (float(bin_width) > 0.0):
+        raise ValueError(f"bin_width must be a frequency resolution > 0 Hz, got {bin_width!r}")
+    bw = float(bin_width)
+    bins = bw * np.arange(math.ceil(lo / bw), math.floor(hi / bw) + 1)
+    nf = rs.n_free
     kf = rs.K[:nf, :nf]
     m0 = (rs.unscaled_mass if rs.unscaled_mass is not None else rs.M)[:nf, :nf]
     ms = rs.M[:nf, :nf]
     flex = rs.truncation_flexibility
-    w2_max = (2.0 * math.pi * hi * 1.05) ** 2
+    w2_max = (2.0 * math.pi * hi * OUTSIDE_REACH) ** 2
+    nb2 = 2 * int(rs.kernel["nb"])
     states = {}
     with threadpool_limits(limits=1, user_api="blas"):
-        for name, rows in contact_states(rs).items():
+        for name, rows in contact_states(rs, active).items():
             lam0, x = _tied_modes(kf, m0, rows, w2_max)
             lam0 = np.clip(lam0, 0.0, None)
-            if ms is m0 or lam0.size == 0:
-                shift_s = np.zeros(lam0.size)
-            else:
+            f = np.sqrt(lam0) / (2.0 * math.pi)
+            near = np.flatnonzero(f > 0.0)  # every mode up to OUTSIDE_REACH x the band top: their flanks reach in
+            inband = (f >= lo) & (f <= hi)
+            shift_s = np.zeros(lam0.size)
+            if ms is not m0 and lam0.size:
                 lam_s, _ = _tied_modes(kf, ms, rows, w2_max * 1.2)
                 n = min(lam0.size, lam_s.size)
-                shift_s = np.zeros(lam0.size)
                 shift_s[:n] = np.sqrt(np.clip(lam_s[:n], 0.0, None) / np.maximum(lam0[:n], 1e-300)) - 1.0
             xb = x[:nb2]
             shift_t = (0.5 * lam0 * np.einsum("ir,ij,jr->r", xb, flex, xb) if flex is not None
                        else np.zeros(lam0.size))
-            f = np.sqrt(lam0) / (2.0 * math.pi)
-            inband = (f >= lo) & (f <= hi)
-            zeta = np.asarray(damping_ratio(np.maximum(f, 1e-9), float(alpha), float(beta), damping_cutoff))
+            shift_dt, decay, decay_dt = np.zeros(lam0.size), np.zeros(lam0.size), np.zeros(lam0.size)
+            for r in near:
+                exact = complex(modal_root(f[r], float(alpha), float(beta), damping_cutoff))
+                decay[r] = decay_dt[r] = -exact.real / (2.0 * math.pi)
+                if time_step is not None:
+                    step = discrete_root(f[r], float(alpha), float(beta), damping_cutoff, float(time_step))
+                    shift_dt[r] = step.imag / exact.imag - 1.0
+                    decay_dt[r] = -step.real / (2.0 * math.pi)
 
-            def lsd(shift):
-                total = sum(zeta[r] * f[r] * lorentzian_lsd_integral(shift[r] / zeta[r])
-                            for r in np.flatnonzero(inband))
-                return math.sqrt(total / (hi - lo))
+            def lsd(shift, with_step):
+                total = sum(float(np.sum(peak_db_error(f[r], decay[r], bins, bw, shift[r] * f[r],
+                                                       decay_dt[r] if with_step else None) ** 2)) for r in near)
+                return math.sqrt(total / max(bins.size, 1))
 
-            states[name] = {"lsd_db": lsd(shift_t + shift_s), "truncation_db": lsd(shift_t),
-                            "mass_scaling_db": lsd(shift_s), "modes": int(inband.sum()),
-                            "largest_shift": float(np.abs(shift_t + shift_s)[inband].max()) if inband.any() else 0.0}
+            total_shift = shift_t + shift_s + shift_dt
+            states[name] = {"lsd_db": lsd(total_shift, True), "truncation_db": lsd(shift_t, False),
+                            "mass_scaling_db": lsd(shift_s, False), "time_step_db": lsd(shift_dt, True),
+                            "modes": int(inband.sum()),
+                            "largest_shift": float(np.abs(total_shift[inband]).max()) if inband.any() else 0.0}
     worst = max(states, key=lambda s: states[s]["lsd_db"])
     return {"lsd_db": states[worst]["lsd_db"], "state": worst, "band": [lo, hi], "states": states}

@@ -20,6 +20,10 @@ record's analyses, any kind with a transient) take plain data (picklable): ``sys
   transient (:func:`solver_choice`: the automatic path unless the study's ``points.transient.solver`` forces one);
 - ``psd``: ``psd(frequency)`` of the second half of the response's steady part (Welch, Hann, half overlap).
 
+``tasks["transient"]["settle_time"]`` [s] (optional, a kind sets it: :mod:`fivid.study.kinds.weak_strong`) is
+the schedule's time between the preload ramp and the base ramp (:class:`fivid.solver.RunSchedule`), 1 ms if
+absent.
+
 The response is the first sensor's acceleration for FE models (steady part from the run's ``transient_end``); a
 lumped kind hands its own record (:mod:`fivid.study.kinds.hoffmann`: the normal displacement ``y``).
 """
@@ -241,7 +245,8 @@ def _fe_transient(model, tasks, conditions):
         kw["safety"] = float(conditions["time_step"])
     integration = IntegrationOptions(**kw)
     ds = simulate(model, condition, FrictionInput(law=law, mu=mu, seed=int(conditions.get("seed", 0))),
-                  schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"]),
+                  schedule=RunSchedule(duration=tr["duration"], sample_rate=tr["sample_rate"],
+                                       **({"settle_time": tr["settle_time"]} if "settle_time" in tr else {})),
                   integration=integration, output=OutputOptions(progress=False))
     solver = {"solver_path": ds.attrs.get("solver_path", "full"),
               "solver_choice_reason": ds.attrs.get("solver_choice_reason", ""),

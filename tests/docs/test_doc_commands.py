@@ -104,8 +104,8 @@ DECISIONS: dict[str, Decision] = {
         "pip install needs the network (CI installs before the tests); the pipeline command after it is "
         "docs/pipeline.md's, run by the slow test"),
     "fivid study configs/studies/weak_strong.yaml -o out/weak_strong": slow(
-        "the full seed-001 study is 28 points, 15 min on 2 workers (docs/studies.md); the slow test runs its "
-        "--quick variant (same config and code, fewer points; 4 min on a loaded 2-core machine)",
+        "the full seed-001 study is 22 points, 9.5 min on 2 workers (docs/studies.md); the slow test runs its "
+        "--quick variant (same config and code, 3 points; 78 s on a loaded 2-core machine)",
         run="fivid study configs/studies/weak_strong.yaml -o out/weak_strong --quick"),
     "fivid study configs/studies/ring_mu_sweep.yaml -o out/ring": slow(
         "the full seed-002 study is 25 min on 2 workers (docs/studies.md); the slow test runs its --quick "

@@ -19,7 +19,7 @@ MODELS = Path(__file__).resolve().parents[2] / "configs" / "models"
 def test_quick_replaces_a_sweep_axis_whole():
     """weak_strong's quick sweep gives normal_load as values where the full study gives start/stop/num."""
     full, quick = load_study(STUDIES / "weak_strong.yaml"), load_study(STUDIES / "weak_strong.yaml", quick=True)
-    assert full.axes["normal_load"].size == 7 and np.isclose(full.axes["normal_load"][[0, -1]], [3e-3, 300]).all()
+    assert full.axes["normal_load"].size == 11 and np.isclose(full.axes["normal_load"][[0, -1]], [3e-3, 300]).all()
     assert quick.axes["normal_load"].tolist() == [3e-3, 1.0, 300.0]
     ring = load_study(STUDIES / "ring_mu_sweep.yaml")
     assert ring.cea is not None and "normal_load" not in ring.cea  # pressed by its loads: no clamp load needed
@@ -83,8 +83,18 @@ def test_weak_strong_study_quick(tmp_path, capsys):
     assert t["criterion"].startswith("response")
     assert "transition_load_modal" in s and s["coupling_agreement"]["n_points"] == 3
     assert all(np.isfinite(p["gain_modes_db"]) and np.isfinite(p["gain_rest_db"]) for p in pts)
+    assert all(np.isfinite(p["transfer_modes_db"]) and np.isfinite(p["transfer_rest_db"]) for p in pts)
+    # settling: the slowest reference mode in the PSD band is the lowest (Rayleigh's rate grows with frequency);
+    # 40 dB of its decay at the rate reported
+    surf = s["surfaces"][repr(1.6e-6)]  # from the synthetic profile through the spectral moments
+    assert "SYNTHETIC" in surf["source"] and "McCool" in surf["source"] and surf["sigma"] > 0
+    st = s["settle"]
+    assert st["mode_frequency"] == min(ref["uncoupled"] + ref["coupled"]) and st["level_db"] == 40
+    assert st["time"] == pytest.approx(np.log(100.0) / st["decay_rate"], rel=1e-9)
     checks = s["seed_checks"]
-    assert checks["cea_stable_at_mu0"]["n_points"] == 3
+    assert checks["cea_stable_at_mu0"]["n_points"] == 3 and checks["cea_stable_at_mu0"]["stable"] is True
+    # stable by CEA and Coulomb rings down: no point is called mode coupling (the law's build-up is forcing)
+    assert all(p["regime"] != "mode_coupling" and p["coulomb_decay_db"] > 0 for p in pts)
     assert checks["amplitude_linear_in_velocity"]["significant"] is False
     assert checks["peaks_follow_load"]["moves_from_uncoupled_to_coupled"] is True
 

@@ -81,3 +81,34 @@ def test_study_surfaces_come_from_the_synthetic_profiles():
         assert s["sigma"] == pytest.approx(np.sqrt(1 - 0.8968 / 3) * np.sqrt(np.pi / 2) * ra, rel=0.1)
         assert s["asperity_density"] == pytest.approx(1 / (np.pi * np.sqrt(3) * xi**2), rel=0.1)
         assert "SYNTHETIC" in s["source"]
+
+
+def test_settle_time_is_the_slowest_modes_decay_to_the_level():
+    """Classic Rayleigh: a mode decays at alpha/2 + beta omega^2/2 (exact for the root's real part), so the lowest
+    mode is the slowest and 40 dB take ln(100)/rate; the band-limited scheme's rate below the cut-off is the same
+    times 1/(1 + (f/fc)^2) in its beta part, to first order in the damping (here 1e-3 relative)."""
+    from fivid.study.kinds.weak_strong import settle_time
+
+    alpha, beta = 50.4, 3.14e-7
+    out = settle_time([2301.0, 838.0, 4796.0], alpha, beta, float("inf"), 40.0)
+    rate = alpha / 2 + beta * (2 * np.pi * 838.0) ** 2 / 2
+    assert out["mode_frequency"] == 838.0
+    assert out["decay_rate"] == pytest.approx(rate, rel=1e-12)
+    assert out["time"] == pytest.approx(np.log(100.0) / rate, rel=1e-12)
+    limited = settle_time([838.0], alpha, beta, 60e3, 20.0)
+    rate_bl = alpha / 2 + beta * (2 * np.pi * 838.0) ** 2 / 2 / (1 + (838.0 / 60e3) ** 2)
+    assert limited["decay_rate"] == pytest.approx(rate_bl, rel=1e-3)
+    assert limited["time"] == pytest.approx(np.log(10.0) / rate_bl, rel=1e-3)
+    with pytest.raises(ValueError, match="never settles"):
+        settle_time([838.0], 0.0, 0.0, float("inf"), 40.0)
+
+
+@pytest.mark.parametrize("regime, growth, decay, expected", [
+    ("mode_coupling", -29.6, 12.6, "stable"),         # stable CEA, Coulomb rings down: forced build-up
+    ("mode_coupling", 5.0, 12.6, "mode_coupling"),    # an unstable CEA: the growth may be the instability
+    ("mode_coupling", -29.6, -3.0, "mode_coupling"),  # Coulomb alone grows: not the law's forcing
+    ("stick_slip", -29.6, 12.6, "stick_slip"), ("stable", -29.6, 12.6, "stable")])
+def test_forced_regime_reads_a_build_up_under_a_stable_cea_as_stable(regime, growth, decay, expected):
+    from fivid.study.kinds.weak_strong import forced_regime
+
+    assert forced_regime(regime, growth, decay) == expected

@@ -27,9 +27,24 @@ The GW surfaces of the ``roughness_ra`` levels come from profiles through the sp
 a Gaussian profile synthesised to the level's Ra (SYNTHETIC, :func:`fivid.surface.gaussian_random_profile`,
 the section's correlation length and seed).
 
+**Settling** (``settle_level``, 40 dB by default): the clamp's displacement ramp rings the beams' modes, and a
+light load's friction cannot drive anything near that ring-down. Each transient's schedule waits
+:func:`settle_time` between the preload ramp and the base ramp (:class:`fivid.solver.RunSchedule`'s
+``settle_time``): the time the slowest reference mode inside the PSD band (the exact decay rate ``-Re(s)`` of
+its Rayleigh damping, :func:`fivid.fe.damping.modal_root`) needs to decay by ``settle_level``; the analysed
+record (the second half of the steady part) then starts that long plus the base ramp and half the record after
+the clamp stopped. The summary's ``settle`` gives the time, the mode and its rate.
+
 What the perturbation adds (``coulomb_reference``): per point the PSD with the law and with Coulomb mu0, split
 into the band of the reference modes (within ``band_width`` of either set) and the rest:
-``gain_modes_db``, ``gain_rest_db``.
+``gain_modes_db``, ``gain_rest_db``; the perturbation's own response (law minus Coulomb on the same start-up)
+in each band, ``power_*_perturbation``, and per unit of its friction force (``A N``, the law's amplitude at
+the point's velocity and roughness times the load), ``transfer_modes_db``, ``transfer_rest_db`` [dB re
+1 (m s-2)^2 N-2]: what the contact passes from the friction force to the sensor, load by load.
+
+``regime``: the envelope analysis's label (kept as ``regime_transient``) unless :func:`forced_regime` reads its
+"mode_coupling" as the forced response building up from the settled, quiet start (CEA at mu0 stable, the
+Coulomb record decaying).
 """
 
 from __future__ import annotations
@@ -42,6 +57,7 @@ from pydantic import Field
 from fivid.config_layer import ConfigModel, Number, Quantity
 from fivid.errors import ConfigError
 from fivid.fe.cea import complex_eigenvalue_analysis
+from fivid.fe.damping import modal_root
 from fivid.friction import load_law
 from fivid.report.html import figure_data_uri, new_figure, table
 from fivid.signal.peaks import near_frequencies, strongest_peaks
@@ -56,7 +72,8 @@ from fivid.surface.contact_law import gw_parameters
 from fivid.surface.rough_pair import RQ_PER_RA
 
 __all__ = ["WeakStrong", "WeakStrongSettings", "KIND", "transitions", "study_surfaces", "RESPONSE_KEYS", "agreement",
-           "seed_checks", "peak_figure", "dumps_checks", "DEFAULTS"]
+           "seed_checks", "peak_figure", "dumps_checks", "DEFAULTS", "settle_time",
+           "forced_regime"]
 
 #: per-point results of the response criterion and the band decomposition copied into summary.json
 RESPONSE_KEYS = (("coupling", "coupling"), ("coupling_response", "coupling_response"),
@@ -65,12 +82,14 @@ RESPONSE_KEYS = (("coupling", "coupling"), ("coupling_response", "coupling_respo
                  ("power_rest", "power_rest"), ("power_rest_coulomb", "power_rest_coulomb"),
                  ("power_modes", "power_modes"), ("power_modes_coulomb", "power_modes_coulomb"),
                  ("power_modes_perturbation", "power_modes_perturbation"),
-                 ("power_rest_perturbation", "power_rest_perturbation"), ("coulomb_decay_db", "coulomb_decay_db"),
+                 ("power_rest_perturbation", "power_rest_perturbation"), ("transfer_modes_db", "transfer_modes_db"),
+                 ("transfer_rest_db", "transfer_rest_db"), ("coulomb_decay_db", "coulomb_decay_db"),
+                 ("regime_transient", "regime_transient"),
                  ("cea_growth_mu0", "cea_growth_mu0"))
 #: the section's defaults (SI)
 DEFAULTS = {"correlation_length": 10e-6, "profile_length": 4e-3, "profile_step": 0.5e-6, "profile_seed": 1,
             "n_peaks": 5, "prominence_db": 10.0, "reference_modes": 12, "band_width": 0.05, "twin": None,
-            "cea_at_mu0": True}
+            "cea_at_mu0": True, "settle_level": 40.0}
 
 
 class WeakStrongSettings(ConfigModel):
@@ -89,6 +108,9 @@ class WeakStrongSettings(ConfigModel):
     twin: str | None = Field(None, description="folder of the twin's rig CSVs (relative to the study file) for "
                                                "seed 000's checks: amplitude linear in V, Coulomb's broadband level")
     cea_at_mu0: bool | None = Field(None, description="a CEA at the law's mu0 at every point (default true)")
+    settle_level: Annotated[Number, Field(gt=0)] = Field(
+        None, description="decay [dB] of the slowest reference mode in the PSD band before the base ramp starts "
+                          "(default 40): sets each transient's settle_time")
 
 
 class WeakStrong(FeSweep):
@@ -130,11 +152,22 @@ class WeakStrong(FeSweep):
                               surface=None if ra is None else surfaces[ra])
         f0, f1 = reference_frequencies(model, cfg["reference_modes"], float(np.max(loads)))
         out["reference_frequencies"] = {"uncoupled": f0.tolist(), "coupled": f1.tolist()}
+        band = (study.points.get("psd") or {}).get("band", (0.0, np.inf))
+        inside = [f for f in np.concatenate([f0, f1]) if band[0] <= f <= band[1]]
+        out["settle"] = settle_time(inside, model.rayleigh_alpha, model.rayleigh_beta, model.damping_cutoff,
+                                    cfg["settle_level"])
         return out
 
     def evaluate(self, system: dict, tasks: dict, conditions: dict):
         """:func:`fivid.study.tasks.fe_point` and the response criterion on its PSD (module docstring)."""
+        if "settle" in system and "transient" in tasks:
+            tasks = {**tasks, "transient": {**tasks["transient"], "settle_time": system["settle"]["time"]}}
         ds = fe_point(system, tasks, conditions)
+        if "settle" in system and "transient" in tasks:
+            st = system["settle"]
+            ds["settle_time"] = ((), st["time"], {"units": "s", "long_name": "wait between preload and base ramp",
+                                                  "level_db": st["level_db"], "mode_frequency": st["mode_frequency"],
+                                                  "decay_rate": st["decay_rate"], "rule": st["rule"]})
         ref = system.get("reference_frequencies")
         if ref is None or "psd" not in ds:
             return ds
@@ -178,6 +211,13 @@ class WeakStrong(FeSweep):
         if cfg.get("cea_at_mu0", True) and "transient" in tasks and "law" in tasks["transient"]:
             ds["cea_growth_mu0"] = ((), _cea_growth_at_mu0(system, tasks, conditions), {
                 "units": "s-1", "long_name": "largest CEA real part at the law's mu0 and the point's load"})
+        if "regime" in ds and "cea_growth_mu0" in ds and "coulomb_decay_db" in ds:
+            ds["regime_transient"] = ds["regime"].copy()
+            ds["regime_transient"].attrs["long_name"] = "regime of the law's record by its envelope alone"
+            ds["regime"] = ((), np.array(forced_regime(str(ds["regime"].values), float(ds["cea_growth_mu0"]),
+                                                       float(ds["coulomb_decay_db"])), dtype=object),
+                            {**ds["regime"].attrs, "rule": "forced_regime: a mode_coupling envelope is the forced "
+                             "response building up when the CEA at mu0 is stable and the Coulomb record decays"})
         if "psd_coulomb" in ds:
             q, qc = ds["psd"].values, ds["psd_coulomb"].values
             for key, sel, what in (("gain_modes_db", band, "the reference modes' band"),
@@ -185,6 +225,13 @@ class WeakStrong(FeSweep):
                 num, den = q[sel].sum(), qc[sel].sum()
                 ds[key] = ((), 10 * np.log10(num / den) if num > 0 and den > 0 else np.nan,
                            {"units": "dB", "long_name": f"law minus Coulomb mu0, power in {what}"})
+        if "power_modes_perturbation" in ds and conditions.get("normal_load"):
+            force = _perturbation_force(tasks, conditions)
+            for part in ("modes", "rest"):
+                q = float(ds[f"power_{part}_perturbation"])
+                ds[f"transfer_{part}_db"] = ((), 10 * np.log10(q / force**2) if q > 0 and force > 0 else np.nan, {
+                    "units": "dB re 1 (m s-2)^2 N-2", "long_name": f"perturbation's response power in the {part} band "
+                    "per unit friction-force power (A N)^2", "force_rms": force})
         return ds
 
     def report(self, page, ds, summary: dict) -> None:
@@ -197,10 +244,18 @@ class WeakStrong(FeSweep):
                         "peak frequencies against load")
             rows = [[p.get("normal_load"), p.get("roughness_ra"), p.get("coupling"), p.get("coupling_response"),
                      p.get("coupling_modal"), p.get("narrowband_fraction"), p.get("gain_modes_db"),
-                     p.get("gain_rest_db")] for p in summary["points"] if p.get("status") == "done"]
+                     p.get("gain_rest_db"), p.get("transfer_modes_db"), p.get("transfer_rest_db")]
+                    for p in summary["points"] if p.get("status") == "done"]
             page.raw(table(["normal_load [N]", "roughness_ra [m]", "coupling (response)", "coupling_response",
                             "coupling_modal (kappa)", "narrowband_fraction", "gain in modes' band [dB]",
-                            "gain elsewhere [dB]"], rows))
+                            "gain elsewhere [dB]", "perturbation transfer, modes' band [dB re 1 (m s-2)^2 N-2]",
+                            "perturbation transfer elsewhere [dB]"], rows))
+            st = summary.get("settle")
+            if st:
+                page.paragraph(f"Every transient waited {st['time']:.3g} s between the preload ramp and the base "
+                               f"ramp: the {st.get('mode_frequency', float('nan')):.0f} Hz reference mode, the "
+                               f"slowest in the PSD band ({st.get('decay_rate', float('nan')):.3g} s-1), decays by "
+                               f"{st.get('level_db', float('nan')):g} dB in that time.")
             a = summary.get("coupling_agreement") or {}
             if a:
                 page.paragraph(f"Response and modal labels agree at {a['n_agree']} of {a['n_points']} points.")
@@ -210,7 +265,8 @@ class WeakStrong(FeSweep):
 
     def summarise(self, study, ds, points: list[dict]) -> dict:
         """The transition loads (response and modal), the reference sets, each point's ``peak_frequencies``,
-        where the response and modal labels agree, and the response's power law (``fits.rms``)."""
+        where the response and modal labels agree, the GW ``surfaces`` (per roughness level, with their
+        ``source``), the ``settle`` time and the response's power law (``fits.rms``)."""
         out = super().summarise(study, ds, points)
         if "peak_frequency" in ds:
             pk = ds["peak_frequency"].transpose("point", "peak").values
@@ -221,15 +277,77 @@ class WeakStrong(FeSweep):
             ref = {k: ds[f"reference_{k}"] for k in ("uncoupled", "coupled")}
             out["reference_frequencies"] = {k: [float(x) for x in (v.isel(point=0) if "point" in v.dims else v).values]
                                             for k, v in ref.items()}
+        if "settle_time" in ds:
+            st = ds["settle_time"]
+            st = st.isel(point=0) if "point" in st.dims else st
+            out["settle"] = {"time": float(st), **{k: st.attrs[k] for k in ("level_db", "mode_frequency",
+                                                                              "decay_rate", "rule") if k in st.attrs},
+                             "units": {"time": "s", "mode_frequency": "Hz", "decay_rate": "s-1", "level_db": "dB"}}
         out.update(transitions(points))
         modal = transitions(points, key="coupling_modal")
         if modal:
             out["transition_load_modal"] = modal["transition_load"]
         out["coupling_agreement"] = agreement(points)
         cfg = {**DEFAULTS, **(study.points.get("weak_strong") or {})}
+        # the GW surface each roughness level's points ran with, and where it came from (a few ms to redo)
+        out["surfaces"] = study_surfaces(cfg, study.axes.get("roughness_ra"), study.source)  # SI
         cfg["band"] = (study.points.get("psd") or {}).get("band", (100.0, 20e3))
         out["seed_checks"] = seed_checks(points, cfg, out.get("reference_frequencies"), study.source)
         return out
+
+
+def settle_time(frequencies, alpha: float, beta: float, cutoff: float, level_db: float) -> dict:
+    """How long the slowest of ``frequencies`` [Hz] takes to decay by ``level_db`` [dB] under Rayleigh damping.
+
+    The decay rate of a mode is ``-Re(s)`` of its exact root (:func:`fivid.fe.damping.modal_root`: classic or
+    band-limited Rayleigh, ``alpha`` [s-1], ``beta`` [s], ``cutoff`` [Hz]; to first order ``alpha/2 +
+    beta omega^2/2``, the lowest mode slowest); the amplitude falls by ``level_db`` in
+    ``ln(10) level_db / 20 / rate``.
+
+    Returns ``{"time" [s], "level_db", "mode_frequency" [Hz], "decay_rate" [s-1], "rule"}``.
+
+    Examples
+    --------
+    >>> round(settle_time([1000.0], 50.0, 0.0, float("inf"), 40.0)["time"], 4)   # rate alpha/2 = 25 s-1
+    0.1842
+    """
+    f = np.asarray(frequencies, dtype=float)
+    if f.size == 0:
+        raise ConfigError("settle_time needs at least one reference mode inside the PSD band (points.psd.band)",
+                          key="points.psd.band")
+    rates = -np.real(modal_root(f, float(alpha), float(beta), float(cutoff)))
+    i = int(np.argmin(rates))
+    if not rates[i] > 0:
+        raise ConfigError(f"the mode at {f[i]:.6g} Hz has no damping (alpha {alpha!r}, beta {beta!r}): it never "
+                          "settles; give the model damping (model config 'damping')", key="damping")
+    return {"time": float(np.log(10.0) * level_db / 20.0 / rates[i]), "level_db": float(level_db),
+            "mode_frequency": float(f[i]), "decay_rate": float(rates[i]),
+            "rule": "the slowest reference mode in the PSD band decays by level_db (Rayleigh damping's exact rate)"
+                    " between the preload ramp and the base ramp (RunSchedule.settle_time)"}
+
+
+def forced_regime(regime: str, cea_growth: float, coulomb_decay_db: float) -> str:
+    """The regime of a point whose friction law forces the response: a "mode_coupling" label of the law's record
+    (its envelope rose and saturated) is the random forcing's response building up from the quiet, settled
+    start when the CEA at mu0 is stable (``cea_growth`` [s-1] < 0) and the same point with Coulomb mu0 alone
+    decays (``coulomb_decay_db`` > 0): then "stable"; otherwise ``regime`` unchanged.
+
+    Examples
+    --------
+    >>> forced_regime("mode_coupling", -29.6, 12.6), forced_regime("mode_coupling", 5.0, 12.6)
+    ('stable', 'mode_coupling')
+    """
+    if regime == "mode_coupling" and cea_growth < 0 and coulomb_decay_db > 0:
+        return "stable"
+    return regime
+
+
+def _perturbation_force(tasks, conditions) -> float:
+    """RMS of the perturbation's friction force [N]: the law's amplitude at the point's velocity and roughness
+    times the normal load (``injection: uniform``: every sliding node's mu_p(t) is the same)."""
+    law = load_law(tasks["transient"]["law"])
+    a = law.amplitude(conditions.get("sliding_velocity"), conditions.get("roughness_ra"), conditions["normal_load"])
+    return float(a) * float(conditions["normal_load"])
 
 
 def _law_band_top(tasks, guard: float) -> float:
@@ -363,7 +481,7 @@ def peak_figure(summary: dict) -> str:
     if t.get("value"):
         ax.axvline(t["value"], color="k", lw=0.8, ls=":", label=f"transition {t['value']:.3g} N")
     ax.set_xscale("log")
-    ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda x, _: f"{x:g}"))  # 0.01, not 0.0
     ax.set_ylim(0, top / 1e3)
     ax.set_xlabel("normal load [N]")
     ax.set_ylabel("frequency [kHz]")
