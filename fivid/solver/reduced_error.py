@@ -279,7 +279,10 @@ def band_error_estimate(rs, band, *, alpha: float, beta: float, damping_cutoff: 
                 decay[r] = decay_dt[r] = -exact.real / (2.0 * math.pi)
                 if time_step is not None:
                     step = discrete_root(f[r], float(alpha), float(beta), damping_cutoff, float(time_step))
-                    shift_dt[r] = step.imag / exact.imag - 1.0
+                    # relative to the damped frequency; an overdamped mode (no imaginary part: beta*omega/2 >= 1,
+                    # e.g. a stiff mode under stiffness damping) has none, so its shift is taken on the undamped one
+                    ref = exact.imag if exact.imag > 0.0 else 2.0 * math.pi * f[r]
+                    shift_dt[r] = (step.imag - exact.imag) / ref
                     decay_dt[r] = -step.real / (2.0 * math.pi)
 
             def lsd(shift, with_step):
