@@ -34,12 +34,12 @@ def _decimate(x: np.ndarray, q: int) -> np.ndarray:
     """``x`` (time along axis 0) low-passed and decimated by ``q``: ``scipy.signal.decimate(x, q, ftype="fir",
     zero_phase=True)`` (its ``resample_poly``: the centred convolution with the filter, zero outside the record,
     sampled every ``q``), written with numpy -- importing scipy.signal costs a third of a second per
-    ``fivid simulate``; tests/solver/test_solver_output.py checks it against scipy's."""
+    ``fivid simulate``; tests/solver/test_solver_decimation.py checks it against scipy's."""
     if q == 1:
         return x
     n_out = x.shape[0] // q
     if x.shape[0] <= 20 * q * 3 + 3:  # too short for the FIR's padding: block means (boxcar)
-        return x[:n_out * q].reshape(n_out, q, *x.shape[1:]).mean(axis=1)
+        return _block_mean(x, q)
     h = _decimation_filter(q)
     flat = x.reshape(x.shape[0], -1)
     y = np.empty((n_out, flat.shape[1]))
