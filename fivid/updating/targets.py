@@ -9,6 +9,7 @@ Layout (quantities with units; relative file names are relative to the targets f
       - {frequency: 1503 Hz, tolerance: 0.5 %}
       - {frequency: 2410 Hz, tolerance: 5 Hz, shape: {file: MODES.nc, mode: 2, sensors: [acc_a, acc_b]}}
       - {frequency: 86 Hz, tolerance: 1 Hz, normal_load: 40 N}     # damper models: FRF peak at that load
+      - {frequency: 10.5 kHz, tolerance: 2 %, mode: 6, interface: rigid}   # with the contact's springs rigid
     count_below: [{frequency: 5 kHz, count: 6}]    # optional: how many modes lie below a frequency
     critical_mu:         # optional (FE models with a contact): CEA critical friction coefficient of a mode pair
       - {value: 0.15, tolerance: 0.02, mode: 6, mu: [0, 1, 21]}
@@ -17,6 +18,12 @@ Layout (quantities with units; relative file names are relative to the targets f
     contact: false       # optional: couple the bodies at the contact (with load, or the model's pressure loads)
     n_modes: 12          # optional: modes computed (default: 2 x the targets, at least 10)
     mass: consistent     # optional: consistent or lumped
+
+``interface: rigid`` (FE models with ``contact``): the target is the mode's frequency with the contact's normal
+springs made rigid (:func:`fivid.fe.modal.modal_analysis` with ``interface_scale`` ``RIGID_INTERFACE_SCALE``: the
+frequency's deficit from the rigid limit falls as 1 / scale), beside the others' at the model's own interface
+stiffness: a frequency measured or computed with a rigid counterpart (seed 002's transient, whose inner disc is
+rigid, against its CEA's deformable one) is what identifies the interface stiffness.
 
 Pairing: a mode with ``shape`` is paired with the model mode of highest MAC between its measured shape
 (``mode`` of the MODES.nc written by ``fivid ema``, its measured DOFs in file order) and the model's shape at
@@ -47,7 +54,8 @@ __all__ = ["ParameterSpec", "ModeTarget", "CountTarget", "CriticalMuTarget", "Ta
 _TOP = ("parameters", "modes", "count_below", "critical_mu", "prestress", "load", "contact", "n_modes", "mass")
 _CRIT = ("value", "tolerance", "mode", "mu", "name")
 _PARAM = ("path", "bounds")
-_MODE = ("frequency", "tolerance", "shape", "mode", "normal_load", "name")
+_MODE = ("frequency", "tolerance", "shape", "mode", "normal_load", "name", "interface")
+_INTERFACES = ("model", "rigid")
 _SHAPE = ("file", "mode", "sensors")
 _PERCENT = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*%\s*")
 _VALUE = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*")
@@ -94,6 +102,8 @@ class ModeTarget:
         Model sensor names matching ``shape``.
     normal_load : float or None
         [N]; damper models: the target is the FRF peak at this normal load.
+    interface : {"model", "rigid"}
+        The contact's normal springs as modelled, or rigid (module docstring).
     """
 
     frequency: float
@@ -104,6 +114,7 @@ class ModeTarget:
     shape: np.ndarray | None = None
     sensors: tuple = ()
     normal_load: float | None = None
+    interface: str = "model"
 
 
 @dataclass(frozen=True)
@@ -248,7 +259,10 @@ def load_targets(path) -> Targets:
             raise src.error(f"{key}.mode", f"expected a model mode number >= 1, found {model_mode!r}")
         shape, sensors = (None, ()) if "shape" not in m else _shape(src, m["shape"], f"{key}.shape", base)
         load = None if "normal_load" not in m else _quantity(src, m["normal_load"], f"{key}.normal_load", "N")
-        modes.append(ModeTarget(f, tol, key, str(m.get("name", key)), model_mode, shape, sensors, load))
+        interface = m.get("interface", "model")
+        if interface not in _INTERFACES:
+            raise src.error(f"{key}.interface", f"expected one of {', '.join(_INTERFACES)}, found {interface!r}")
+        modes.append(ModeTarget(f, tol, key, str(m.get("name", key)), model_mode, shape, sensors, load, interface))
     counts = []
     cb = data.get("count_below", [])
     for i, c in enumerate(_list(src, cb if isinstance(cb, list) else [cb], "count_below")):
@@ -273,8 +287,13 @@ def load_targets(path) -> Targets:
     mass = data.get("mass", "consistent")
     if mass not in ("consistent", "lumped"):
         raise src.error("mass", f"expected 'consistent' or 'lumped', found {mass!r}")
-    return Targets(tuple(params), tuple(modes), tuple(counts), tuple(crits), prestress, load,
-                   bool(contact or load is not None or crits), n_modes, mass, src)
+    contact = bool(contact or load is not None or crits)
+    rigid = [t for t in modes if t.interface == "rigid"]
+    if rigid and not contact:
+        raise src.error(f"{rigid[0].key}.interface", "an 'interface: rigid' target makes the contact's springs "
+                                                     "rigid: it needs 'contact: true' (or a 'load')")
+    return Targets(tuple(params), tuple(modes), tuple(counts), tuple(crits), prestress, load, contact, n_modes,
+                   mass, src)
 
 
 def _critical_mu(src: ConfigSource, spec, key: str) -> CriticalMuTarget:

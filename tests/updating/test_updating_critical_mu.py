@@ -15,7 +15,9 @@ import xarray as xr
 from fivid.fe.cea import complex_eigenvalue_analysis
 from fivid.fe.build import load_model
 from fivid.updating import load_targets, update_model
-from fivid.updating.predict import pair_critical_mu
+from fivid.fe.config import read_config
+from fivid.fe.modal import modal_analysis
+from fivid.updating.predict import RIGID_INTERFACE_SCALE, FEModes, pair_critical_mu
 
 RING = """\
 # synthetic test model: a coarse polycarbonate ring squeezed on a rigid core turning at 10 rpm
@@ -117,3 +119,43 @@ def test_critical_mu_target_errors_name_the_key(tmp_path, entry, key, words):
     with pytest.raises(ConfigError) as err:
         load_targets(p)
     assert err.value.key == key and words in err.value.message and err.value.line == 6
+
+
+def test_rigid_interface_target_is_the_rigid_limit(tmp_path):
+    """``interface: rigid`` mode targets: the contact springs scaled by RIGID_INTERFACE_SCALE. Oracle: the springs
+    are in series with the ring, so a frequency's deficit from the rigid limit falls as 1 / scale once the
+    interface is far stiffer than the wall (3e13 N/m^3 and up here, ~25 x the wall's 10 E / D): the decade
+    differences shrink tenfold, to the next order (1 / scale^2: ~4 % at the first decade, hence 9-11)."""
+    path = _ring(tmp_path, "3e11 N/m^3", "ring.yaml")
+    model = load_model(str(path))
+    f = {s: modal_analysis(model, 12, include_contact=True, interface_scale=s)["frequency"].values
+         for s in (1.0, 1e2, 1e3, 1e4)}
+    d1, d2 = f[1e3] - f[1e2], f[1e4] - f[1e3]
+    sel = d1 > 1e-5 * f[1e2]  # modes that feel the interface (the others' differences are eigen-solver noise)
+    assert sel.sum() >= 4
+    assert np.all((d1[sel] / d2[sel] > 9.0) & (d1[sel] / d2[sel] < 11.0))
+    targets = tmp_path / "targets.yaml"
+    targets.write_text("parameters:\n  - {path: 'contacts[0].normal_stiffness', bounds: [1e11 N/m^3, 1e12 N/m^3]}\n"
+                       "modes:\n  - {frequency: 5 kHz, tolerance: 1 %, mode: 3}\n"
+                       "  - {frequency: 5 kHz, tolerance: 1 %, mode: 3, interface: rigid}\n"
+                       "contact: true\nn_modes: 12\n")
+    pred = FEModes(load_targets(targets))(read_config(path)[0])
+    elastic = np.flatnonzero(f[1.0] > 0)
+    assert RIGID_INTERFACE_SCALE == 1e4
+    assert pred.frequency[0] == pytest.approx(f[1.0][elastic[2]], rel=1e-9)
+    assert pred.frequency[1] == pytest.approx(f[1e4][np.flatnonzero(f[1e4] > 0)[2]], rel=1e-9)
+
+
+@pytest.mark.parametrize("extra, key, words", [
+    ("interface: stiff", "modes[0].interface", "model, rigid"),
+    ("interface: rigid", "modes[0].interface", "contact: true"),
+])
+def test_interface_target_errors_name_the_key(tmp_path, extra, key, words):
+    from fivid.errors import ConfigError
+
+    p = tmp_path / "targets.yaml"
+    p.write_text("parameters:\n  - {path: materials.pc.E, bounds: [2 GPa, 2.6 GPa]}\n"
+                 f"modes:\n  - {{frequency: 10 kHz, tolerance: 1 %, {extra}}}\n")
+    with pytest.raises(ConfigError) as err:
+        load_targets(p)
+    assert err.value.key == key and words in err.value.message and err.value.line == 4

@@ -23,8 +23,9 @@ radius and its counter-clockwise tangent, added after the model's own sensors (t
     transient -- partial stick during growth, its start from the preload's ringing -- need not pick the fastest).
 ``contact_state(map_time, bore_angle)``
     0 stick, 1 slip, 2 open at each bore node over the steady part (at most ``MAP_SAMPLES`` times): open where
-    the node's radial displacement exceeds the smallest one around the bore (the closed nodes' common radius: the
-    rigid core's) by more than ``OPEN_GAP``; stick where its tangential velocity is within ``STICK_SPEED`` of the
+    the node's radial displacement exceeds, by more than ``OPEN_GAP``, the smallest one around the bore (rigid
+    law: the closed nodes' common radius, the rigid core's) or the core's radial expansion (compliant law: the
+    closed nodes penetrate the core, :func:`fivid.fe.static.resolve_expansions`); stick where its tangential velocity is within ``STICK_SPEED`` of the
     core's surface speed; else slip.
 ``vibration_to_sliding_speed``
     The bore's tangential vibration velocity amplitude in the last quarter (median over the nodes) over the core's
@@ -42,6 +43,7 @@ import numpy as np
 from fivid.errors import ConfigError
 from fivid.fe.cea import Linearisation, cea_mode_shapes, complex_eigenvalue_analysis
 from fivid.fe.modal import modal_analysis
+from fivid.fe.static import resolve_expansions
 from fivid.report.html import figure_data_uri, table
 from fivid.study.kinds.sweep import FeSweep
 from fivid.study.tasks import TRANSIENT_KEYS, fe_point, refined_model
@@ -123,7 +125,11 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     vt = vel[sel][:, t_idx]
     speed = abs(c.rigid.angular_velocity * c.rigid.radius)
     state = np.where(np.abs(vt - c.rigid.angular_velocity * c.rigid.radius) <= STICK_SPEED * speed, 0, 1)
-    state = np.where(ur - ur.min(axis=1, keepdims=True) > OPEN_GAP, 2, state).astype(np.int8)
+    if c.law is not None and c.law.is_penalty:  # compliant: closed while inside the expanded core (d > 0)
+        gap = ur - resolve_expansions(model).contacts[0].rigid.expansion
+    else:  # rigid: the closed nodes share the cylinder's radius
+        gap = ur - ur.min(axis=1, keepdims=True)
+    state = np.where(gap > OPEN_GAP, 2, state).astype(np.int8)
     coords["map_time"] = ("map_time", t[sel] - t[0], {"units": "s", "long_name": "time since the steady part began"})
     data["contact_state"] = (("map_time", "bore_angle"), state, {
         "long_name": "contact state of the bore node", "flag_values": "0 1 2", "flag_meanings": "stick slip open"})
