@@ -31,7 +31,7 @@ from fivid.solver.options import (
     SimulationInputs,
 )
 from fivid.solver.reduced import ReducedSystem, integrate_reduced, reduced_system
-from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
+from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate, scored_contact_switches
 from fivid.solver.setup import KernelArrays, LoadingSequence, kernel_arrays
 from fivid.solver.stencil import BlockStencils, block_stencils
 from fivid.solver.timestep import stable_step, stable_step_of
@@ -129,6 +129,9 @@ class PreparedRun:
         if self.reduced is not None:
             ds.attrs.update(self.reduced.attrs())
         ds.attrs.update(choice_attrs(self.choice))
+        if self.reduced is not None and self.choice and self.choice.get("estimate"):
+            # the a-posteriori premise of the estimate's step-resolution bound (fivid.solver.reduced_error)
+            ds.attrs["reduced_error_contact_switches"] = scored_contact_switches(ds)
         check_energy_balance(ds)  # a run whose balance does not close is no result (fivid.solver.inputs)
         return ds
 

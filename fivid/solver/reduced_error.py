@@ -52,7 +52,9 @@ Its RMS over the band's bins is added to the modal part: ``lsd_db = modal_db + r
 of ``|e_modal| + |e_res|`` is at most the sum of the two RMS). Measured (docs/solver.md, default schedule of
 ``fivid simulate``): 1.7-3.1 x above the full-vs-reduced distance on the two rigid rigs. Where components of
 different events cancel -- a record that starts inside the start's transient of bouncing contact -- a relative
-displacement changes the bin by more, and this is no bound.
+displacement changes the bin by more, and this is no bound: :func:`scored_contact_switches` counts, after the
+run, the contact switches in the scored record (output attr ``reduced_error_contact_switches``; 0 where it was
+measured to hold).
 
 **Contact states.** The contact state changes the modes, so the estimate is taken for three linear states of the
 slaves closed after the preload (:func:`contact_states`; on the rigs the upper beam rests on one corner node, not
@@ -78,7 +80,7 @@ from fivid.fe.damping import modal_root
 from fivid.solver.integrate import velocity_filter_gain
 
 __all__ = ["DEFAULT_ERROR_BAND", "DEFAULT_BIN_WIDTH", "hann_kernel", "peak_psd", "peak_db_error", "discrete_root",
-           "step_resolution_db", "contact_states", "band_error_estimate"]
+           "step_resolution_db", "scored_contact_switches", "contact_states", "band_error_estimate"]
 
 #: band [Hz] of the estimate when no scoring band is given (that of docs/solver.md's full-vs-reduced checks)
 DEFAULT_ERROR_BAND = (200.0, 10000.0)
@@ -188,6 +190,20 @@ def step_resolution_db(bins, time_step: float) -> float:
     if not bins.size:
         return 0.0
     return float(np.sqrt(np.mean((20.0 * np.log10(1.0 + 2.0 * math.pi * bins * dt)) ** 2)))
+
+
+def scored_contact_switches(ds) -> int:
+    """Output samples of the RunDataset ``ds`` after its ``transient_end`` [s] at which the contact's state changes
+    (any of ``stick_fraction``, ``slip_fraction``, ``open_fraction``): the a-posteriori check of the step's
+    resolution bound, which holds while the scored record's components do not cancel (module docstring); a record
+    that switches contact holds many events' responses (0 without the fractions)."""
+    names = [k for k in ("stick_fraction", "slip_fraction", "open_fraction") if k in ds]
+    if not names:
+        return 0
+    t = ds["time"].values
+    keep = t >= float(ds.attrs.get("transient_end", 0.0))
+    x = np.column_stack([np.asarray(ds[k].values, dtype=float).reshape(t.size, -1) for k in names])[keep]
+    return int(np.count_nonzero(np.any(x[1:] != x[:-1], axis=1)))
 
 
 def contact_states(rs, active=None) -> dict:

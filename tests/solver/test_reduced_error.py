@@ -181,6 +181,22 @@ def test_band_estimate_is_the_modal_part_plus_the_step_resolution(coarse):
     assert band_error_estimate(rs, (200.0, 10e3), alpha=50.0, beta=3e-7, bin_width=200.0)["resolution_db"] == 0.0
 
 
+def test_scored_contact_switches_of_a_bouncing_start(coarse):
+    """The a-posteriori check counts the output samples after ``transient_end`` at which any contact-state fraction
+    changes: on the coarse rig with 0.1 ms ramps and no settling the record starts in the bouncing contact, so it
+    is the by-hand count (> 0), recorded in the reduced run's attrs; a record cut to its steady part's first sample
+    has none."""
+    from fivid.solver import simulate
+    from fivid.solver.reduced_error import scored_contact_switches
+
+    ds = simulate(coarse, **run_inputs(2e-3, reduced="reduced"))
+    after = ds.sel(time=slice(ds.attrs["transient_end"], None))
+    frac = np.column_stack([after[k].values for k in ("stick_fraction", "slip_fraction", "open_fraction")])
+    by_hand = sum(bool(np.any(frac[i] != frac[i - 1])) for i in range(1, len(frac)))
+    assert by_hand > 0 and ds.attrs["reduced_error_contact_switches"] == by_hand == scored_contact_switches(ds)
+    assert scored_contact_switches(after.isel(time=slice(0, 1))) == 0
+
+
 def _measured_distance(model, inputs):
     """``(automatic run, measured LSD [dB])``: the automatic path's run against the full one's acceleration PSD
     (200 Hz - 10 kHz, Welch Hann 256 / 50 %, the steady part)."""
@@ -218,6 +234,7 @@ def test_estimate_bounds_the_measured_full_vs_reduced_distance(model, mu, load, 
     print(f"{model} mu {mu} {load} N {velocity} m/s: estimate {est:.3g} dB ({red.attrs['reduced_error_estimate_states']}); "
           f"measured {measured:.3g} dB")
     assert red.attrs["solver_path"] == "reduced" and red.attrs["contact_gs_tolerance"] == 1e-12
+    assert red.attrs["reduced_error_contact_switches"] == 0  # the resolution bound's premise
     assert measured <= est <= 10.0 * measured
 
 
