@@ -253,6 +253,7 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
     mu : ndarray (n_slave,), optional
         Friction coefficient of each slave node (all pairs, in order); None or 0: frictionless.
     """
+    import scipy.sparse.linalg  # noqa: F401  (loaded before the BLAS limit below: threadpoolctl limits loaded libraries)
     from threadpoolctl import threadpool_limits
 
     geo = contact_geometry(model)
