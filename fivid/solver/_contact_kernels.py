@@ -527,7 +527,7 @@ def _gauss_seidel_sweep(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave
 @kernel
 def contact_solve(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
                   pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, max_iter, tol, cnode_slot, vold_c,
-                  margin, sleep):
+                  margin, sleep=False):
     """Forward-increment Lagrange multipliers (Carpenter, Taylor & Katona 1991) for all slave nodes.
 
     On entry ``u, v`` are the predicted ``u*``, ``v*``; on exit they are corrected so that every active slave
