@@ -31,7 +31,7 @@ from fivid.solver.options import (
     SimulationInputs,
 )
 from fivid.solver.reduced import ReducedSystem, integrate_reduced, reduced_system
-from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate
+from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate, scored_contact_switches
 from fivid.solver.setup import KernelArrays, LoadingSequence, kernel_arrays
 from fivid.solver.stencil import BlockStencils, block_stencils
 from fivid.solver.timestep import stable_step, stable_step_of
@@ -44,6 +44,12 @@ log = logging.getLogger("fivid")
 #: the reduced path's cut-off and mass-scaling target with ``reduced="auto"``/``"reduced"``, in units of the band
 #: top ``sample_rate / 2``: 18 x 25.6 kHz = 460.8 kHz (docs/solver.md, "Reduced-order path")
 AUTO_SCALING_FACTOR = 18.0
+
+#: the reduced path's contact Gauss-Seidel tolerance at most (fraction of the shortest master segment): its boundary
+#: inverse mass couples a node's x and y, so the solve iterates and stops with a residual of up to the tolerance,
+#: a white contact-force noise in the PSD's troughs; at 1e-12 instead of 1e-10 the coarse rig's full-vs-reduced
+#: distance halves (0.071 -> 0.038 dB, as at 1e-14) at no measured cost (docs/solver.md, "The error estimate")
+REDUCED_GS_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -123,6 +129,9 @@ class PreparedRun:
         if self.reduced is not None:
             ds.attrs.update(self.reduced.attrs())
         ds.attrs.update(choice_attrs(self.choice))
+        if self.reduced is not None and self.choice and self.choice.get("estimate"):
+            # the a-posteriori premise of the estimate's step-resolution bound (fivid.solver.reduced_error)
+            ds.attrs["reduced_error_contact_switches"] = scored_contact_switches(ds)
         check_energy_balance(ds)  # a run whose balance does not close is no result (fivid.solver.inputs)
         return ds
 
@@ -260,8 +269,11 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
     run_condition = OperatingCondition(v_signed, normal_load, roughness_ra)  # signed along the base motion
     fric = friction_table(model, ka.slave_pair, slave_x, friction, run_condition, total_time=n_int * t_int, dt=dt,
                           sample_rate=sample_rate)
+    gs_tolerance = float(integration.gs_tolerance)
+    if rs is not None:
+        gs_tolerance = min(gs_tolerance, REDUCED_GS_TOLERANCE)
     settings = IntegrationSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int,
-                                   int(integration.gs_max_iterations), float(integration.gs_tolerance))
+                                   int(integration.gs_max_iterations), gs_tolerance)
     inputs = SimulationInputs(replace(run_condition, sliding_velocity=abs(v_signed)), friction,
                               replace(schedule, duration=duration, sample_rate=sample_rate, settle_time=settle_time),
                               integration, replace(output, oversample=oversample))
@@ -370,8 +382,8 @@ def _choose_path(model, ka, integration: IntegrationOptions, *, sliding_distance
 
 def choice_attrs(choice) -> dict:
     """The output attrs recording which solver path ran and why (``solver_path``, ``solver_choice``,
-    ``solver_choice_reason``, ``reduced_error_estimate_db`` (NaN: not estimated), its contact state, band and
-    tolerance)."""
+    ``solver_choice_reason``, ``reduced_error_estimate_db`` (NaN: not estimated), its contact state, per-state
+    breakdown and step-resolution part ``reduced_error_resolution_db``, band and tolerance)."""
     if not choice:
         return {}
     est = choice.get("estimate")
@@ -380,8 +392,10 @@ def choice_attrs(choice) -> dict:
     if est:
         out["reduced_error_estimate_state"] = est["state"]
         out["reduced_error_estimate_states"] = "; ".join(
-            f"{k}: {v['lsd_db']:.3g} dB (truncation {v['truncation_db']:.3g}, mass scaling {v['mass_scaling_db']:.3g}, "
-            f"time step {v['time_step_db']:.3g}, {v['modes']} modes)" for k, v in est["states"].items())
+            f"{k}: {v['lsd_db']:.3g} dB (step resolution {v['resolution_db']:.3g}, modal {v['modal_db']:.3g}: truncation "
+            f"{v['truncation_db']:.3g}, mass scaling {v['mass_scaling_db']:.3g}, time step {v['time_step_db']:.3g}, "
+            f"{v['modes']} modes)" for k, v in est["states"].items())
+        out["reduced_error_resolution_db"] = float(est["resolution_db"])
     if "band" in choice:
         out["reduced_error_band"] = [float(b) for b in choice["band"]]
         out["reduced_error_band_units"] = "Hz"

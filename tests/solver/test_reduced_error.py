@@ -18,6 +18,7 @@ from fivid.solver.reduced_error import (
     hann_kernel,
     peak_db_error,
     peak_psd,
+    step_resolution_db,
 )
 from tests.helpers.reduced_setup import coarse, run_inputs  # noqa: F401  (coarse is a fixture)
 
@@ -142,38 +143,123 @@ def test_an_undamped_model_gets_a_finite_estimate_from_the_psd_resolution(coarse
     assert est["states"]["open"]["time_step_db"] == pytest.approx(by_hand, rel=1e-3)
 
 
+def test_reduced_path_solves_its_contact_tighter(coarse):
+    """The reduced path's coupled contact solve stops at ``REDUCED_GS_TOLERANCE`` (1e-12 of a segment) at most: its
+    residual is a white contact-force noise in the PSD's troughs (docs/solver.md: 0.071 -> 0.038 dB on the coarse
+    rig); a tighter request is kept, and the full path keeps the requested tolerance."""
+    from fivid.solver.driver import REDUCED_GS_TOLERANCE
+
+    def tolerance(**integration):
+        return prepare_run(coarse, **run_inputs(1e-3, **integration)).settings.gs_tolerance
+
+    assert tolerance(reduced="reduced") == REDUCED_GS_TOLERANCE == 1e-12
+    assert tolerance(reduced="reduced", gs_tolerance=1e-14) == 1e-14
+    assert tolerance(reduced=None) == 1e-10
+
+
+def test_step_resolution_against_its_closed_form():
+    """``step_resolution_db`` is the RMS over the bins of ``20 log10(1 + 2 pi f dt)``; to first order in ``omega dt``
+    it is ``(20 / ln 10) 2 pi dt sqrt(mean f^2)`` (the next term is ``omega dt / 2`` of it: here <= 1.7 %); and the
+    band estimate is the modal part plus it, in every contact state."""
+    bins, dt = 200.0 * np.arange(1, 51), 5.4e-7
+    first_order = 20.0 / math.log(10.0) * 2.0 * math.pi * dt * math.sqrt(np.mean(bins ** 2))
+    assert step_resolution_db(bins, dt) == pytest.approx(first_order, rel=2.0 * math.pi * 1e4 * dt / 2.0)
+    assert step_resolution_db(bins, dt) < first_order
+    with pytest.raises(ValueError, match="time_step"):
+        step_resolution_db(bins, 0.0)
+
+
+def test_band_estimate_is_the_modal_part_plus_the_step_resolution(coarse):
+    """``lsd_db = modal_db + resolution_db`` in every state (the Minkowski bound of the module docstring), the
+    resolution over the band's bins at the PSD's resolution, and none without a step."""
+    rs = prepare_run(coarse, **run_inputs(1e-3, reduced="reduced")).reduced
+    est = band_error_estimate(rs, (200.0, 10e3), alpha=50.0, beta=3e-7, time_step=4e-7, bin_width=200.0)
+    assert est["resolution_db"] == pytest.approx(step_resolution_db(200.0 * np.arange(1, 51), 4e-7), rel=1e-12)
+    for v in est["states"].values():
+        assert v["lsd_db"] == pytest.approx(v["modal_db"] + est["resolution_db"], rel=1e-12)
+        assert v["modal_db"] > 0.0
+    assert band_error_estimate(rs, (200.0, 10e3), alpha=50.0, beta=3e-7, bin_width=200.0)["resolution_db"] == 0.0
+
+
+def test_scored_contact_switches_of_a_bouncing_start(coarse):
+    """The a-posteriori check counts the output samples after ``transient_end`` at which any contact-state fraction
+    changes: on the coarse rig with 0.1 ms ramps and no settling the record starts in the bouncing contact, so it
+    is the by-hand count (> 0), recorded in the reduced run's attrs; a record cut to its steady part's first sample
+    has none."""
+    from fivid.solver import simulate
+    from fivid.solver.reduced_error import scored_contact_switches
+
+    ds = simulate(coarse, **run_inputs(2e-3, reduced="reduced"))
+    after = ds.sel(time=slice(ds.attrs["transient_end"], None))
+    frac = np.column_stack([after[k].values for k in ("stick_fraction", "slip_fraction", "open_fraction")])
+    by_hand = sum(bool(np.any(frac[i] != frac[i - 1])) for i in range(1, len(frac)))
+    assert by_hand > 0 and ds.attrs["reduced_error_contact_switches"] == by_hand == scored_contact_switches(ds)
+    assert scored_contact_switches(after.isel(time=slice(0, 1))) == 0
+
+
+def _measured_distance(model, inputs):
+    """``(automatic run, measured LSD [dB])``: the automatic path's run against the full one's acceleration PSD
+    (200 Hz - 10 kHz, Welch Hann 256 / 50 %, the steady part)."""
+    from fivid.signal.compare import band_distance, steady_psds
+    from fivid.solver import simulate
+
+    red = simulate(model, **inputs(reduced="auto"))
+    full = simulate(model, **inputs(reduced=None))
+    f, (p_f, p_r), _ = steady_psds([full, red], nperseg=256)
+    return red, band_distance(f, p_f, p_r, (200.0, 10e3))[0]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model, mu, load, velocity", [("triboair_coarse.yaml", 0.3, 5.0, 0.01),
+                                                       ("triboair.yaml", 0.3, 5.0, 0.01),
+                                                       ("triboair_coarse.yaml", 0.6, 20.0, 0.05)])
+def test_estimate_bounds_the_measured_full_vs_reduced_distance(model, mu, load, velocity):
+    """The 2 mm and the 0.5 mm rig (the default, configs/models/triboair.yaml) at mu 0.3, 5 N, 10 mm/s and the
+    2 mm rig at mu 0.6, 20 N, 50 mm/s, each with ``fivid simulate``'s schedule (0.1 s after its settling and
+    ramps, 51.2 kHz): the estimate against the measured log-spectral distance of the automatic (reduced) and the
+    full run's acceleration PSDs over 200 Hz - 10 kHz. Asserted: the estimate bounds it (the step's resolution
+    bound holds while no components cancel: module docstring) and stays informative (within 10 x), and the
+    reduced path is chosen at 0.5 dB. Measured (docs/solver.md): 0.13 / 0.038, 0.18 / 0.069, 0.13 / 0.042 dB."""
+    from fivid.fe import load_model
+    from fivid.solver import FrictionInput, IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule
+
+    def inputs(**integration):
+        return dict(condition=OperatingCondition(sliding_velocity=velocity, normal_load=load),
+                    friction=FrictionInput(mu=mu), schedule=RunSchedule(duration=0.1, sample_rate=51200.0),
+                    integration=IntegrationOptions(**integration), output=OutputOptions(progress=False))
+
+    red, measured = _measured_distance(load_model(Path(__file__).resolve().parents[2] / "configs/models" / model),
+                                       inputs)
+    est = float(red.attrs["reduced_error_estimate_db"])
+    print(f"{model} mu {mu} {load} N {velocity} m/s: estimate {est:.3g} dB ({red.attrs['reduced_error_estimate_states']}); "
+          f"measured {measured:.3g} dB")
+    assert red.attrs["solver_path"] == "reduced" and red.attrs["contact_gs_tolerance"] == 1e-12
+    assert red.attrs["reduced_error_contact_switches"] == 0  # the resolution bound's premise
+    assert measured <= est <= 10.0 * measured
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("model", ["triboair_coarse.yaml", "triboair.yaml", "triboair_rough.yaml"])
-def test_estimate_against_measured_full_vs_reduced_distance(model):
-    """Three models: the 2 mm and the 0.5 mm rig (rigid contact) and the 0.5 mm rig with a Greenwood-Williamson
-    rough contact. The estimate against the measured log-spectral distance of the reduced and the full run's
-    acceleration PSDs (Coulomb mu 0.3, 10 mm/s, 5 N, 30 ms of sliding, 200 Hz - 10 kHz, Welch Hann 256 / 50 %,
-    the steady part), and against the same reduced run with its contact solved to 1e-14 instead of 1e-10 of a
-    master segment (the Gauss-Seidel residual's share). What is asserted is what the method guarantees: the
-    automatic choice is right (estimate and measurement on the same side of the 0.5 dB tolerance; the rough
-    contact is refused up front, and its forced reduction is indeed off), and the estimate is a positive part of
-    the measured distance. The figures (docs/solver.md) show the estimate 11-106 x below the measurement on the
-    rigid rigs: the measured distance sits in the spectrum's troughs, 60-100 dB below the peaks, and in the start's
-    transient, which the modal estimate does not see."""
+def test_choice_right_when_the_record_starts_in_the_transient(model):
+    """Short ramps (0.2 ms preload, 0.1 ms base, no settling, 30 ms): the scored record starts 0.3 ms after the
+    start, with the contact opening and closing hundreds of times, where the step's resolution bound is no bound
+    (docs/solver.md: the fine rig measures 0.443 dB against 0.175). Asserted is what still holds: the automatic
+    choice is right (estimate and measurement on the same side of the 0.5 dB tolerance) on the 2 mm and the
+    0.5 mm rig; the Greenwood-Williamson rough contact is refused up front, and its forced reduction is indeed off."""
     from fivid.fe import load_model
     from fivid.signal.compare import band_distance, steady_psds
     from fivid.solver import simulate
 
-    root = Path(__file__).resolve().parents[2]
-    m = load_model(root / "configs/models" / model)
+    m = load_model(Path(__file__).resolve().parents[2] / "configs/models" / model)
     red = simulate(m, **run_inputs(0.03, reduced="auto"))
     rough = red.attrs["solver_path"] == "full"
     if rough:
         assert "compliant normal law" in red.attrs["solver_choice_reason"]
         red = simulate(m, **run_inputs(0.03, reduced="reduced"))
-    tight = simulate(m, **run_inputs(0.03, reduced="reduced", gs_tolerance=1e-14))
     full = simulate(m, **run_inputs(0.03, reduced=None))
-    f, (p_f, p_r, p_t), _ = steady_psds([full, red, tight], nperseg=256)
+    f, (p_f, p_r), _ = steady_psds([full, red], nperseg=256)
     measured = band_distance(f, p_f, p_r, (200.0, 10e3))[0]
-    measured_tight = band_distance(f, p_f, p_t, (200.0, 10e3))[0]
     est = float(red.attrs["reduced_error_estimate_db"])
-    print(f"{model}: estimate {est:.3g} dB ({red.attrs['reduced_error_estimate_states']}); measured {measured:.3g} dB, "
-          f"{measured_tight:.3g} dB with the contact solved to 1e-14; automatic path {'full' if rough else 'reduced'}")
+    print(f"{model}: estimate {est:.3g} dB; measured {measured:.3g} dB; automatic path {'full' if rough else 'reduced'}")
     assert red.attrs["solver_path"] == "reduced" and est > 0.0
     assert (est <= 0.5 and not rough) == (measured <= 0.5)
-    assert est <= measured
