@@ -76,7 +76,7 @@ class ReducedSystem:
         Largest relative (mass-norm) part of the interior's quasi-static response to a boundary acceleration
         (``K_II^-1 M_II Psi_I``) that the kept modes miss [-]: the error of leaving out the higher modes.
     kernel : dict
-        Arrays of :func:`fivid.solver._reduced_kernels.run_reduced_steps`.
+        Arrays of :func:`fivid.solver._reduced_kernels.run_modal_steps`.
     mass_scaling : MassScaling or None
         The selective mass scaling applied to ``M`` (:func:`scale_high_modes`).
     unscaled_mass : ndarray (n, n) or None
@@ -260,18 +260,9 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
     nf, ng = int(b["n_free"]), len(g_dofs)
     n = nf + ng
     Mr, Kb, M0 = b["M"], b["K"], b["M0"]
-    cidx = np.concatenate([np.arange(2 * nb), np.arange(nf, n)]).astype(np.int64)
-    minv_ff = np.linalg.inv(Mr[:nf, :nf])
-    minv_ff = 0.5 * (minv_ff + minv_ff.T)
     kernel = _contact_arrays(model, ka, nodes, masters)
-    kernel.update(
-        nb=nb, nf=nf, kc=np.ascontiguousarray(Kb[np.ix_(cidx, cidx)]), cidx=cidx,
-        kdiag=np.ascontiguousarray(np.diag(Kb)[2 * nb:nf]),
-        minv_ff=np.ascontiguousarray(minv_ff), b_fg=np.ascontiguousarray(minv_ff @ Mr[:nf, nf:]),
-        m_g=np.ascontiguousarray(Mr[nf:]), m=np.ascontiguousarray(Mr), grp_par=np.ascontiguousarray(g_par),
-        g_react=np.ascontiguousarray(g_react), wmat=np.ascontiguousarray(minv_ff[:2 * nb, :2 * nb]),
-        minv_c=np.zeros(2 * nb),
-    )
+    kernel.update(nb=nb, nf=nf, grp_par=np.ascontiguousarray(g_par), g_react=np.ascontiguousarray(g_react),
+                  minv_c=np.zeros(2 * nb), **modal_arrays(Mr, Kb, nf, nb))
     sc = b["scaling"]
     scaling = MassScaling(Mr[:nf, :nf], float(sc[0]), int(sc[1]), float(sc[2]), float(sc[3]))
     freq = b["mode_frequencies"]
@@ -281,6 +272,32 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
                          sliding_range=float(sliding_distance), kernel=kernel, mass_scaling=scaling,
                          unscaled_mass=M0, truncation_flexibility=b["flexibility"],
                          omega_top=float(b["omega_max"]), basis_key=key, basis_source=source, setup_seconds=seconds)
+
+
+def modal_arrays(M, K, nf, nb) -> dict:
+    """The arrays of :func:`fivid.solver._reduced_kernels.run_modal_steps`: the reduced system ``(M, K)`` (free
+    coordinates first, ``nf`` of them, the first ``2 nb`` the physical boundary dofs; then the groups) in the modal
+    coordinates of its free part, ``K_FF Phi = M_FF Phi Lambda``, ``Phi^T M_FF Phi = I``.
+
+    Returns ``lam`` (``Lambda``, [s-2]), ``phi`` (``Phi``: physical free coordinates = ``Phi eta``), ``phib`` (its
+    boundary rows), ``wmat = Phi_b Phi_b^T`` (the boundary block of ``M_FF^-1``, [kg-1]), ``kfg = Phi^T K_FG`` and
+    its transpose ``kgf``, ``kgg = K_GG``, ``bfg = Phi^T M_FG`` and its transpose ``bgf``, ``mgg = M_GG``. Dropping the off-diagonal round-off
+    of ``Phi^T K_FF Phi`` (relative to ``Lambda``'s top, about the eigensolver's ``1e-15``) is the only difference
+    from stepping the physical coordinates.
+    """
+    import scipy.linalg
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):  # 0.02 s on one thread; 0.1-0.4 s on two under load
+        _, phi = scipy.linalg.eigh(K[:nf, :nf], M[:nf, :nf]) if nf else (None, np.zeros((0, 0)))
+    # the Rayleigh quotients phi_i^T K phi_i, not the eigensolver's values: these carry its relative error
+    # eps lambda_max / lambda_i on the low modes (1.6e-10 on the coarse rig), the quotients only its second order
+    lam = np.einsum("ij,ij->j", phi, K[:nf, :nf] @ phi)
+    phib = np.ascontiguousarray(phi[:2 * nb])
+    c = np.ascontiguousarray
+    kfg, bfg = c(phi.T @ K[:nf, nf:]), c(phi.T @ M[:nf, nf:])
+    return dict(lam=c(lam), phi=c(phi), phib=phib, wmat=c(phib @ phib.T), kfg=kfg, kgf=c(kfg.T), kgg=c(K[nf:, nf:]),
+                bfg=bfg, bgf=c(bfg.T), mgg=c(M[nf:, nf:]))
 
 
 def _count_below(Kii, Mii, omega2):
@@ -512,19 +529,22 @@ def _contact_arrays(model, ka, nodes, masters) -> dict:
 
 def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None):
     """Run the reduced time loop of ``settings.n_intervals`` output intervals (see
-    :func:`fivid.solver.integrate.integrate`); returns :class:`fivid.solver.integrate.RawRecords` with the
-    final state expanded to the global dofs."""
+    :func:`fivid.solver.integrate.integrate`) in the modal coordinates of the free part
+    (:func:`fivid.solver._reduced_kernels.run_modal_steps`); returns :class:`fivid.solver.integrate.RawRecords`
+    with the final state expanded to the global dofs."""
     from fivid.solver import _kernels as K  # lazy: pulls numba
-    from fivid.solver._reduced_kernels import run_reduced_steps  # lazy: pulls numba
+    from fivid.solver._reduced_kernels import run_modal_steps  # lazy: pulls numba
 
     a = rs.kernel
     dt = settings.time_step
     n_sub = settings.steps_per_interval
     n_int = settings.n_intervals
     n, nb, nf = rs.size, a["nb"], a["nf"]
-    # initial velocity: the M-orthogonal projection of the model's onto the reduced basis
+    phi = a["phi"]
+    # initial velocity: the M-orthogonal projection of the model's onto the reduced basis, in modal coordinates
     v_full = model.initial_velocity()
-    qd = np.linalg.solve(rs.M, rs.T.T @ (_lumped(model) * v_full)) if np.any(v_full) else np.zeros(n)
+    qd_r = np.linalg.solve(rs.M, rs.T.T @ (_lumped(model) * v_full)) if np.any(v_full) else np.zeros(n)
+    qd = np.concatenate([phi.T @ (rs.M[:nf, :nf] @ qd_r[:nf]), qd_r[nf:]])
     for g in range(n - nf):
         p = a["grp_par"][g]
         qd[nf + g] = K.constrained_velocity(int(p[0]), p[1], p[2], p[3], -dt, dt)
@@ -533,7 +553,8 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
     a_filt = velocity_filter_gain(model.damping_cutoff, dt)
     vf = qd.copy()
     w = q + beta * qd
-    p_mom = rs.M @ qd
+    p_mom = np.concatenate([qd[:nf] + a["bfg"] @ qd[nf:], a["bfg"].T @ qd[:nf] + a["mgg"] @ qd[nf:]])  # M~ qd
+    qb, qdb = a["phib"] @ q[:nf], a["phib"] @ qd[:nf]
     ns = a["slave_node"].size
     n_pairs = a["master_ptr"].size - 1
     state = dict(geo=np.zeros((ns, N_GEO)), lam=np.zeros((ns, 2)), cstate=np.zeros(ns, dtype=np.int64),
@@ -541,38 +562,38 @@ def integrate_reduced(model, rs: ReducedSystem, fric, settings, *, progress=None
     rec = np.full((n_int, K.N_REC), np.nan)
     sens_v = np.full((n_int, a["sens_node"].size, 2), np.nan)
     contact = np.full((n_int, n_pairs, 5), np.nan)
-    sens_v0 = a["sens_dir"][:, 0] * qd[a["sens_node"]] + a["sens_dir"][:, 1] * qd[a["sens_node"] + nb]
+    sens_v0 = a["sens_dir"][:, 0] * qdb[a["sens_node"]] + a["sens_dir"][:, 1] * qdb[a["sens_node"] + nb]
     ke0 = float(0.5 * qd @ p_mom)
     acc = np.zeros(K.N_ACC)
     diag = np.zeros(2, dtype=np.int64)
     gs_tol = settings.gs_tolerance * shortest_master_segment(a["X"], nb, a["master_ptr"], a["master_nodes"],
                                                              a["slave_node"], a["slave_pair"])
     mu_tab = np.ascontiguousarray(fric.mu)
-    bufs = [np.zeros(n) for _ in range(4)]
-    scratch_c, cimp = np.zeros(a["cidx"].size), np.zeros(2 * nb)
+    bufs = [np.zeros(n) for _ in range(3)]
+    cimp, gimp = np.zeros(2 * nb), np.zeros(nf)
 
     def step(r0, nr):
-        status, _ = run_reduced_steps(
+        status, _ = run_modal_steps(
             r0 * n_sub, nr * n_sub, dt, float(model.rayleigh_alpha), beta, a_filt, n_sub, nb, nf,
-            a["kc"], a["cidx"], a["kdiag"], a["minv_ff"], a["b_fg"], a["m_g"], a["m"], a["grp_par"],
+            a["lam"], a["kfg"], a["kgf"], a["kgg"], np.ones(nf), a["bfg"], a["bgf"], a["mgg"], a["phib"], a["grp_par"],
             np.zeros((n - nf, 2)), a["g_react"],
             a["X"], a["slave_node"], a["slave_pair"], a["master_ptr"], a["master_nodes"], a["pair_sign"],
             a["pair_par"], a["law_tab"], a["s_area"], a["minv_c"], a["wmat"], state["seg"], state["geo"],
             state["lam"], state["cstate"], settings.gs_max_iterations, gs_tol, mu_tab, float(fric.rate),
             state["mu_now"], state["vold_c"], a["cnode_slot"], a["cnodes"], a["sens_node"], a["sens_dir"],
-            q, qd, w, vf, bufs[0], p_mom, bufs[1], bufs[2], scratch_c, np.zeros_like(scratch_c), cimp, acc,
-            np.zeros(2),
+            q, qd, w, vf, bufs[0], p_mom, bufs[1], bufs[2], qb, qdb, cimp, gimp, acc, np.zeros(2),
             rec[r0:r0 + nr], sens_v[r0:r0 + nr], contact[r0:r0 + nr], RUNAWAY_FACTOR, diag)
         if status != K.OK:
             worst = int(diag[1])
             raise SimulationDiverged(
                 f"the reduced simulation diverged at step {int(diag[0])} (t = {int(diag[0]) * dt:.6g} s): "
-                f"{'NaN or infinite values' if status == K.NAN else 'runaway energy'}; largest speed at reduced "
-                f"coordinate {worst} of {n} ({_coordinate_name(worst, nb, nf)}). Time step {dt:.4g} s, critical "
+                f"{'NaN or infinite values' if status == K.NAN else 'runaway energy'}; largest speed at "
+                f"{_coordinate_name(worst, nb, nf)}. Time step {dt:.4g} s, critical "
                 f"{settings.critical_time_step:.4g} s; run the full model or lower the step (time_step=...)")
 
-    chunked(step, n_int, max(1, int(3e7 // max(1, n * n * n_sub // 8))), progress, settings.oversample)
-    return RawRecords(rec, sens_v, sens_v0, contact, rs.T @ q, rs.T @ qd, ke0, acc, n_int * n_sub)
+    chunked(step, n_int, max(1, int(3e7 // max(1, n * n_sub * (2 * nb + 8)))), progress, settings.oversample)
+    phys = lambda x: np.concatenate([phi @ x[:nf], x[nf:]])  # noqa: E731  (modal -> physical reduced coordinates)
+    return RawRecords(rec, sens_v, sens_v0, contact, rs.T @ phys(q), rs.T @ phys(qd), ke0, acc, n_int * n_sub)
 
 
 def _lumped(model):
@@ -580,6 +601,6 @@ def _lumped(model):
 
 
 def _coordinate_name(i, nb, nf):
-    if i < 2 * nb:
-        return f"boundary node {i % nb}, {'xy'[i // nb]}"
-    return f"fixed-interface mode {i - 2 * nb + 1}" if i < nf else f"constraint group {i - nf}"
+    """The physical boundary coordinate ``i`` (``< 2 nb``, the kernel's divergence diagnosis) in words; ``nf`` unused
+    beyond it (the modal amplitudes have no node)."""
+    return f"boundary node {i % nb} (global node in ReducedSystem.nodes), {'xy'[(i // nb) % 2]}"

@@ -19,6 +19,7 @@ filtered velocity) must have spectral radius <= 1 for every ``omega`` up to ``om
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,8 +123,10 @@ def amplification_matrix(omega, dt: float, alpha: float, beta: float, cutoff: fl
     return np.stack([ru, rv, rf], axis=-2)
 
 
+@functools.lru_cache(maxsize=64)
 def _largest_stable_step(omega_max: float, alpha: float, beta: float, cutoff: float) -> float:
-    """Largest ``dt`` [s] with spectral radius <= 1 (+ round-off) for every mode up to ``omega_max`` (bisection)."""
+    """Largest ``dt`` [s] with spectral radius <= 1 (+ round-off) for every mode up to ``omega_max`` (bisection; 0.1 s,
+    kept per argument set: a run asks for its reduced system's step twice, path choice and set-up)."""
     omegas = omega_max * np.concatenate([np.geomspace(1e-4, 1.0, 400), [1.0]])
 
     def stable(dt):

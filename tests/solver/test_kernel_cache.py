@@ -85,7 +85,7 @@ def test_the_cache_folder_is_keyed_on_every_kernel_source(tmp_path):
 
 
 def test_fivid_kernels_are_cached_under_the_digest_of_fivid_kernel_sources():
-    from fivid.solver._reduced_kernels import run_reduced_steps
+    from fivid.solver._reduced_kernels import run_modal_steps
 
-    path = run_reduced_steps._cache.cache_path
+    path = run_modal_steps._cache.cache_path
     assert os.path.basename(path) == f"kernels-{KernelSourcesLocator.digest}"

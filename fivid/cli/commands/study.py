@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from fivid.study.config import AXES
-
 __all__ = ["register"]
 
 _DESCRIPTION = """\
@@ -41,7 +39,7 @@ def _run(args) -> int:
 
     from fivid.errors import ConfigError
     from fivid.storage import dumps_json
-    from fivid.study import load_study, run_study
+    from fivid.study import AXES, load_study, run_study
 
     if args.workers < 0:
         raise ConfigError(f"--workers must be >= 0, got {args.workers}", key="--workers")
@@ -69,12 +67,16 @@ def _run(args) -> int:
 
 def _with_units(name: str, value) -> str:
     """``normal_load 5 N``: a swept quantity with its units (fivid.study.config.AXES; none for a pure number)."""
+    from fivid.study.config import AXES  # here, not at module top: every command's parser imports this module
+
     units = AXES[name][0]
     return f"{name} {value:g}" + ("" if units == "1" else f" {units}")
 
 
 def _transition_lines(summary: dict) -> list[str]:
     """The weak/strong transition load of a load sweep (summary ``transition_load``, ``transition_loads``)."""
+    from fivid.study.config import AXES
+
     def one(t) -> str:
         if t.get("value") is None:
             return t.get("note", "no transition in the swept loads")
