@@ -46,12 +46,6 @@ log = logging.getLogger("fivid")
 #: top ``sample_rate / 2``: 18 x 25.6 kHz = 460.8 kHz (docs/solver.md, "Reduced-order path")
 AUTO_SCALING_FACTOR = 18.0
 
-#: the reduced path's contact Gauss-Seidel tolerance at most (fraction of the shortest master segment): its boundary
-#: inverse mass couples a node's x and y, so the solve iterates and stops with a residual of up to the tolerance,
-#: a white contact-force noise in the PSD's troughs; at 1e-12 instead of 1e-10 the coarse rig's full-vs-reduced
-#: distance halves (0.071 -> 0.038 dB, as at 1e-14) at no measured cost (docs/solver.md, "The error estimate")
-REDUCED_GS_TOLERANCE = 1e-12
-
 
 @dataclass(frozen=True)
 class IntegrationSettings:
@@ -306,11 +300,8 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
     run_condition = OperatingCondition(v_signed, normal_load, roughness_ra)  # signed along the base motion
     fric = friction_table(model, ka.slave_pair, slave_x, friction, run_condition, total_time=n_int * t_int, dt=dt,
                           sample_rate=sample_rate)
-    gs_tolerance = float(integration.gs_tolerance)
-    if rs is not None:
-        gs_tolerance = min(gs_tolerance, REDUCED_GS_TOLERANCE)
     settings = IntegrationSettings(dt, dt_crit, stab.omega_max, n_sub, oversample, n_int,
-                                   int(integration.gs_max_iterations), gs_tolerance)
+                                   int(integration.gs_max_iterations), float(integration.gs_tolerance))
     inputs = SimulationInputs(replace(run_condition, sliding_velocity=abs(v_signed)), friction,
                               replace(schedule, duration=duration, sample_rate=sample_rate, settle_time=settle_time),
                               integration, replace(output, oversample=oversample))

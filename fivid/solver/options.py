@@ -75,7 +75,7 @@ class IntegrationOptions:
         Contact Gauss-Seidel sweeps per step at most (default 100).
     gs_tolerance : float
         Largest node-pair correction of the last sweep as a fraction of the shortest master segment [-]
-        (default 1e-10; the reduced path uses at most ``fivid.solver.driver.REDUCED_GS_TOLERANCE``, 1e-12).
+        (default 1e-10).
     reduced : None, "auto", "reduced", True or int
         The solver path. None (or False): the full model. ``"auto"``: the Craig-Bampton reduced system
         (:mod:`fivid.solver.reduced`; fixed-interface modes and mass scaling at

@@ -65,8 +65,8 @@ estimate.
 
 **What it leaves out** (measured in docs/solver.md, "The error estimate"): the reduced contact solve's residual
 (its boundary inverse mass couples a node's x and y, so Gauss-Seidel iterates and stops with a residual of up to
-its tolerance, a white contact-force noise in the troughs; the reduced path solves to 1e-12 of a segment, where
-it no longer shows), and records that start inside the start's transient (above). Without the resolution term the
+its tolerance, a white contact-force noise in the troughs: halved at 1e-12, which costs ~15 % of the warm run,
+so it is left at 1e-10, inside the resolution bound), and records that start inside the start's transient (above). Without the resolution term the
 modal part alone was 4-106 x below the measured distance on the rigs.
 """
 
