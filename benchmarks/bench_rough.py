@@ -24,7 +24,8 @@ full-scale model config exists: ``full_scale_slave_nodes``, ``full_scale_dofs``,
 ``full_scale_fraction_of_bare_stencil`` (its full step against the bare rectangular stencil + update on the same
 node count, measured in this run, as ``bench_solver.py``'s ``rough_fraction_of_bare_stencil``), the same without its
 contact pair (``full_scale_no_contact_fraction_of_bare_stencil``: the mapped stencil's own cost), the contact's
-share of the step ``full_scale_contact_share`` and ``full_scale_steps`` of a short preload-and-slide record
+share of the step ``full_scale_contact_share`` (the same three from the process's CPU time, ``full_scale_cpu_*``,
+for a loaded machine) and ``full_scale_steps`` of a short preload-and-slide record
 (30 mm/s). With ``--quick`` the full-scale figures come from a 12 mm cut at the same spacing (the smoke run).
 With ``--transition`` the full-scale pair coarsens along x with depth (:mod:`fivid.fe.transition`, as the
 paper-scale study's ``transition: true``) instead: only its surface level has the Rsm/8 columns
@@ -163,7 +164,7 @@ def _full_scale(rounds, steps, length=0.12, transition=False):
     import dataclasses
 
     import numpy as np
-    from bench_solver import _bare_kernels, _mapped_fraction  # benchmarks/, this script's folder
+    from bench_solver import _bare_kernels  # benchmarks/, this script's folder
 
     from fivid.fe import load_model
     from fivid.solver import OperatingCondition, RunSchedule
@@ -182,12 +183,38 @@ def _full_scale(rounds, steps, length=0.12, transition=False):
            "full_scale_mesh": "transition" if transition else "graded",
            "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
            "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt}
-    frac, _, _, sweeps, _ = _mapped_fraction(model, c_rect, bare, kw, steps * dt, rounds)
-    frac0, _, _, _, _ = _mapped_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, steps * dt, rounds)
+    frac, cpu, sweeps = _step_fraction(model, c_rect, bare, kw, rounds)
+    frac0, cpu0, _ = _step_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, rounds)
     out.update({"full_scale_fraction_of_bare_stencil": frac, "full_scale_no_contact_fraction_of_bare_stencil": frac0,
-                "full_scale_contact_share": 1.0 - frac / frac0, "full_scale_contact_gs_mean_sweeps": sweeps,
-                "full_scale_steps": steps})
+                "full_scale_contact_share": 1.0 - frac / frac0, "full_scale_cpu_fraction_of_bare_stencil": cpu,
+                "full_scale_cpu_no_contact_fraction_of_bare_stencil": cpu0, "full_scale_cpu_contact_share": 1.0 - cpu / cpu0,
+                "full_scale_contact_gs_mean_sweeps": sweeps, "full_scale_steps": steps})
     return out
+
+
+def _step_fraction(model, c_rect, bare, kw, rounds):
+    """``(wall, cpu, mean Gauss-Seidel sweeps)``: the bare rectangular stencil + update on a ghost-padded grid of the
+    model's node count per block (``bench_solver.py``'s reference) over the model's full step
+    (:meth:`fivid.solver.driver.PreparedRun.run` per step), by wall time and by the process's CPU time (which the
+    shared machine's load inflates less), interleaved rounds, best of each."""
+    import numpy as np
+    from bench_solver import _bare_arguments  # benchmarks/, this script's folder
+
+    from fivid.solver.driver import prepare_run
+
+    prep = prepare_run(model, **kw)
+    steps = prep.settings.n_intervals * prep.settings.steps_per_interval
+    bare_args = _bare_arguments(model, prep, c_rect, bare)
+    ds = prep.run(progress=False)  # compile/load the kernels for this model's argument types
+    best = {k: np.inf for k in ("run", "bare", "run_cpu", "bare_cpu")}
+    for _ in range(rounds):
+        for key, call in (("run", lambda: prep.run(progress=False)),
+                          ("bare", lambda: bare(steps, *bare_args))):
+            t0, c0 = time.perf_counter(), time.process_time()
+            call()
+            best[key] = min(best[key], time.perf_counter() - t0)
+            best[key + "_cpu"] = min(best[key + "_cpu"], time.process_time() - c0)
+    return best["bare"] / best["run"], best["bare_cpu"] / best["run_cpu"], ds.attrs.get("contact_gs_mean_sweeps")
 
 
 if __name__ == "__main__":

@@ -121,6 +121,18 @@ def _stencil_loops():
     return njit(cache=False)(bare_stencil), njit(cache=False)(fivid_stencil)
 
 
+def _bare_arguments(model, prep, c_rect, bare) -> tuple:
+    """The arguments after ``nsteps`` of the ``bare`` loop (:func:`_bare_kernels`) for ``model``'s node count per
+    block (:func:`_bare_layout`) at the step, damping and mean mass of the prepared run ``prep``; the loop is run
+    10 steps (compiled)."""
+    npd, blocks, c_uni = _bare_layout(model, c_rect)
+    arrays = [np.zeros(2 * npd) for _ in range(4)]
+    mb = np.full(2 * npd, 1.0 / float(np.mean(prep.arrays.mass[prep.arrays.mass > 0])))
+    args = (prep.settings.time_step, model.rayleigh_alpha, model.rayleigh_beta, npd, blocks, c_uni, mb, *arrays)
+    bare(10, *args)
+    return args
+
+
 def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
     """``(fraction_of_bare_stencil, dof_updates_per_s, mapped node share, mean Gauss-Seidel sweeps or None,
     stencil_fraction_of_bare_stencil)`` of a model with mapped blocks: its full step against the bare stencil + update
@@ -131,11 +143,8 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
     prep = prepare_run(model, **_lasting(kw, duration))
     s = prep.settings
     steps = s.n_intervals * s.steps_per_interval
-    npd, blocks, c_uni = _bare_layout(model, c_rect)
-    arrays = [np.zeros(2 * npd) for _ in range(4)]
-    mb = np.full(2 * npd, 1.0 / float(np.mean(prep.arrays.mass[prep.arrays.mass > 0])))
-    dt, a, b = s.time_step, model.rayleigh_alpha, model.rayleigh_beta
-    bare(10, dt, a, b, npd, blocks, c_uni, mb, *arrays)
+    bare_args = _bare_arguments(model, prep, c_rect, bare)
+    npd, blocks, c_uni = bare_args[3:6]
     bare_stencil, fivid_stencil = _stencil_loops()
     st = prep.stencils
     rng = np.random.default_rng(0)
@@ -152,7 +161,7 @@ def _mapped_fraction(model, c_rect, bare, kw, duration, rounds):
         t0 = time.perf_counter()
         ds = prep.run(progress=False)
         t_run = min(t_run, (time.perf_counter() - t0) / steps)
-        t_bare = min(t_bare, _time(bare, steps, dt, a, b, npd, blocks, c_uni, mb, *arrays, repeat=1) / steps)
+        t_bare = min(t_bare, _time(bare, steps, *bare_args, repeat=1) / steps)
         t_st = min(t_st, _time(fivid_stencil, steps, w_st, f_st, st.kernel_args, repeat=1) / steps)
         t_bare_st = min(t_bare_st, _time(bare_stencil, steps, npd, blocks, c_uni, w_bare, f_bare, repeat=1) / steps)
     mapped = int(st.blocks[st.blocks[:, 4] >= 2][:, 1:3].prod(axis=1).sum() + st.lst_idx.size)  # per-node, rotated

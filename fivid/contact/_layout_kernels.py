@@ -50,6 +50,8 @@ column                   meaning
 ``GEO_GAP``              the gap [m] in the predicted configuration (deformable master)
 ``GEO_IDLE``             1: an open slave left out of the Gauss-Seidel sweeps (gap beyond the candidate margin),
                          else 0
+``GEO_SLEEP``            > 0: a sleeping slave's remaining displacement budget [m] (not located while it lasts;
+                         see :func:`fivid.solver._contact_kernels.contact_solve`), else 0
 ======================== ================================================================================
 
 ``rec_contact`` (one row of :data:`N_REC_CONTACT` per pair and output interval): ``REC_NORMAL``, ``REC_TANGENTIAL``
@@ -66,6 +68,7 @@ __all__ = ["NPAR", "LAW", "LAW_COEFFICIENT", "LAW_EXPONENT", "MU_STATIC_EXCESS",
            "SURFACE_SY", "SURFACE_START", "SURFACE_RAMP", "EXPANSION", "EXPANSION_START", "EXPANSION_RAMP",
            "LAW_RIGID", "LAW_LINEAR", "LAW_POWER", "LAW_TABLE", "MASTER_EDGE", "MASTER_LINE", "MASTER_CIRCLE",
            "GEO_N0", "GEO_N1", "GEO_NX", "GEO_NY", "GEO_TX", "GEO_TY", "GEO_INSIDE", "GEO_PENETRATION", "GEO_SURFACE_VELOCITY", "GEO_GAP", "GEO_IDLE",
+           "GEO_SLEEP",
            "N_GEO", "REC_NORMAL", "REC_TANGENTIAL", "REC_STICK", "REC_SLIP", "REC_OPEN", "N_REC_CONTACT",
            "CNODE_V_STEP", "CNODE_V_PREDICTED", "CNODE_MOVED", "N_CNODE"]
 
@@ -116,8 +119,9 @@ GEO_PENETRATION = 7
 GEO_SURFACE_VELOCITY = 8
 GEO_GAP = 9
 GEO_IDLE = 10
+GEO_SLEEP = 11
 #: columns of a geo row
-N_GEO = 11
+N_GEO = 12
 
 # the solver's per-pair contact record (rec_contact)
 REC_NORMAL = 0

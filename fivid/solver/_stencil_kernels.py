@@ -12,7 +12,7 @@ __all__ = ["StencilArrays", "block_forces", "spring_forces"]
 #: the stencil argument of :func:`block_forces` (``block_forces(w, f, stencil)``), built by
 #: :attr:`fivid.solver.stencil.BlockStencils.kernel_args`
 StencilArrays = namedtuple("StencilArrays", ["npd", "blocks", "c_uni", "c_map", "rot", "wr", "lst_idx", "lst_nbr",
-                                             "lst_coef", "tie_s", "tie_m", "tie_w"])
+                                             "lst_coef", "tie_s", "tie_m", "tie_w", "tie_j"])
 
 
 @fma_kernel
@@ -196,6 +196,39 @@ def _rotated_patch(wx, wy, fx, fy, rx, ry, c_uni, rot, blk):
 
 
 @fma_kernel
+def _joint_displacements(w, s0, m0, n):
+    """A halving joint's tied row (:func:`block_forces`, ``tie_j``): node ``s0 + 2i`` takes ``w`` of master
+    ``m0 + i``, node ``s0 + 2i + 1`` the mean of masters ``m0 + i`` and ``m0 + i + 1`` (one component)."""
+    s = uint64(s0)
+    m = uint64(m0)
+    two = uint64(2)
+    for i in range(n):
+        a = w[m + uint64(i)]
+        b = w[m + uint64(i + 1)]
+        w[s + two * uint64(i)] = a
+        w[s + two * uint64(i) + uint64(1)] = 0.5 * a + 0.5 * b
+    w[s + two * uint64(n)] = w[m + uint64(n)]
+
+
+@fma_kernel
+def _joint_forces(f, s0, m0, n):
+    """The transpose of :func:`_joint_displacements`: the tied row's forces moved onto the masters (in the order
+    of the listed ties: ``f_m + f_(2i-1) / 2 + f_(2i) + f_(2i+1) / 2``), the tied row's zeroed (one component)."""
+    s = uint64(s0)
+    m = uint64(m0)
+    two = uint64(2)
+    f[m] += f[s]
+    for i in range(n):
+        q = s + two * uint64(i)
+        h = 0.5 * f[q + uint64(1)]
+        f[m + uint64(i)] += h
+        g = f[m + uint64(i + 1)] + h
+        f[m + uint64(i + 1)] = g + f[q + two]
+    for i in range(2 * n + 1):
+        f[s + uint64(i)] = 0.0
+
+
+@fma_kernel
 def block_forces(w, f, stencil):
     """``f = K_blocks w`` by the per-block 3x3 stencils (every node of every block is written).
 
@@ -236,12 +269,19 @@ def block_forces(w, f, stencil):
         Tied nodes of mesh transitions (:class:`fivid.fe.model.Tie`): x-index, masters' x-indices, weights.
         Their ``w`` is first set from the masters' (``w_s = sum weights w_m``, written into ``w``), and their
         forces are finally moved to the masters (``f_m += weights f_s``, ``f_s = 0``): ``f = T^T K T w``.
+    tie_j : int64 ndarray (n_joint, 3)
+        Halving joints, the same for a whole tied row at once: ``(s0, m0, n)``, nodes ``s0 .. s0 + 2n`` tied to
+        masters ``m0 .. m0 + n`` (node ``s0 + 2i`` on master ``m0 + i``, node ``s0 + 2i + 1`` half-way): contiguous
+        loops instead of the listed ties' gathers and scatters (:func:`_joint_displacements`, :func:`_joint_forces`).
     """
-    npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef, tie_s, tie_m, tie_w = stencil
+    npd, blocks, c_uni, c_map, rot, wr, lst_idx, lst_nbr, lst_coef, tie_s, tie_m, tie_w, tie_j = stencil
     wx = w[:npd]
     wy = w[npd:]
     fx = f[:npd]
     fy = f[npd:]
+    for r in range(tie_j.shape[0]):
+        _joint_displacements(wx, tie_j[r, 0], tie_j[r, 1], tie_j[r, 2])
+        _joint_displacements(wy, tie_j[r, 0], tie_j[r, 1], tie_j[r, 2])
     for r in range(tie_s.shape[0]):
         s = tie_s[r]
         a = tie_m[r, 0]
@@ -287,6 +327,9 @@ def block_forces(w, f, stencil):
             fy[q] += tie_w[r, k] * fy[s]
         fx[s] = 0.0
         fy[s] = 0.0
+    for r in range(tie_j.shape[0]):
+        _joint_forces(fx, tie_j[r, 0], tie_j[r, 1], tie_j[r, 2])
+        _joint_forces(fy, tie_j[r, 0], tie_j[r, 1], tie_j[r, 2])
 
 
 @kernel

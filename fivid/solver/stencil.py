@@ -99,6 +99,9 @@ class BlockStencils:
         x-indices of its two masters.
     tie_w : ndarray, shape (n_tie, 2)
         Their interpolation weights [-].
+    tie_j : ndarray of int64, shape (n_joint, 3)
+        Ties that are whole halving joints, ``(s0, m0, n)``: x-indices ``s0 .. s0 + 2n`` tied to ``m0 .. m0 + n``
+        (even ones on a master, odd ones half-way), not listed in ``tie_*`` (:func:`_tie_arrays`).
     """
 
     n_nodes: int
@@ -114,6 +117,7 @@ class BlockStencils:
     tie_s: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     tie_m: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
     tie_w: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    tie_j: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
 
     @property
     def kernel_args(self):
@@ -123,7 +127,7 @@ class BlockStencils:
         from fivid.solver._stencil_kernels import StencilArrays  # lazy: pulls numba
 
         return StencilArrays(self.npd, self.blocks, self.c_uni, self.c_map, self.rot, np.zeros(2 * self.npd),
-                             self.lst_idx, self.lst_nbr, self.lst_coef, self.tie_s, self.tie_m, self.tie_w)
+                             self.lst_idx, self.lst_nbr, self.lst_coef, self.tie_s, self.tie_m, self.tie_w, self.tie_j)
 
     def dof_index(self, dof) -> np.ndarray:
         """Flat kernel index of global dof(s) ``2*node + c``."""
@@ -187,6 +191,15 @@ def _neighbours(block, pad: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
 SAME_STENCIL_RTOL = 1e-12
 
 
+def _uniform_tolerance(block) -> float:
+    """Relative tolerance [-] under which a block's element stiffnesses are one: :data:`SAME_STENCIL_RTOL`, or the
+    round-off of a long block's coordinates if larger -- ``eps |x|`` with ``|x|`` up to the block's extent, differenced
+    over one element, is ``eps`` times the elements along it (8x for the products of the integration): 1.2e-12
+    measured on the 5 248-column rectangles of the 120 mm rough pair's transition levels, whose coordinates are
+    multiples of a 22.9 um step."""
+    return max(SAME_STENCIL_RTOL, 8.0 * np.finfo(float).eps * max(block.nx, block.ny))
+
+
 def _column_angles(block) -> np.ndarray:
     """Angle of every node column of ``block`` against its first [rad]: the direction from its row-0 node to its
     last-row node (a ring's radial lines; 0 for the vertical columns of rectangles and profiled blocks)."""
@@ -228,7 +241,8 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
     is not uniform, nor rotated unless the stress is, and takes the mapped path).
 
     A block is uniform when all its element stiffnesses agree to :data:`SAME_STENCIL_RTOL` of their largest
-    entry (float resolution of the element integration): its interior nodes then share one coefficient set, and
+    entry (float resolution of the element integration; a long block's coordinate round-off if larger,
+    :func:`_uniform_tolerance`): its interior nodes then share one coefficient set, and
     so do the nodes of each edge. Other blocks (and blocks with fewer than 3x3 nodes) are patches whose rows are
     rotations of one stencil (an annular ring's or arc's radial layers, :func:`_rotated_rows`, unless
     ``rotated`` is false; their first and last columns listed) or, failing that, mapped patches with per-node
@@ -242,7 +256,8 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
         ke = block_element_stiffness(block)
         if prestress is not None:
             ke = ke + block_geometric_stiffness(block, prestress)
-        uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=SAME_STENCIL_RTOL * np.abs(ke[0, 0]).max()))
+        same = _uniform_tolerance(block)
+        uniform = bool(np.allclose(ke, ke[0, 0], rtol=0.0, atol=same * np.abs(ke[0, 0]).max()))
         uniform = uniform and block.nx >= 2 and block.ny >= 2 and not block.periodic
         c = _block_coefficients(block, ke)
         o = pad + block.node_offset
@@ -256,7 +271,7 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
                 # rectangular elements: no xy coupling with the axis neighbours and the node itself (exactly
                 # zero up to the Gauss-sum round-off, ~1e-18 of the diagonal), the kernel skips those terms
                 cross = np.abs(cc[[1, 3, 4, 5, 7]][:, [0, 1], [1, 0]])
-                kind = PATCH_RECT if cross.max() <= 1e-12 * np.abs(cc).max() else PATCH_UNIFORM
+                kind = PATCH_RECT if cross.max() <= same * np.abs(cc).max() else PATCH_UNIFORM
                 rows.append((o + j * stride + i, cols, nrows, stride, kind, len(uni_coef), 0, 0))
                 uni_coef.append(c[j, i])
             listed[[0, 0, -1, -1], [0, -1, 0, -1]] = True
@@ -298,14 +313,46 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
     )
 
 
+def _halving_joint(tie):
+    """``(s0, m0, n)`` when ``tie`` is a whole halving joint (:mod:`fivid.fe.transition`'s: slaves ``s0 .. s0 + 2n``
+    in order, slave ``2i`` on master ``m0 + i`` with weights (1, 0) -- the last one (0, 1) on ``m0 + n`` -- and slave
+    ``2i + 1`` half-way between ``m0 + i`` and ``m0 + i + 1``), else None."""
+    s, m, w = np.asarray(tie.slave_nodes), np.asarray(tie.master_nodes), np.asarray(tie.weights, dtype=float)
+    k = s.size
+    if k < 3 or k % 2 == 0 or np.any(np.diff(s) != 1):
+        return None
+    n = (k - 1) // 2
+    m0 = int(m[0, 0])
+    i = np.arange(k) // 2
+    i[-1] = n - 1  # the last slave's segment is the last one
+    want_w = np.where((np.arange(k) % 2 == 1)[:, None], 0.5, [1.0, 0.0])
+    want_w[-1] = (0.0, 1.0)
+    if np.array_equal(m, np.stack([m0 + i, m0 + i + 1], axis=1)) and np.array_equal(w, want_w):
+        return int(s[0]), m0, n
+    return None
+
+
 def _tie_arrays(model, pad: int) -> dict:
-    """``tie_s``, ``tie_m``, ``tie_w`` of :class:`BlockStencils` from the model's ties (x-indices: ``pad + node``)."""
-    ties = getattr(model, "ties", ())
+    """``tie_s``, ``tie_m``, ``tie_w`` and ``tie_j`` of :class:`BlockStencils` from the model's ties (x-indices:
+    ``pad + node``): the whole halving joints as ``tie_j`` (:func:`_halving_joint`), the others listed. The joints
+    are done after the listed ties, so a joint's masters may not be tied themselves (a chain of ties would need
+    an order in both passes); then everything is listed."""
+    ties = tuple(getattr(model, "ties", ()))
     if not ties:
         return {}
-    return {"tie_s": np.ascontiguousarray(pad + np.concatenate([t.slave_nodes for t in ties]), dtype=np.int64),
-            "tie_m": np.ascontiguousarray(pad + np.concatenate([t.master_nodes for t in ties]), dtype=np.int64),
-            "tie_w": np.ascontiguousarray(np.concatenate([t.weights for t in ties]), dtype=float)}
+    joints = [_halving_joint(t) for t in ties]
+    slaves = np.concatenate([t.slave_nodes for t in ties])
+    masters = np.concatenate([np.ravel(t.master_nodes) for t in ties])
+    if np.isin(masters, slaves).any():
+        joints = [None] * len(ties)
+    listed = [t for t, j in zip(ties, joints) if j is None]
+    out = {"tie_j": np.array([(pad + s0, pad + m0, n) for s0, m0, n in filter(None, joints)],
+                             dtype=np.int64).reshape(-1, 3)}
+    if listed:
+        out.update(tie_s=np.ascontiguousarray(pad + np.concatenate([t.slave_nodes for t in listed]), dtype=np.int64),
+                   tie_m=np.ascontiguousarray(pad + np.concatenate([t.master_nodes for t in listed]), dtype=np.int64),
+                   tie_w=np.ascontiguousarray(np.concatenate([t.weights for t in listed]), dtype=float))
+    return out
 
 
 def apply_stencils(stencils: BlockStencils, w: np.ndarray) -> np.ndarray:

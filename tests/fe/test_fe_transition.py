@@ -100,3 +100,42 @@ def test_modal_frequencies_converge_at_second_order_to_the_uniform_mesh():
     # and rotary inertia lower it (L/h = 15: a few %)
     eb = 4.7300407**2 / (2 * np.pi * 0.12**2) * np.sqrt(E / (1 - NU**2) * 8e-3**2 / 12 / RHO)
     assert 0.85 * eb < exact[0] < eb
+
+
+def test_halving_joints_match_the_listed_ties(tied):
+    """The row-wise halving joints (``tie_j``) against the listed ties they replace (the general gather/scatter
+    path of ``block_forces``, fed the model's ties): bit-for-bit the same forces, tied rows included."""
+    import dataclasses
+
+    from fivid.solver._stencil_kernels import block_forces
+
+    st = block_stencils(tied)
+    assert st.tie_s.size == 0 and st.tie_j.shape[0] == len(tied.ties)
+    listed = dataclasses.replace(
+        st, tie_j=np.zeros((0, 3), dtype=np.int64),
+        tie_s=st.pad + np.concatenate([t.slave_nodes for t in tied.ties]).astype(np.int64),
+        tie_m=np.ascontiguousarray(st.pad + np.concatenate([t.master_nodes for t in tied.ties]), dtype=np.int64),
+        tie_w=np.ascontiguousarray(np.concatenate([t.weights for t in tied.ties]), dtype=float))
+    w = st.to_kernel(np.random.default_rng(2).standard_normal(tied.n_dofs) * 1e-6)
+    f_joint, f_listed = np.zeros_like(w), np.zeros_like(w)
+    block_forces(w.copy(), f_joint, st.kernel_args)
+    block_forces(w.copy(), f_listed, listed.kernel_args)
+    np.testing.assert_array_equal(f_joint, f_listed)
+
+
+def test_a_long_rectangular_level_is_one_rectangular_stencil():
+    """A 120 mm rectangle of 5 248 columns (the Ra 1 pair's level 1, 22.9 um elements): its coordinates' round-off
+    spreads the element stiffnesses by more than SAME_STENCIL_RTOL, yet it is one uniform block (rectangular
+    interior stencil, no per-node or rotated patch), and its forces are the assembled K's to 1e-12."""
+    from fivid.fe.assembly import block_element_stiffness
+    from fivid.solver.stencil import PATCH_MAPPED, PATCH_RECT, PATCH_ROTATED, SAME_STENCIL_RTOL
+
+    m = _block(5248, 2, depth=2 * 0.12 / 5248)
+    ke = block_element_stiffness(m.blocks[0])
+    assert np.abs(ke - ke[0, 0]).max() > SAME_STENCIL_RTOL * np.abs(ke[0, 0]).max()  # the case at hand
+    st = block_stencils(m)
+    kinds = set(st.blocks[:, 4].tolist())
+    assert PATCH_RECT in kinds and not kinds & {PATCH_MAPPED, PATCH_ROTATED}
+    w = np.random.default_rng(3).standard_normal(m.n_dofs) * 1e-6
+    ref = stiffness_matrix(m) @ w
+    assert np.abs(apply_stencils(st, w) - ref).max() <= 1e-12 * np.abs(ref).max()

@@ -139,7 +139,7 @@ def test_candidate_sweeps_match_sweeping_all_slaves(law, coefficient):
         out = {}
         for m, st in runs.items():
             st["u"] += shift
-            out[m] = contact_solve(*st.values(), m)
+            out[m] = contact_solve(*st.values(), m, False)
         a, b = runs[CANDIDATE_MARGIN], runs[np.inf]
         assert out[CANDIDATE_MARGIN] == out[np.inf]
         for key in ("u", "v", "lam", "cstate", "seg"):
@@ -153,3 +153,41 @@ def test_candidate_sweeps_match_sweeping_all_slaves(law, coefficient):
         calm += a["geo"][:, GEO_IDLE].sum() > 0.5 * shut.size
         closed += int(shut.sum())
     assert closed > 0 and calm >= 10, (closed, calm)
+
+
+@pytest.mark.parametrize("law, coefficient", [(0, 0.0), (1, 1e17)])  # rigid; linear, 1e17 Pa/m
+def test_sleeping_slaves_change_no_force(law, coefficient):
+    """Sleeping slaves (the time loop's contact solve) against the plain algorithm (infinite margin: every slave
+    located and swept) over steps that move the nodes as the time loop does (``u += dt v``, then the solve): the
+    slave edge slides along the master at a steady speed (past 2.4 segments in all) and sinks onto it, with small
+    random velocities. Bit-for-bit the same positions, velocities, multipliers and states at every step, while
+    most slaves sleep; slaves wake and close (the closed set changes)."""
+    from fivid.contact._layout_kernels import GEO_SLEEP
+    from fivid.solver._contact_kernels import CANDIDATE_MARGIN, contact_solve
+
+    rng = np.random.default_rng(10 + law)
+    nseg = 300
+    base = _solve_state(rng, nseg, law, coefficient)
+    base["u"][:] = 0.0
+    npd, dt, sn = base["npd"], base["dt"], base["slave_node"]
+    runs = {m: {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in base.items()}
+            for m in (CANDIDATE_MARGIN, np.inf)}
+    asleep, closed_sets = [], set()
+    for step in range(60):
+        jitter = rng.normal(0.0, 0.3, 2 * npd)  # m/s: 0.3 nm per step
+        for m, st in runs.items():
+            v = st["v"]
+            v += jitter
+            v[sn] += 0.04 * 11.5e-6 / dt  # 0.04 segment per step along x
+            v[sn + npd] -= 0.05e-6 / dt  # sinking 0.05 um per step (3 um = 1.5 Rq in all)
+            st["u"] += dt * v
+            contact_solve(*st.values(), m, m != np.inf)
+            v[sn] -= 0.04 * 11.5e-6 / dt
+            v[sn + npd] += 0.05e-6 / dt
+        a, b = runs[CANDIDATE_MARGIN], runs[np.inf]
+        for key in ("u", "v", "lam", "cstate"):
+            np.testing.assert_array_equal(a[key], b[key], err_msg=f"step {step}: {key}")
+        asleep.append(float(np.mean(a["geo"][:, GEO_SLEEP] > 0.0)))
+        closed_sets.add(tuple(np.flatnonzero(a["cstate"])))
+        assert not b["geo"][:, GEO_SLEEP].any()
+    assert max(asleep) > 0.5 and len(closed_sets) > 10, (asleep, len(closed_sets))
