@@ -75,7 +75,7 @@ class IntegrationOptions:
         Contact Gauss-Seidel sweeps per step at most (default 100).
     gs_tolerance : float
         Largest node-pair correction of the last sweep as a fraction of the shortest master segment [-]
-        (default 1e-10; the reduced path uses at most ``fivid.solver.driver.REDUCED_GS_TOLERANCE``, 1e-12).
+        (default 1e-10).
     reduced : None, "auto", "reduced", True or int
         The solver path. None (or False): the full model. ``"auto"``: the Craig-Bampton reduced system
         (:mod:`fivid.solver.reduced`; fixed-interface modes and mass scaling at
@@ -100,6 +100,10 @@ class IntegrationOptions:
         Read/store the reduced basis in the on-disk cache (:mod:`fivid.solver.basis_cache`; default True).
     cache_dir : path-like or None
         The cache folder (None: ``$FIVID_CACHE_DIR`` or the user cache folder).
+    reduced_check : bool
+        After a reduced run, check it a posteriori against a second reduced run at half its step (a Richardson
+        pair, twice the reduced run's steps; default False): ``reduced_error_check_db``, and with ``reduced="auto"``
+        the full model instead when that figure exceeds ``reduced_tolerance`` (:func:`fivid.solver.simulate`).
 
     Examples
     --------
@@ -117,6 +121,7 @@ class IntegrationOptions:
     error_band: tuple[float, float] | None = None
     basis_cache: bool = True
     cache_dir: str | PathLike | None = None
+    reduced_check: bool = False
 
 
 @dataclass(frozen=True)
