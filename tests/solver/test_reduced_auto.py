@@ -128,3 +128,27 @@ def test_dry_run_estimates_the_run_time(tmp_path, capsys):
     assert j["solver_path"] == "reduced" and j["memory_bytes"] > 0
     assert j["estimated_run_time_s"] == pytest.approx(t["setup_seconds"] + t["seconds_per_interval"] * t["n_intervals"])
     assert t["seconds_per_interval"] > 0 and not (tmp_path / "x.nc").exists()
+
+
+def test_reduced_check_from_the_command_line(tmp_path, capsys):
+    """``fivid simulate --reduced-check``: the a-posteriori Richardson pair runs, its figure and step ratio reach the
+    JSON summary and the output's attrs, the history line names the flag (so the run can be repeated), and
+    ``--full --reduced-check`` is refused with exit 2 (nothing to check)."""
+    import xarray as xr
+
+    from fivid.cli import main
+
+    out = tmp_path / "x.nc"
+    args = ["simulate", str(COARSE), "--mu", "0.3", "--velocity", "10 mm/s", "--load", "5 N", "--duration", "5 ms",
+            "--cache-dir", str(tmp_path / "cache"), "--json"]
+    assert main([*args, "--reduced-check", "-o", str(out)]) == 0
+    j = json.loads(capsys.readouterr().out)
+    assert j["solver_path"] == "reduced"  # the coarse rig's figure is far below 0.5 dB (docs/solver.md's table)
+    assert math.isfinite(j["reduced_error_check_db"]) and j["reduced_error_check_db"] >= 0.0
+    assert j["reduced_error_check_step_ratio"] == pytest.approx(0.5, rel=1e-12)  # exactly half the run's step
+    with xr.open_dataset(out) as ds:
+        assert ds.attrs["reduced_error_check_db"] == pytest.approx(j["reduced_error_check_db"])
+        assert "--reduced-check" in ds.attrs["history"]
+    assert main([*args, "--full", "--reduced-check", "-o", str(tmp_path / "y.nc")]) == 2
+    err = capsys.readouterr().err
+    assert "--reduced-check" in err and "--full" in err and not (tmp_path / "y.nc").exists()

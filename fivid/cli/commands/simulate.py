@@ -63,6 +63,11 @@ def register(subparsers) -> None:
     p.add_argument("--reduced-tolerance", metavar="DB", type=float, default=0.5,
                    help="largest estimated in-band log-spectral distance [dB] of the reduced path for the automatic "
                    "choice (default 0.5)")
+    p.add_argument("--reduced-check", action="store_true",
+                   help="after a reduced run, check it against a second reduced run at half its step (a Richardson "
+                   "pair: about twice the reduced run's time loop) and record reduced_error_check_db; with the "
+                   "automatic choice, run the full model instead when that figure exceeds --reduced-tolerance "
+                   "(docs/solver.md)")
     p.add_argument("--error-band", nargs=2, metavar=("LOW", "HIGH"), type=quantity("Hz", nonnegative=True),
                    help="band of that estimate, e.g. '800 Hz' '8 kHz' (default 200 Hz to 10 kHz or sample-rate/2)")
     p.add_argument("--reduced-mass-scaling", metavar="Q", type=quantity("Hz", positive=True),
@@ -151,7 +156,8 @@ def run(args) -> int:
                                              "reduced_error_band", "reduced_basis_source", "reduced_setup_time",
                                              "reduced_size", "reduced_modes", "reduced_cutoff",
                                              "reduced_first_truncated_frequency", "reduced_static_residual",
-                                             "reduced_mass_scaling", "reduced_added_mass_fraction")
+                                             "reduced_mass_scaling", "reduced_added_mass_fraction",
+                                             "reduced_error_check_db", "reduced_error_check_step_ratio")
                     if k in ds.attrs})
     if args.json:
         print(dumps_json(summary))
@@ -228,7 +234,7 @@ def _simulation_inputs(args, law):
 
 def _path_options(args) -> dict:
     """The solver-path arguments of :func:`fivid.solver.simulate` from ``--full``/``--reduced [N]`` (default auto),
-    ``--reduced-tolerance``, ``--error-band``, ``--reduced-mass-scaling`` and ``--cache-dir``."""
+    ``--reduced-tolerance``, ``--reduced-check``, ``--error-band``, ``--reduced-mass-scaling`` and ``--cache-dir``."""
     from fivid.errors import ConfigError
 
     reduced = {None: "auto", "full": None}.get(args.reduced, args.reduced)
@@ -246,8 +252,11 @@ def _path_options(args) -> dict:
     if band is not None and not band[0] < band[1]:
         raise ConfigError(f"--error-band LOW HIGH needs LOW < HIGH, got {band[0]:g} Hz and {band[1]:g} Hz",
                           key="--error-band")
+    if args.reduced_check and reduced is None:
+        raise ConfigError("--reduced-check checks a reduced run; it has nothing to check with --full",
+                          key="--reduced-check")
     return dict(reduced=reduced, reduced_mass_scaling=scaling, reduced_tolerance=float(args.reduced_tolerance),
-                error_band=band, cache_dir=args.cache_dir)
+                error_band=band, cache_dir=args.cache_dir, reduced_check=bool(args.reduced_check))
 
 
 def _dry_run(args, model, size, inputs) -> int:
@@ -370,7 +379,7 @@ def _load_model(path):
 _OPTIONS = (("--law", "law"), ("--mu", "mu"), ("--velocity", "velocity"), ("--load", "load"),
             ("--roughness", "roughness"), ("--duration", "duration"), ("--sample-rate", "sample_rate"),
             ("--seed", "seed"), ("--time-step", "time_step"), ("--reduced", "reduced"), ("--reduced-tolerance", "reduced_tolerance"),
-            ("--error-band", "error_band"), ("--reduced-mass-scaling", "reduced_mass_scaling"), ("--run-id", "run_id"),
+            ("--reduced-check", "reduced_check"), ("--error-band", "error_band"), ("--reduced-mass-scaling", "reduced_mass_scaling"), ("--run-id", "run_id"),
             ("--samples", "samples"), ("-o", "output"))
 
 
@@ -386,6 +395,8 @@ def _command_line(args) -> str:
         value = getattr(args, dest, None)
         if dest == "reduced":  # the solver path: auto (nothing), --full, --reduced or --reduced N
             words += {None: [], "full": ["--full"], "reduced": ["--reduced"]}.get(value, ["--reduced", str(value)])
+        elif isinstance(value, bool):  # a flag: named when set
+            words += [option] if value else []
         elif isinstance(value, (list, tuple)):
             words += [option, *(str(getattr(v, "text", v)) for v in value)]
         elif value is not None:
