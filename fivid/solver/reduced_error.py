@@ -50,12 +50,12 @@ component ``A`` into ``A exp(-i omega tau)``, ``|A exp(-i omega tau) - A| <= ome
 component exceeds the bin's sum (no cancellation), the bin changes by at most ``20 log10(1 + 2 pi f dt)`` [dB].
 Its RMS over the band's bins is added to the modal part: ``lsd_db = modal_db + resolution_db`` (Minkowski: the RMS
 of ``|e_modal| + |e_res|`` is at most the sum of the two RMS). Measured (docs/solver.md, default schedule of
-``fivid simulate``): 1.7-3.1 x above the full-vs-reduced distance on the two rigid rigs. Where components of
+``fivid simulate``): 1.1-3.1 x above the full-vs-reduced distance on the two rigid rigs. Where components of
 different events cancel -- a record that starts inside the start's transient of bouncing contact -- a relative
 displacement changes the bin by more, and this is no bound: :func:`scored_contact_switches` counts, after the
 run, the contact switches in the scored record (output attr ``reduced_error_contact_switches``; 0 where it was
 measured to hold). What covers such records is the opt-in a-posteriori check (``IntegrationOptions.reduced_check``,
-:func:`fivid.solver.simulate`: the run against one at half its step, a Richardson bound; measured 1.6-1.9 x the
+:func:`fivid.solver.simulate`: the run against one at half its step, a Richardson bound; measured 1.6-2.0 x the
 distance on every case, the bouncing record included, at the price of a second reduced run).
 
 **Contact states.** The contact state changes the modes, so the estimate is taken for three linear states of the
