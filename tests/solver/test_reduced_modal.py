@@ -77,8 +77,9 @@ def test_delassus_contact_solve_reaches_the_shared_solves_multipliers(coarse):
     coupling pulls slave 1 down when slave 0 is pushed out: slave 0 starts 1 mm inside its master, slave 1 1.5 mm
     outside (beyond the candidate margin: idle, so it joins the sweeps only after the first pass closes it; its
     force then lifts slave 0 off, which ends open). The
-    Delassus solve of the reduced loop and the shared projected Gauss-Seidel (``contact_solve`` with the dense
-    ``W``, every slave swept) reach the same multipliers, states and corrected ``u``, ``v``.
+    Delassus solve of the reduced loop (its sweeps and exact steps) and the shared projected Gauss-Seidel
+    (``contact_solve`` with the dense ``W``, every slave swept) reach the same multipliers, states and corrected
+    ``u``, ``v``.
 
     Tolerance: both iterate until an increment moves no node pair by more than ``tol = 1e-16`` m against
     corrections of ~1e-3 m, so each stops within ``1e-13 / (1 - r)`` (relative) of the common fixed point for a
@@ -118,7 +119,8 @@ def test_delassus_contact_solve_reaches_the_shared_solves_multipliers(coarse):
             delassus_contact_solve(X, u, v, nb, dt, dt, W, slaves, pairs, ptr, masters, np.array([1.0]), pair_par,
                                    tabs, np.ones(ns), seg, geo, lam, cstate, mu[None, :], 0.0, np.zeros(ns), 500, tol,
                                    acc, np.zeros(ns, np.int64), np.zeros((ns, ns, 4)), np.zeros((ns, 2, 2 * nb)),
-                                   np.zeros((ns, 4)), np.zeros((ns, 2)))
+                                   np.zeros((ns, 4)), np.zeros((ns, 2)), np.zeros(ns, np.int64),
+                                   np.zeros((2 * ns, 2 * ns + 1)))
             assert 0 < acc[GS_SWEEPS] < 500
         out[name] = (u, v, lam, cstate)
     (ua, va, la, ca), (ub, vb, lb, cb) = out["shared"], out["delassus"]
