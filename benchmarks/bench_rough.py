@@ -29,7 +29,12 @@ for a loaded machine) and ``full_scale_steps`` of a short preload-and-slide reco
 (30 mm/s). With ``--quick`` the full-scale figures come from a 12 mm cut at the same spacing (the smoke run).
 With ``--transition`` the full-scale pair coarsens along x with depth (:mod:`fivid.fe.transition`, as the
 paper-scale study's ``transition: true``) instead: only its surface level has the Rsm/8 columns
-(``full_scale_mesh`` names which).
+(``full_scale_mesh`` names which), and its surface levels are mass-scaled as the paper-scale study's
+(``points.roughness.surface_added_mass``, or ``--surface-added-mass``; :mod:`fivid.fe.mass_scaling`): printed are
+the step used ``full_scale_time_step_s`` (0.9 of the stable step) and the unscaled model's
+``full_scale_unscaled_time_step_s``, the cap ``full_scale_surface_added_mass`` and per block its density factor and
+added mass fraction ``full_scale_mass_scaling``, the CPU time per step ``full_scale_cpu_us_per_step`` and the
+study's 1.25 ms record at that step and cost, ``full_scale_point_projected_cpu_s`` (set-up not included).
 
 Idle full-scale figures (issue 26)::
 
@@ -54,10 +59,19 @@ def main(argv=None) -> int:
     ap.add_argument("--full-scale-only", action="store_true", help="only the full-scale contact figures")
     ap.add_argument("--transition", action="store_true",
                     help="the full-scale pair coarsening along x with depth (fivid.fe.transition)")
+    ap.add_argument("--surface-added-mass", type=float, default=None,
+                    help="with --transition: mass-scale the surface levels, adding at most this fraction of each "
+                         "body's mass (fivid.fe.mass_scaling; default: the paper-scale study's "
+                         "points.roughness.surface_added_mass; 0: none)")
     args, load = parse_guarded(ap, argv)
     out = {"benchmark": "rough", "quick": bool(args.quick)}
+    added = args.surface_added_mass
+    if added is None:
+        from fivid.study.config import load_study
+
+        added = load_study(ROOT / "configs/studies/roughness_paper.yaml").points["roughness"].get("surface_added_mass")
     out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300, 0.012 if args.quick else 0.12,
-                           transition=args.transition))
+                           transition=args.transition, added_mass=float(added or 0.0) if args.transition else 0.0))
     if args.full_scale_only:
         out["load_average_1min"] = load
         print(json.dumps(out))
@@ -158,9 +172,10 @@ def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12, transition=Fals
     return load_model(cfg)
 
 
-def _full_scale(rounds, steps, length=0.12, transition=False):
+def _full_scale(rounds, steps, length=0.12, transition=False, added_mass=0.0):
     """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run, best of ``rounds``, on
-    blocks ``length`` [m] long (``--quick``: a 12 mm cut at the same surface spacing, so the smoke run stays short)."""
+    blocks ``length`` [m] long (``--quick``: a 12 mm cut at the same surface spacing, so the smoke run stays short);
+    ``added_mass``: the surface levels' mass scaling (:func:`fivid.fe.mass_scaling.surface_mass_scaling`)."""
     import dataclasses
 
     import numpy as np
@@ -171,7 +186,11 @@ def _full_scale(rounds, steps, length=0.12, transition=False):
     from fivid.solver.stencil import block_stencils
     from fivid.solver.timestep import stable_step
 
+    from fivid.fe.mass_scaling import surface_mass_scaling
+
     model = _full_scale_pair(length=length, transition=transition)
+    dt_unscaled = 0.9 * stable_step(model).critical_time_step
+    model, scaling = surface_mass_scaling(model, max_added_mass=added_mass)
     st = block_stencils(load_model(ROOT / "configs/models/triboair.yaml"))
     c_rect = st.c_uni[int(st.blocks[np.flatnonzero(st.blocks[:, 4] == 1)[0], 5])]  # the rig's interior stencil
     bare = _bare_kernels()[0]
@@ -182,18 +201,24 @@ def _full_scale(rounds, steps, length=0.12, transition=False):
     out = {"full_scale_model": f"configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um), {length * 1e3:g} mm long",
            "full_scale_mesh": "transition" if transition else "graded",
            "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
-           "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt}
-    frac, cpu, sweeps = _step_fraction(model, c_rect, bare, kw, rounds)
-    frac0, cpu0, _ = _step_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, rounds)
+           "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt,
+           "full_scale_unscaled_time_step_s": dt_unscaled, "full_scale_surface_added_mass": added_mass,
+           "full_scale_mass_scaling": {k: {"density_factor": r["factor"], "added_mass_fraction": r["added_mass_fraction"]}
+                                       for k, r in scaling.items()}}
+    frac, cpu, sweeps, step_cpu = _step_fraction(model, c_rect, bare, kw, rounds)
+    frac0, cpu0, _, _ = _step_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, rounds)
     out.update({"full_scale_fraction_of_bare_stencil": frac, "full_scale_no_contact_fraction_of_bare_stencil": frac0,
                 "full_scale_contact_share": 1.0 - frac / frac0, "full_scale_cpu_fraction_of_bare_stencil": cpu,
                 "full_scale_cpu_no_contact_fraction_of_bare_stencil": cpu0, "full_scale_cpu_contact_share": 1.0 - cpu / cpu0,
-                "full_scale_contact_gs_mean_sweeps": sweeps, "full_scale_steps": steps})
+                "full_scale_contact_gs_mean_sweeps": sweeps, "full_scale_steps": steps,
+                "full_scale_cpu_us_per_step": 1e6 * step_cpu,
+                # the paper-scale study's 1.25 ms record at this step and per-step CPU (the run's setup not included)
+                "full_scale_point_projected_cpu_s": step_cpu * 1.25e-3 / dt})
     return out
 
 
 def _step_fraction(model, c_rect, bare, kw, rounds):
-    """``(wall, cpu, mean Gauss-Seidel sweeps)``: the bare rectangular stencil + update on a ghost-padded grid of the
+    """``(wall, cpu, mean Gauss-Seidel sweeps, CPU seconds per step of the model)``: the bare rectangular stencil + update on a ghost-padded grid of the
     model's node count per block (``bench_solver.py``'s reference) over the model's full step
     (:meth:`fivid.solver.driver.PreparedRun.run` per step), by wall time and by the process's CPU time (which the
     shared machine's load inflates less), interleaved rounds, best of each."""
@@ -214,7 +239,8 @@ def _step_fraction(model, c_rect, bare, kw, rounds):
             call()
             best[key] = min(best[key], time.perf_counter() - t0)
             best[key + "_cpu"] = min(best[key + "_cpu"], time.process_time() - c0)
-    return best["bare"] / best["run"], best["bare_cpu"] / best["run_cpu"], ds.attrs.get("contact_gs_mean_sweeps")
+    return (best["bare"] / best["run"], best["bare_cpu"] / best["run_cpu"], ds.attrs.get("contact_gs_mean_sweeps"),
+            best["run_cpu"] / steps)
 
 
 if __name__ == "__main__":

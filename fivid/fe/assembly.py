@@ -181,8 +181,10 @@ def block_element_stiffness(block) -> np.ndarray:
 
 
 def block_element_mass(block, *, lumped: bool = False) -> np.ndarray:
-    """Element mass of every element of a block, shape (ny, nx, 8, 8) [kg]."""
-    return element_mass_q4(block.element_corners(), block.material.rho, block.thickness, lumped=lumped)
+    """Element mass of every element of a block, shape (ny, nx, 8, 8) [kg] (the density times the block's
+    ``mass_scale``, :mod:`fivid.fe.mass_scaling`)."""
+    return element_mass_q4(block.element_corners(), block.material.rho * block.mass_scale, block.thickness,
+                           lumped=lumped)
 
 
 def _assemble(model, element_matrices) -> "scipy.sparse.csr_matrix":  # noqa: F821

@@ -135,6 +135,9 @@ class Block:
         coordinates of their four corner nodes (of the last column for a periodic ring).
     periodic : bool
         A full ring closing on itself: ``nx`` node columns, column ``nx`` wraps to column 0.
+    mass_scale : float
+        Factor on the density in the block's mass matrices only [-] (conventional mass scaling,
+        :mod:`fivid.fe.mass_scaling`; 1: none). The stiffness is unchanged.
     """
 
     name: str
@@ -149,6 +152,7 @@ class Block:
     initial_velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
     shape: str = "quad"
     periodic: bool = False
+    mass_scale: float = 1.0
 
     @property
     def n_cols(self) -> int:

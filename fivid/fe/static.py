@@ -91,7 +91,15 @@ class ContactGeometry:
 
 
 def contact_geometry(model, u=None) -> ContactGeometry:
-    """Project every slave node onto its master edge or rigid surface (in ``coords + u``; ``u`` global, optional)."""
+    """Project every slave node onto its master edge or rigid surface (in ``coords + u``; ``u`` global, optional).
+
+    On a master edge the node's master point is the nearest of its orthogonal projections onto segments and of the
+    interior vertices it lies beyond both segments of (a vertex: :func:`fivid.contact._kernels.vertex_geometry`'s
+    gap and normal, recorded as the segment ending there at ``xi = 1``): the closest-point definition the explicit
+    solver's contact search uses (:func:`fivid.solver._contact_kernels._locate`). A node beyond the edge's ends has
+    none (gap inf)."""
+    from fivid.contact._kernels import vertex_geometry  # lazy: pulls numba
+
     x = model.coords if u is None else model.coords + np.asarray(u).reshape(-1, 2)
     nodes, pairs, segs, xis, normals, gaps, ends, vts = [], [], [], [], [], [], [], []
     for p, pair in enumerate(model.contacts):
@@ -111,23 +119,28 @@ def contact_geometry(model, u=None) -> ContactGeometry:
         a, b = x[m[:-1]], x[m[1:]]
         e = b - a
         L2 = np.einsum("ij,ij->i", e, e)
+        t_all = e / np.sqrt(L2)[:, None]
+        n_all = np.stack([t_all[:, 1], -t_all[:, 0]], axis=1)  # tangent turned clockwise: outward
         for s in np.asarray(pair.slave_nodes):
             xi = np.einsum("ij,ij->i", x[s] - a, e) / L2
             inside = np.flatnonzero((xi >= -1e-12) & (xi <= 1.0 + 1e-12))
+            # interior vertices the node lies beyond both segments of (its nearest master point may be one)
+            corner = np.flatnonzero((xi[:-1] > 1.0 + 1e-12) & (xi[1:] < -1e-12))
             nodes.append(s)
             pairs.append(p)
             vts.append(0.0)
-            if inside.size == 0:
+            cand = [(float(np.einsum("j,j->", x[s] - (a[j] + xi[j] * e[j]), n_all[j])), int(j),
+                     float(np.clip(xi[j], 0.0, 1.0)), tuple(n_all[j])) for j in inside]
+            for j in corner:
+                g, nx, ny, _, _ = vertex_geometry(*x[s], *b[j], *n_all[j], *n_all[j + 1], 1.0)
+                cand.append((float(g), int(j), 1.0, (float(nx), float(ny))))
+            if not cand:
                 segs.append(-1), xis.append(0.0), normals.append((0.0, 0.0)), gaps.append(np.inf)
                 ends.append((-1, -1))
                 continue
-            t = e[inside] / np.sqrt(L2[inside])[:, None]
-            n = np.stack([t[:, 1], -t[:, 0]], axis=1)  # tangent turned clockwise: outward
-            g = np.einsum("ij,ij->i", x[s] - (a[inside] + xi[inside, None] * e[inside]), n)
-            k = int(np.argmin(np.abs(g)))
-            segs.append(int(inside[k])), xis.append(float(np.clip(xi[inside[k]], 0.0, 1.0)))
-            normals.append(tuple(n[k])), gaps.append(float(g[k]))
-            ends.append((int(m[inside[k]]), int(m[inside[k] + 1])))
+            g, j, xi_j, n_j = min(cand, key=lambda c: abs(c[0]))  # the nearest master point
+            segs.append(j), xis.append(xi_j), normals.append(n_j), gaps.append(g)
+            ends.append((int(m[j]), int(m[j + 1])))
     area = np.concatenate([slave_areas(model, c) for c in model.contacts]) if model.contacts else np.zeros(0)
     return ContactGeometry(
         slave_node=np.array(nodes, dtype=np.int64),
@@ -284,9 +297,44 @@ def preload_displacement(model, normal_load: float | None, *, normal_weights: np
     f_ext = external_load_vector(model)  # pressure loads at full value, part of the zero-clamp solution ua
     Kfc_e = (K[:, fixed] @ e[fixed])[free]
 
-    with threadpool_limits(limits=1, user_api="blas"):  # see _FreeStiffness
-        return _active_set_iteration(K, G, Gt, geo, law_of, pen, mu, g0, usable, active, tied, e, f_ext, Kfc_e, reg,
-                                     free, fixed, normal_load, normal_weights, direction, max_iterations)
+    try:
+        with threadpool_limits(limits=1, user_api="blas"):  # see _FreeStiffness
+            return _active_set_iteration(K, G, Gt, geo, law_of, pen, mu, g0, usable, active, tied, e, f_ext, Kfc_e,
+                                         reg, free, fixed, normal_load, normal_weights, direction, max_iterations)
+    except (np.linalg.LinAlgError, RuntimeError) as exc:
+        if isinstance(exc, RuntimeError) and "singular" not in str(exc):  # splu's "Factor is exactly singular"
+            raise
+        raise _singular_preload(model, geo, G, Gt, free, mu) from exc
+
+
+def _singular_preload(model, geo, G, Gt, free, mu) -> ConfigError:
+    """The ConfigError for a singular preload system (the stiffness, or the contact rows bordering it): names the
+    model file, the slave nodes whose normal or (with friction) tangential constraint acts on prescribed dofs only
+    (both sides clamped or driven: the constraint has nothing to move), else the other likely cause, a body held by
+    nothing but contact that the preload does not hold."""
+    path = model.source.rsplit(" sha256:", 1)[0] if model.source else None
+    bad = []
+    for rows, kind in ((G, "normal"), (Gt, "tangential")):
+        dead = np.flatnonzero(geo.usable & (np.abs(rows[:, free]).sum(axis=1).A1 == 0.0))
+        if kind == "tangential":
+            dead = dead[mu[dead] > 0]
+        bad += [(int(k), kind) for k in dead]
+    if bad:
+        k, kind = bad[0]
+        c = model.contacts[geo.slave_pair[k]]
+        s = int(geo.slave_node[k])
+        more = f" (and {len(bad) - 1} more)" if len(bad) > 1 else ""
+        return ConfigError(
+            f"the static preload's contact system is singular: contact {c.name!r}, slave node {s} at "
+            f"{model.coords[s].tolist()} m{more}: its {kind} constraint ties it to a master point whose dofs, like its "
+            "own, are all prescribed (clamped or driven), so the constraint has nothing to move; leave that node out of the "
+            f"slave range (contacts.{c.name}.slave x: [from, to], e.g. half an element inside the clamped or driven "
+            "corner) or free one of the two", file=path, key=f"contacts.{c.name}.slave")
+    return ConfigError(
+        "the static preload's stiffness with the closed contact nodes is singular: likely a body held by nothing "
+        "but the contact that the preload does not hold (no clamp, spring or driven dof against a free motion, and "
+        "too few or no contact nodes closed at the preload); support that body (a clamp or spring), or give a "
+        "normal load (--load) or pressure load that closes its contact", file=path)
 
 
 def _active_set_iteration(K, G, Gt, geo, law_of, pen, mu, g0, usable, active, tied, e, f_ext, Kfc_e, reg, free, fixed,

@@ -10,7 +10,14 @@ laws and rigid surfaces are those of :mod:`fivid.contact._kernels`, the friction
 
 import math
 
-from fivid.contact._kernels import circle_radius, normal_energy, normal_pressure, rigid_geometry, surface_ramp
+from fivid.contact._kernels import (
+    circle_radius,
+    normal_energy,
+    normal_pressure,
+    rigid_geometry,
+    surface_ramp,
+    vertex_geometry,
+)
 from fivid.contact._layout_kernels import (
     CNODE_MOVED,
     CNODE_V_STEP,
@@ -81,18 +88,22 @@ def _segment_xi(X, u, npd, xs, ys, a, b):
 
 @kernel
 def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
-    """Find the master segment under slave node ``sn`` starting from ``seg_k`` (local monotone search).
+    """Find the master point nearest to slave node ``sn`` starting from segment ``seg_k`` (local monotone search).
 
-    Returns ``(segment, xi, nx, ny, tx, ty, inside)`` with the unit outward normal ``n`` and tangent ``t``.
+    Returns ``(segment, xi, nx, ny, tx, ty, inside)``: the master point is ``N0 a + N1 b`` (``N0 = 1 - xi``,
+    ``N1 = xi``) of the segment from node ``a`` to ``b``, with the unit outward normal ``n`` and tangent ``t`` there;
+    ``inside`` false: beyond the edge's ends (no master).
 
     The walk steps to the neighbour segment while the projection falls before (``xi < 0``) or beyond (``xi > 1``)
     the current one. It starts from the previous step's segment, which the slave has left by a small fraction of
-    a segment at most, so it costs one or two projections: no spatial search structure is needed. A slave facing
-    a convex master vertex (a rough master's asperity tops) projects beyond both segments meeting there: the walk
-    turns back at once and would go on alternating between the two for its whole budget of ``nseg + 1``
-    projections (on a 10 000-segment rough edge, 0.15 s per step for 2 000 such slaves). The alternation is
-    periodic from its first turn, so its end state is known: the segment the last projection of the budget
-    would be on follows from the budget's parity, and it is evaluated directly (bit-for-bit the same result).
+    a segment at most, so it costs one or two projections: no spatial search structure is needed. A walk that turns
+    back has found a slave beyond both segments meeting at an interior vertex: over a convex vertex (a rough
+    master's asperity tops, open) or under a concave one (its valleys, penetrating): its nearest master point is
+    that vertex, and its gap and normal are :func:`fivid.contact._kernels.vertex_geometry`'s (returned as the
+    segment ending at the vertex, ``xi = 1``). A penetrating slave that projects onto its segment may project onto a
+    neighbour too (under a convex vertex, where both overlap): the one with the smaller penetration (the nearer
+    surface point) is taken, so the gap is the signed distance to the edge and continuous as the slave slides
+    across the vertex (the normal turns there, as it must).
     """
     xs = X[sn] + u[sn]
     ys = X[sn + npd] + u[sn + npd]
@@ -110,16 +121,8 @@ def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
         else:
             break
         if step == -last:
-            # turned back at projection ``it``: projections it - 1, it, it + 1, ... alternate between the
-            # previous segment s + step and this one s; the budget's last projection (number nseg) is on the
-            # previous one when nseg - (it - 1) is even, and the walk ends one move later, on the other one
-            if (nseg - it + 1) % 2 == 0:
-                s += step
-                xi, ex, ey = _segment_xi(X, u, npd, xs, ys, mnodes[m0 + s], mnodes[m0 + s + 1])
-                s -= step
-            else:
-                s += step
-            break
+            # turned back: beyond both segments meeting at the vertex between s and s + step
+            return _vertex_point(X, u, npd, xs, ys, mnodes, m0, min(s, s + step), sign)
         s += step
         last = step
     L = math.sqrt(ex * ex + ey * ey)
@@ -129,7 +132,52 @@ def _locate(X, u, npd, sn, mnodes, m0, nseg, seg_k, sign):
     # in and out of contact through round-off: accept 1e-6 of a segment beyond the ends, then clamp
     inside = -1e-6 <= xi <= 1.0 + 1e-6
     xi = min(max(xi, 0.0), 1.0)
-    return s, xi, sign * ty, -sign * tx, tx, ty, inside
+    nx = sign * ty
+    ny = -sign * tx
+    if inside:
+        a = mnodes[m0 + s]
+        g = _edge_gap(X, u, npd, sn, a, mnodes[m0 + s + 1], 1.0 - xi, xi, nx, ny)
+        if g < 0.0:
+            # penetrating: a neighbour segment it also projects onto with a smaller penetration is nearer
+            for j in (s - 1, s + 1):
+                if j < 0 or j >= nseg:
+                    continue
+                xj, fx, fy = _segment_xi(X, u, npd, xs, ys, mnodes[m0 + j], mnodes[m0 + j + 1])
+                if not 0.0 <= xj <= 1.0:
+                    continue
+                Lj = math.sqrt(fx * fx + fy * fy)
+                gj = _edge_gap(X, u, npd, sn, mnodes[m0 + j], mnodes[m0 + j + 1], 1.0 - xj, xj, sign * fy / Lj,
+                               -sign * fx / Lj)
+                if gj > g:
+                    g = gj
+                    s = j
+                    xi = xj
+                    tx = fx / Lj
+                    ty = fy / Lj
+            nx = sign * ty
+            ny = -sign * tx
+    return s, xi, nx, ny, tx, ty, inside
+
+
+@kernel
+def _vertex_point(X, u, npd, xs, ys, mnodes, m0, s, sign):
+    """:func:`_locate`'s result for a slave at ``(xs, ys)`` [m] beyond both segments ``s`` and ``s + 1`` of a master
+    edge: the vertex between them (node ``mnodes[m0 + s + 1]``, ``xi = 1`` on segment ``s``) with the gap's normal
+    and tangent of :func:`fivid.contact._kernels.vertex_geometry`."""
+    a = mnodes[m0 + s]
+    v = mnodes[m0 + s + 1]
+    b = mnodes[m0 + s + 2]
+    xv = X[v] + u[v]
+    yv = X[v + npd] + u[v + npd]
+    e1x = xv - X[a] - u[a]
+    e1y = yv - X[a + npd] - u[a + npd]
+    e2x = X[b] + u[b] - xv
+    e2y = X[b + npd] + u[b + npd] - yv
+    l1 = math.sqrt(e1x * e1x + e1y * e1y)
+    l2 = math.sqrt(e2x * e2x + e2y * e2y)
+    _, nx, ny, tx, ty = vertex_geometry(xs, ys, xv, yv, sign * e1y / l1, -sign * e1x / l1, sign * e2y / l2,
+                                        -sign * e2x / l2, sign)
+    return s, 1.0, nx, ny, tx, ty, True
 
 
 @kernel
@@ -375,10 +423,9 @@ def _slave_geometry(X, u, npd, t_new, slave_node, slave_pair, master_ptr, master
                 if inside and g > margin * seg_len:
                     idle = 1.0
                 reach = SLEEP_MARGINS * margin * seg_len
-                # outside the master: a positive gap to the segment it faces (inside), or to the nearest point of the
-                # nearest segment (a slave facing none: over a concave vertex, the outward wedge between the two
-                # segments' normals, or beyond the edge's ends); a facing slave's distance to the edge is at most its
-                # gap: a cheap pre-check
+                # outside the master: a positive gap to the point it faces (a segment's foot point, or a vertex it
+                # is beyond both segments of), or to the edge's end point (beyond the edge's ends); a facing slave's
+                # distance to the edge is at most its gap: a cheap pre-check
                 if sleepy and g > reach:
                     if p != mono_pair:
                         mex, mey, mono = _monotone_direction(X, u, npd, master_nodes, m0, nseg)

@@ -17,6 +17,7 @@ import numpy as np
 
 from fivid.fe import load_model
 from fivid.fe.config import read_config
+from fivid.fe.mass_scaling import surface_mass_scaling
 from fivid.fe.rough_pair import profiled_length, rough_pair_config
 from fivid.fe.transition import transition_model
 from fivid.score.roughness import (
@@ -95,7 +96,7 @@ RSM_LEVELS = (200e-6, 300e-6)
 ROUGHNESS_TASK = {"correlation_length": None, "rsm": RSM_LEVELS, "profile_step": 5e-6, "seeds": (3, 4),
                   "sensor_every": 4, "gs_tolerance": 1e-6, "gs_max_iterations": 30, "settle_time": 0.05e-3,
                   "surfaces": "rsm_levels", "nodes_per_rsm": None, "sensor_spacing": None, "profile_files": None,
-                  "seat": False, "transition": False}
+                  "seat": False, "transition": False, "surface_added_mass": None}
 
 
 def point_profiles_design(spec: dict, conditions: dict) -> dict:
@@ -142,7 +143,9 @@ def build_point_model(model_path, spec: dict, conditions: dict):
     sensors sit on every ``round(sensor_spacing / mesh step)``-th node (``sensor_every`` otherwise); with ``seat``
     the upper block starts seated on its two supporting asperities (``rough_pair_config``'s ``seat``); with
     ``transition`` (and ``nodes_per_rsm``) both blocks coarsen along x with depth
-    (:func:`fivid.fe.transition.transition_model`: only the surface level has columns of the mesh step)."""
+    (:func:`fivid.fe.transition.transition_model`: only the surface level has columns of the mesh step); with
+    ``surface_added_mass`` (a fraction of each body's mass) their surface levels are mass-scaled
+    (:func:`fivid.fe.mass_scaling.surface_mass_scaling`; the record's ``mass_scaling``)."""
     spec = {**ROUGHNESS_TASK, **spec}
     length = profiled_length(model_path)
     design = point_profiles_design(spec, conditions)
@@ -160,6 +163,9 @@ def build_point_model(model_path, spec: dict, conditions: dict):
     model = load_model(cfg)
     if info["transition"]:
         model = transition_model(model, info["transition"])
+    info["mass_scaling"] = {}
+    if spec.get("surface_added_mass"):
+        model, info["mass_scaling"] = surface_mass_scaling(model, max_added_mass=float(spec["surface_added_mass"]))
     return model, lower, info, design
 
 
@@ -252,6 +258,11 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
                                    {"units": "s-1", "long_name": "degrees of freedom x steps / wall time"}),
         "n_dof": ((), int(model.coords.size), {"units": "1", "long_name": "degrees of freedom"}),
         "time_step": ((), float(ds.attrs["time_step"]), {"units": "s", "long_name": "solver time step"}),
+        "added_mass_fraction": ((), max([r["added_mass_fraction"] for r in info["mass_scaling"].values()], default=0.0),
+                                {"units": "1", "long_name": "mass added by the surface levels' mass scaling, largest "
+                                                            "fraction of a body's mass (fivid.fe.mass_scaling)",
+                                 "density_factors": " ".join(f"{k}:{r['factor']:.4g}"
+                                                             for k, r in info["mass_scaling"].items())}),
     }
     for key in ("Ra", "Rq", "Rz", "Rsm"):
         if key in ev:
@@ -279,6 +290,7 @@ def roughness_settings(study) -> dict:
         "surfaces": spec.get("surfaces") or "rsm_levels",
         "nodes_per_rsm": spec.get("nodes_per_rsm"), "sensor_spacing": spec.get("sensor_spacing"),
         "seat": bool(spec.get("seat")), "transition": bool(spec.get("transition")),
+        "surface_added_mass": spec.get("surface_added_mass"),
         "profile_files": spec.get("profile_files"),
         "profiles": {"generator": "fivid.surface.gaussian_random_profile", "acf": "gaussian",
                      "rq_per_ra": RQ_PER_RA,

@@ -159,23 +159,26 @@ def test_the_pooled_replicate_scatter_recovers_the_generator_sigma():
 QUICK = ROOT / "configs/models/rough_pair_paper_quick.yaml"
 
 
-@pytest.mark.parametrize("transition", [False, True], ids=["graded", "transition"])
-def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations(transition):
+@pytest.mark.parametrize("transition, added_mass", [(False, None), (True, None), (True, 0.01)],
+                         ids=["graded", "transition", "transition-mass-scaled"])
+def test_a_quick_paper_point_splits_the_drive_power_into_the_named_dissipations(transition, added_mass):
     """One point of the 12 x 2 mm cut (Table 1's Ra 26 um at Rsm/4, 12.5 cm/s, 0.45 ms): the power the drive and
     the load put in over the steady window equals friction + vibratory (damping) + impact power + the rate of
     change of the stored energies, to the solver's energy-balance error (its change over the window); each
     dissipation is >= 0; the shock intensity is the vibratory energy per shock (P = n_c E). (Friction power = mu Fn V
     is the flat pair's oracle, tests/test_roughness_graded.py: here the slip rate fluctuates about V.) Both meshes:
     graded through the depth, and coarsening along x with depth (fivid.fe.transition: tied levels, whose kernel
-    elimination must keep the balance)."""
+    elimination must keep the balance), and the latter with its surface levels mass-scaled (fivid.fe.mass_scaling:
+    the kinetic energy and the contact's Lagrange step must both use the scaled mass)."""
     from fivid.score.roughness import dissipation_rate, roughness_metrics
     from fivid.solver import IntegrationOptions, OperatingCondition, OutputOptions, RunSchedule, simulate
     from fivid.study.roughness import build_point_model
 
     model, _, _, _ = build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": 4, "sensor_spacing": 0.5e-3,
-                                               "transition": transition},
+                                               "transition": transition, "surface_added_mass": added_mass},
                                        {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0})
     assert bool(model.ties) == transition
+    assert any(b.mass_scale > 1.0 for b in model.blocks) == bool(added_mass)
     ds = simulate(model, OperatingCondition(sliding_velocity=0.125, roughness_ra=26e-6),
                   schedule=RunSchedule(duration=0.45e-3, sample_rate=2e6, settle_time=0.05e-3),
                   integration=IntegrationOptions(gs_tolerance=1e-6, gs_max_iterations=30),

@@ -104,3 +104,15 @@ def test_fitted_ring_meets_seed_002s_modal_facts():
     ds = complex_eigenvalue_analysis(model, np.linspace(0, 1, 21), n_modes=22, linearisation=Linearisation(prestress=True))
     mu_c, detail = pair_critical_mu(ds, 6)
     assert mu_c == pytest.approx(0.15, abs=0.05) and {detail["mode"], detail["partner"]} == {6, 7}
+
+
+def test_ring_header_names_the_targets_file_as_it_is():
+    """configs/models/ring.yaml's fivid-update header gives the sha256 of the targets file it was fitted against:
+    it must be the file's current content (a stale hash means the fit's provenance no longer holds)."""
+    import hashlib
+
+    root = Path(__file__).resolve().parents[2]
+    header = (root / "configs" / "models" / "ring.yaml").read_text(encoding="utf-8").splitlines()
+    line = next(x for x in header if x.startswith("# targets: "))
+    path, digest = line.removeprefix("# targets: ").split(" sha256:")
+    assert hashlib.sha256((root / path).read_bytes()).hexdigest() == digest

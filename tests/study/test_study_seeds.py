@@ -112,6 +112,10 @@ def test_ring_study_quick(tmp_path, capsys):
     by_mu = {p["mu"]: p for p in s["points"]}
     assert [by_mu[m]["regime"] for m in (0.01, 0.3)] == ["stable", "mode_coupling"]
     assert by_mu[1.0]["regime"] != "stable" and by_mu[1.0]["stick_fraction"] > by_mu[0.3]["stick_fraction"]
+    # mode coupling by the paper's marks too: a harmonic limit cycle whose bore sticks only within each cycle
+    assert by_mu[0.3]["harmonic_share"] > 0.99 and by_mu[0.3]["sustained_sticks"] == 0
+    assert by_mu[0.3]["longest_stick_periods"] < 1 and by_mu[0.3]["regime_transient"] == "mode_coupling"
+    assert by_mu[0.3]["limit_cycle_peak"] >= by_mu[0.3]["amplitude"]  # a peak is at least the RMS
     assert by_mu[0.01]["mac_with_cea"] > 0.99
     assert by_mu[0.3]["growth_rate"] > 0 and by_mu[0.3]["onset_time"] > 0
     assert s["critical_mu"]["value"] < 0.3

@@ -31,6 +31,13 @@ radius and its counter-clockwise tangent, added after the model's own sensors (t
     The bore's tangential vibration velocity amplitude in the last quarter (median over the nodes) over the core's
     surface speed: near 1 when the limit cycle is bounded by local stick within each cycle (the vibration speed
     catches up with the sliding speed), which sets the limit-cycle level to about ``2 pi f V``.
+``limit_cycle_peak``
+    The response's (first sensor's) largest excursion from its mean in the last quarter [m s-2]: the paper's
+    "amplitude of vibration" of its Fig. 9 (a time signal's envelope, not an RMS).
+``regime`` (seed 002's stick-slip), ``regime_transient``, ``harmonic_share``, ``sustained_sticks``, ``longest_stick_periods``
+    The regime by the paper's own stick-slip marks (:func:`fivid.study.analysis.zone_stick_slip`, on the second
+    half of the response and of every bore node's stick state at the full sample rate), the envelope analysis's
+    label it replaces, and the marks' measures.
 ``ods_shape_*``, ``cea_shape_*``, ``velocity_snapshot``
     The two shapes (phase-aligned, unit largest component) and four radial-velocity snapshots a quarter period
     apart at the end of the growth window, for the report's figures.
@@ -45,6 +52,7 @@ from fivid.fe.cea import Linearisation, cea_mode_shapes, complex_eigenvalue_anal
 from fivid.fe.modal import modal_analysis
 from fivid.fe.static import resolve_expansions
 from fivid.report.html import figure_data_uri, table
+from fivid.study.analysis import zone_stick_slip
 from fivid.study.kinds.sweep import FeSweep
 from fivid.study.tasks import TRANSIENT_KEYS, fe_point, refined_model
 
@@ -118,12 +126,16 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     angle = np.degrees(np.arctan2(xy[:, 1], xy[:, 0])) % 360.0
     coords["bore_angle"] = ("bore_angle", angle, {"units": "degree", "long_name": "angle of the bore node"})
     coords["component"] = ("component", np.array(["radial", "tangential"], dtype=object))
+    # the regime by seed 002's own stick-slip marks (fivid.study.analysis.zone_stick_slip), from every bore node's
+    # state at the full sample rate over the record's second half (the map below is subsampled)
+    speed = abs(c.rigid.angular_velocity * c.rigid.radius)
+    stuck = np.abs(vel[:, t_idx] - c.rigid.angular_velocity * c.rigid.radius) <= STICK_SPEED * speed
+    _paper_regime(run, stuck, fs, data)
     # contact states over the steady part
     step = max(1, t.size // MAP_SAMPLES)
     sel = slice(0, step * (t.size // step), step)
     ur = disp[sel][:, r_idx]
     vt = vel[sel][:, t_idx]
-    speed = abs(c.rigid.angular_velocity * c.rigid.radius)
     state = np.where(np.abs(vt - c.rigid.angular_velocity * c.rigid.radius) <= STICK_SPEED * speed, 0, 1)
     if c.law is not None and c.law.is_penalty:  # compliant: closed while inside the expanded core (d > 0)
         gap = ur - resolve_expansions(model).contacts[0].rigid.expansion
@@ -137,6 +149,10 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     # reaches it, the nodes stick within each cycle and friction stops feeding the mode)
     tail = vel[3 * t.size // 4:][:, t_idx]
     amp = np.max(np.abs(tail - tail.mean(axis=0)), axis=0)
+    acc = run["acceleration"]
+    x = (acc.isel(sensor=0) if "sensor" in acc.dims else acc).values[3 * t.size // 4:]
+    data["limit_cycle_peak"] = ((), float(np.max(np.abs(x - x.mean()))), {
+        "units": "m s-2", "long_name": "largest excursion of the response from its mean, last quarter"})
     data["vibration_to_sliding_speed"] = ((), float(np.median(amp) / speed), {
         "units": "1", "long_name": "median over the bore of the tangential vibration velocity amplitude (last "
                                    "quarter) over the core's surface speed"})
@@ -182,6 +198,33 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     coords["snapshot"] = ("snapshot", t[idx] - t[0], {"units": "s", "long_name": "snapshot time"})
     data["velocity_snapshot"] = (("snapshot", "bore_angle"), vel[idx][:, r_idx], {
         "units": "m s-1", "long_name": "radial velocity of the bore nodes"})
+
+
+def _paper_regime(run, stuck, fs: float, data: dict) -> None:
+    """``regime`` by :func:`fivid.study.analysis.zone_stick_slip` on the second half of the response (first
+    sensor) and of the bore's stick states; the envelope analysis's label stays as ``regime_transient``. Without
+    the paper's stick-slip marks a point keeps the envelope's label, unless that label was the gross-stick rule's
+    stick-slip: then mode coupling if its envelope grew significantly, else stable."""
+    acc = run["acceleration"]
+    x = (acc.isel(sensor=0) if "sensor" in acc.dims else acc).values
+    h = slice(x.size // 2, x.size)
+    out = zone_stick_slip(x[h], fs, stuck[h])
+    old = str(data["regime"][1])
+    rate, err = float(data["growth_rate"][1]), float(data["growth_rate_stderr"][1])
+    regime = "stick_slip" if out["stick_slip"] else old if old != "stick_slip" else (
+        "mode_coupling" if rate > 3.0 * err else "stable")
+    data["regime_transient"] = ((), np.array(old, dtype=object), {
+        "long_name": "regime by the envelope and gross-stick rules (fivid.study.analysis.analyse_transient)"})
+    data["regime"] = ((), np.array(regime, dtype=object), {
+        **data["regime"][2], "rule": "seed 002's stick-slip (p. 7, Fig. 8): fivid.study.analysis.zone_stick_slip"})
+    for key, unit, text in (
+            ("harmonic_share", "1", "share of the response power (second half) at its dominant frequency and "
+                                    "harmonics"),
+            ("sustained_sticks", "1", "bore stick runs longer than one period that release (second half)"),
+            ("longest_stick_periods", "1", "longest bore stick run (second half), in periods of the dominant "
+                                           "frequency")):
+        data[key] = ((), int(out[key]) if key == "sustained_sticks" else float(out[key]),
+                     {"units": unit, "long_name": text})
 
 
 def _state_map_figure(ds, summary) -> str:
@@ -244,7 +287,11 @@ class RingRegimes(FeSweep):
                                        ("cea_mode_frequency", "cea_mode_frequency"), ("amplitude", "amplitude"),
                                        ("best_cea_mac", "best_cea_mac"), ("best_cea_frequency", "best_cea_frequency"),
                                        ("best_cea_growth_rate", "best_cea_growth_rate"),
-                                       ("vibration_to_sliding_speed", "vibration_to_sliding_speed"))
+                                       ("vibration_to_sliding_speed", "vibration_to_sliding_speed"),
+                                       ("regime_transient", "regime_transient"),
+                                       ("limit_cycle_peak", "limit_cycle_peak"), ("harmonic_share", "harmonic_share"),
+                                       ("sustained_sticks", "sustained_sticks"),
+                                       ("longest_stick_periods", "longest_stick_periods"))
 
     def guess(self, data: dict) -> bool:
         """An FE study with a CEA and transients."""
@@ -282,7 +329,8 @@ class RingRegimes(FeSweep):
         velocity snapshots."""
         rows = [[p.get("mu"), p.get("regime"), p.get("growth_rate"), p.get("cea_growth_rate"), p.get("frequency"),
                  p.get("cea_frequency"), p.get("ods_frequency"), p.get("mac_with_cea"), p.get("best_cea_frequency"),
-                 p.get("best_cea_mac"), p.get("amplitude"), p.get("vibration_to_sliding_speed")]
+                 p.get("best_cea_mac"), p.get("amplitude"), p.get("limit_cycle_peak"), p.get("vibration_to_sliding_speed"),
+                 p.get("harmonic_share"), p.get("sustained_sticks"), p.get("regime_transient")]
                 for p in summary["points"] if "regime" in p and "mu" in p]
         if not rows:
             return
@@ -292,7 +340,11 @@ class RingRegimes(FeSweep):
         page.raw(table(["mu", "regime", "growth rate [1/s]", "CEA growth rate [1/s]", "frequency [Hz]",
                         "CEA frequency [Hz]", "growth-window frequency [Hz]", "MAC with CEA",
                         "best-matching unstable CEA mode [Hz]", "its MAC",
-                        "limit-cycle RMS [m/s²]", "vibration / sliding speed"], rows))
+                        "limit-cycle RMS [m/s²]", "limit-cycle peak [m/s²]", "vibration / sliding speed",
+                        "harmonic share", "bore sticks > 1 period", "envelope rule's regime"], rows))
+        page.paragraph("Regime: stick-slip by seed 002's marks (p. 7, Fig. 8): a stick zone that releases (a bore "
+                       "node stuck longer than one period of the dominant vibration) and a response that is not "
+                       "harmonic (harmonic share < 0.5); fivid.study.analysis.zone_stick_slip.")
         if "contact_state" in ds:
             page.figure(_state_map_figure(ds, summary), "Contact state along the bore (stick / slip / open) against "
                         "time, per μ (seed 002, Fig. 8).", "contact states")

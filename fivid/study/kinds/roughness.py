@@ -25,7 +25,7 @@ ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impuls
                   "mean_normal_force", "mean_friction_force", "open_fraction", "friction_coefficient",
                   "friction_coefficient_rms", "profile_rsm_target", "profile_Ra", "profile_Rq",
                   "profile_Rz", "profile_Rsm", "simulation_seconds", "simulation_cpu_seconds", "mesh_step",
-                  "dof_updates_per_second", "n_dof", "time_step")
+                  "dof_updates_per_second", "n_dof", "time_step", "added_mass_fraction")
 
 
 class RoughnessSettings(ConfigModel):
@@ -47,6 +47,9 @@ class RoughnessSettings(ConfigModel):
     seat: bool = Field(None, description="start the upper block seated on its two supporting asperities")
     transition: bool = Field(None, description="with nodes_per_rsm: coarsen both blocks along x with depth "
                                                "(fivid.fe.transition; only the surface level at Rsm / nodes_per_rsm)")
+    surface_added_mass: Annotated[Number, Field(ge=0, lt=1)] = Field(
+        None, description="with transition: mass-scale each block's surface level, adding at most this fraction of "
+                          "the body's mass (fivid.fe.mass_scaling; a longer stable step)")
     profile_files: Annotated[list[str], Field(min_length=2, max_length=2, description="lower, upper profile files "
                                                                                        "(surfaces: measured)")] = None
 
