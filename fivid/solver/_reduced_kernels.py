@@ -48,7 +48,12 @@ from fivid.solver._loop_kernels import add_step_work, finish_record, group_veloc
 #: exact steps (:func:`_exact_multipliers`) the Delassus solve may take per pass between its sweeps
 EXACT_STEPS = 3
 
-__all__ = ["modal_product", "delassus_contact_solve", "contact_impulse", "group_reactions", "damped_displacement", "run_modal_steps"]
+#: the most closed slaves an exact step solves for: its elimination costs ``(2c)^3 / 3``, a sweep ``O(c m)``, so
+#: beyond this the sweeps alone are cheaper (a rough pair's hundreds of closed slaves)
+EXACT_MAX_CLOSED = 48
+
+__all__ = ["modal_product", "delassus_contact_solve", "contact_impulse", "group_reactions", "damped_displacement",
+           "run_modal_steps"]
 
 
 @reassociating_kernel
@@ -272,9 +277,11 @@ def _exact_multipliers(dt, slave_pair, pair_par, geo, lam, cstate, mu, act, m, c
     equations the Gauss-Seidel update satisfies at its fixed point -- by Gaussian elimination (partial pivoting)
     on the ``2c x 2c`` system the Delassus blocks ``cmat`` give for the ``c`` closed slaves; ``rel`` and ``lam``
     moved to it. Only for rigid normal laws on master edges with a constant kinetic coefficient (the equations are
-    then linear); skipped, returning False, otherwise, when no slave is closed, when the system is singular or when
+    then linear); skipped, returning False, otherwise, when no slave or more than :data:`EXACT_MAX_CLOSED` are
+    closed, when the system is singular or when
     it would pull a slave (``lam_n < 0``): the sweeps go on from where they were and decide (they verify the states
-    in every case). ``closed`` (ns,) int and ``dmat`` (2 ns, 2 ns + 1) are work arrays."""
+    in every case). ``closed`` (ns,) int and ``dmat`` (2 c_max, 2 c_max + 1), ``c_max = min(ns,
+    EXACT_MAX_CLOSED)``, are work arrays."""
     c = 0
     for i in range(m):
         k = act[i]
@@ -286,7 +293,7 @@ def _exact_multipliers(dt, slave_pair, pair_par, geo, lam, cstate, mu, act, m, c
             return False
         closed[c] = i
         c += 1
-    if c == 0:
+    if c == 0 or c > EXACT_MAX_CLOSED:
         return False
     nn = 2 * c
     dt2 = dt * dt
@@ -387,7 +394,8 @@ def delassus_contact_solve(X, u, v, nb, dt, t_new, wmat, slave_node, slave_pair,
     Gauss-Seidel residual, ~6e-7 of their largest values on the coarse rig).
 
     Work arrays (``ns`` slaves, ``nb`` boundary nodes): ``act`` (ns,) int, ``cmat`` (ns, ns, 4), ``resp``
-    (ns, 2, 2 nb), ``rel`` (ns, 4), ``applied`` (ns, 2), ``closed`` (ns,) int, ``dmat`` (2 ns, 2 ns + 1).
+    (ns, 2, 2 nb), ``rel`` (ns, 4), ``applied`` (ns, 2), ``closed`` (ns,) int, ``dmat`` (2 c_max, 2 c_max + 1)
+    (:func:`_exact_multipliers`).
     """
     ns = slave_node.shape[0]
     friction_now(mu_tab, mu_rate, t_new, mu_now)
@@ -526,7 +534,7 @@ def run_modal_steps(
     rel = np.zeros((ns, 4))
     applied = np.zeros((ns, 2))
     closed = np.zeros(ns, dtype=np.int64)
-    dmat = np.zeros((2 * ns, 2 * ns + 1))
+    dmat = np.zeros((2 * min(ns, EXACT_MAX_CLOSED), 2 * min(ns, EXACT_MAX_CLOSED) + 1))
     for r in range(n_out):
         start_record(react_acc, rec_contact[r])
         for sub in range(n_sub):
@@ -565,9 +573,10 @@ def run_modal_steps(
             else:
                 _boundary_step(phib, qd, qb, qdb, dt)
             if ns > 0:
-                delassus_contact_solve(X, qb, qdb, nb, dt, t + dt, wmat, slave_node, slave_pair, master_ptr, master_nodes,
-                                       pair_sign, pair_par, law_tab, s_area, seg, geo, lam_c, cstate, mu_tab, mu_rate,
-                                       mu_now, gs_max_iter, gs_tol, acc, act, cmat, resp, rel, applied, closed, dmat)
+                delassus_contact_solve(X, qb, qdb, nb, dt, t + dt, wmat, slave_node, slave_pair, master_ptr,
+                                       master_nodes, pair_sign, pair_par, law_tab, s_area, seg, geo, lam_c, cstate,
+                                       mu_tab, mu_rate, mu_now, gs_max_iter, gs_tol, acc, act, cmat, resp, rel, applied,
+                                       closed, dmat)
                 contact_impulse(cimp, nb, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par, geo, lam_c,
                                 cstate)
                 _modal_impulse(phib, cimp, gimp)
