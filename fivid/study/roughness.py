@@ -91,6 +91,11 @@ def identification_run(ds):
 #: Rsm levels [m] of the study's profiles, one per replicate (sweep axis ``seed``: replicate r takes level
 #: r mod 2): inside seed 003's Table 1 range (92-516 um) and resolved by >= 8 elements of rough_pair_graded.yaml
 RSM_LEVELS = (200e-6, 300e-6)
+#: Table 1 surfaces are synthesised at Rsm / this, whatever the mesh (``nodes_per_rsm``): the random draws of a
+#: spectral synthesis depend on its sample count, so a step that followed the mesh gave every resolution its own
+#: surface, and a convergence check compared two realisations, not two resolutions; 24 samples per Rsm are the
+#: nodes of the finest mesh checked (Rsm/12) and twice those of the study's Rsm/8
+TABLE1_SYNTHESIS_PER_RSM = 24
 #: study task defaults (``points: roughness:``; docs/roughness.md). ``correlation_length`` None: from the
 #: replicate's Rsm level (``rsm``, read with this default until the study config accepts the key)
 ROUGHNESS_TASK = {"correlation_length": None, "rsm": RSM_LEVELS, "profile_step": 5e-6, "seeds": (3, 4),
@@ -121,8 +126,7 @@ def _point_profiles(spec: dict, conditions: dict, length: float, design: dict):
     kind = spec.get("surfaces") or "rsm_levels"
     if kind == "table1":
         rsm = table1_row(ra)["Rsm"]
-        step = rsm / (2 * spec["nodes_per_rsm"]) if spec.get("nodes_per_rsm") else None
-        return table1_profiles(ra, length, seeds=design["seeds"], step=step), rsm
+        return table1_profiles(ra, length, seeds=design["seeds"], step=rsm / TABLE1_SYNTHESIS_PER_RSM), rsm
     if kind == "measured":
         lower, upper = measured_rough_profiles(*spec["profile_files"], length)
         rsm = evaluate_profile(lower, form="line").parameters["Rsm"]

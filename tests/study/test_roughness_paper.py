@@ -283,3 +283,19 @@ def test_the_transition_mesh_keeps_the_surfaces_loads_and_clamps_of_the_pair():
         assert y[edge].min() == 0.0 and y[edge].max() == b.coords[-1, col, 1]  # back face to surface
     drive = tr.motion("base")
     assert np.ptp(y[drive.nodes]) == pytest.approx(2e-3, rel=0.05) and not np.isin(drive.nodes, tied).any()
+
+
+def test_one_replicate_is_one_surface_at_every_mesh_resolution():
+    """A Table 1 point's profiles do not depend on nodes_per_rsm (synthesised at Rsm / TABLE1_SYNTHESIS_PER_RSM):
+    a resolution check compares two meshes of one surface; the finer mesh's surface nodes lie on that profile."""
+    from fivid.study.roughness import build_point_model
+
+    cond = {"roughness_ra": 26e-6, "normal_load": 1.0, "seed": 0}
+    built = [build_point_model(QUICK, {"surfaces": "table1", "nodes_per_rsm": n, "transition": True}, cond)
+             for n in (8, 12)]
+    (m8, p8, _, d8), (m12, p12, _, d12) = built
+    np.testing.assert_array_equal(p8.values, p12.values)
+    assert d12["mesh_step"] < d8["mesh_step"]
+    b = m12.block("lower")
+    z = np.interp(b.coords[-1, :, 0], p12["x"].values, p12.values)
+    assert np.abs(b.coords[-1, :, 1] - 2e-3 - z).max() <= 1e-15
