@@ -17,7 +17,8 @@ every later run, e.g. a new data set on the same rig). Prints one JSON line:
   (the dask workers);
 - ``discretisation_error_db``: the report's estimated model error of the fine (warm) run (``discretisation.json``
   key ``estimate_db``; acceptance <= 1), ``coarse_discretisation_error_db``; the verdicts, the solver paths and
-  ``fine_simulate_stage_s`` / ``coarse_simulate_stage_s`` (the simulate stage's own wall time);
+  ``fine_simulate_stage_s`` / ``coarse_simulate_stage_s`` (the simulate stage's own wall time) and their ratio
+  ``fine_vs_coarse_simulate_stage_ratio``;
 - ``load_average_1min`` at the start (the benchmark refuses to run above the core count unless ``--force``).
 
 The README's figures (wall and CPU time of the main job) are ``fine_cold_wall_s`` and ``fine_cold_cpu_s``.
@@ -123,6 +124,8 @@ def main(argv=None) -> int:
         "coarse_cold_cpu_s": jobs["coarse_cold"]["cpu_s"],
         "fine_simulate_stage_s": fine["simulate_stage_s"],
         "coarse_simulate_stage_s": coarse["simulate_stage_s"],
+        "fine_vs_coarse_simulate_stage_ratio": (fine["simulate_stage_s"] / coarse["simulate_stage_s"]
+                                                if fine["simulate_stage_s"] and coarse["simulate_stage_s"] else None),
         "fine_cold_simulate_stage_s": jobs["fine_cold"]["simulate_stage_s"],
         "discretisation_error_db": fine["estimate_db"],
         "coarse_discretisation_error_db": coarse["estimate_db"],

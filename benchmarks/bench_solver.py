@@ -42,7 +42,10 @@ The reduced path by default (issue 30, :func:`_auto_path`): ``auto_speedup_warm`
 end-to-end wall time of ``fivid simulate`` with its defaults (the automatic choice; warm and empty basis cache)
 over ``fivid simulate --full``, ``auto_band_lsd_db`` (their PSDs), ``reduced_setup_s`` (the basis build of the
 cold run; this key replaces the reduced comparison's set-up time above), on the default rig for 0.1 s (coarse rig,
-0.03 s with ``--quick``).
+0.03 s with ``--quick``). The automatic path's reduced loop on the default (fine) against the coarse rig
+(:func:`_reduced_fine_vs_coarse`, 0.05 s, 0.01 s with ``--quick``): ``reduced_fine_us_per_step``,
+``reduced_coarse_us_per_step`` (CPU time), ``reduced_fine_vs_coarse_step_cost_ratio`` and
+``reduced_fine_vs_coarse_loop_ratio`` (the same simulated time), sweeps per step of each.
 """
 
 from __future__ import annotations
@@ -232,6 +235,7 @@ def main(argv=None) -> int:
     factor = args.mass_scaling if args.mass_scaling is not None else 6.0 if args.quick else 18.0
     out.update(_reduced_comparison(rmodel, kw, 0.03 if args.quick else 0.05, rounds, factor))
     out.update(_auto_path(rpath, "0.03 s" if args.quick else "0.1 s"))  # the reduced path by default (issue 30)
+    out.update(_reduced_fine_vs_coarse(default, coarse, kw, 0.01 if args.quick else 0.05, rounds))
     out["load_average_1min_end"] = round(os.getloadavg()[0], 2)
     print(json.dumps(out))
     return 0
@@ -413,6 +417,37 @@ def _reduced_comparison(model, kw, duration, rounds, scaling_factor):
         "full_mean_friction_n": _steady_mean(runs["full"], "friction_force"),
     }
     return out
+
+
+def _reduced_fine_vs_coarse(default, coarse, kw, duration, rounds):
+    """The reduced time loop of the default (fine) and of the coarse rig as the automatic path runs them (issue 30:
+    the pipeline's simulate stage on the fine rig against the coarse one), interleaved in this process, best of
+    ``rounds``: CPU time per step (``reduced_fine_us_per_step``, ``reduced_coarse_us_per_step``; the loop is serial,
+    so CPU time is its cost even on a loaded machine), their ratio ``reduced_fine_vs_coarse_step_cost_ratio``, the
+    loops' ratio over the same simulated time ``reduced_fine_vs_coarse_loop_ratio`` (the fine rig takes fewer,
+    longer steps) and the contact solve's Gauss-Seidel sweeps per step."""
+    from fivid.solver import _kernels as K
+    from fivid.solver.driver import prepare_run
+    from fivid.solver.reduced import integrate_reduced
+
+    best = {}
+    preps = {name: prepare_run(m, **_lasting(kw, duration, reduced="auto")) for name, m in (("fine", default),
+                                                                                         ("coarse", coarse))}
+    for _ in range(rounds):
+        for name, prep in preps.items():
+            if prep.reduced is None:
+                raise SystemExit(f"the automatic path chose the full model for the {name} rig: {prep.choice}")
+            t0 = time.process_time()
+            raw = integrate_reduced(prep.model, prep.reduced, prep.friction, prep.settings)
+            cpu = time.process_time() - t0
+            steps = prep.settings.n_intervals * prep.settings.steps_per_interval
+            if cpu < best.get(name, (np.inf,))[0]:
+                best[name] = (cpu, steps, raw.acc[K.GS_SWEEPS] / steps)
+    (fc, fs, fsw), (cc, cs, csw) = best["fine"], best["coarse"]
+    return {"reduced_fine_us_per_step": fc / fs * 1e6, "reduced_coarse_us_per_step": cc / cs * 1e6,
+            "reduced_fine_vs_coarse_step_cost_ratio": (fc / fs) / (cc / cs),
+            "reduced_fine_vs_coarse_loop_ratio": fc / cc, "reduced_fine_sweeps_per_step": fsw,
+            "reduced_coarse_sweeps_per_step": csw, "reduced_fine_vs_coarse_simulated_s": duration}
 
 
 def _auto_path(model_path, duration):

@@ -504,13 +504,35 @@ def _clear_moved(slave_node, slave_pair, master_ptr, master_nodes, pair_par, seg
 
 
 @kernel
+def _multiplier_update(par_p, tab, area, mu_k, dt, g, ln, lt, vx, vy, nx, ny, tx, ty, vs, wx, wxy, wy):
+    """The projected Gauss-Seidel update of one slave's multipliers ``(ln, lt)`` [N] (:func:`contact_solve`): at
+    gap ``g`` [m], relative velocity ``(vx, vy)`` [m s-1] of ``slave - (N0 a + N1 b)``, unit normal and tangent,
+    the master's surface velocity ``vs`` along ``t`` and the inverse mass ``(wx, wxy, wy)`` [kg-1] of that relative
+    motion (:func:`_pair_compliance`). Returns ``(ln_new, lt_new, state, wn, wt)``: state 0 open, 1 stick, 2 slip,
+    and the gap's and the tangential increment's responses [m N-1] to their multipliers."""
+    dt2 = dt * dt
+    wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
+    ln_new = _normal_update(int(par_p[LAW]), par_p[LAW_COEFFICIENT], par_p[LAW_EXPONENT], tab, area, g, ln, wn)
+    dn = ln_new - ln
+    # tangential: relative tangential increment over the step (the master's surface velocity removed),
+    # including the normal correction
+    rx = vx + dt * dn * nx * wx + dt * dn * ny * wxy
+    ry = vy + dt * dn * ny * wy + dt * dn * nx * wxy
+    st = dt * (rx * tx + ry * ty - vs)
+    wt = dt2 * (tx * tx * wx + ty * ty * wy + 2.0 * tx * ty * wxy)
+    lt_new, state = _tangential_update(lt, st, wt, ln_new, mu_k, par_p, dt)
+    if ln_new == 0.0:
+        state = 0
+    return ln_new, lt_new, state, wn, wt
+
+
+@kernel
 def _gauss_seidel_sweep(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
                         pair_par, law_tab, s_area, seg, geo, lam, cstate, mu, cnode_slot, vold_c):
     """One projected Gauss-Seidel sweep over the slaves facing their master and not idle (see
     :func:`contact_solve`; a rigid circle at its radius at ``t_new`` [s]): update each multiplier pair and apply its
     increment at once. Returns the largest displacement [m] an increment moved a node pair by."""
     ns = slave_node.shape[0]
-    dt2 = dt * dt
     change = 0.0
     for k in range(ns):
         if geo[k, GEO_INSIDE] == 0.0:
@@ -541,21 +563,12 @@ def _gauss_seidel_sweep(X, u, v, npd, dt, t_new, minv_c, wmat, slave_node, slave
             g = rigid_geometry(int(pair_par[p, MASTER]), pair_par[p, SURFACE_X], pair_par[p, SURFACE_Y],
                                _rigid_a(pair_par[p], t_new), pair_par[p, SURFACE_B], 0.0, 0.0, X[sn], X[sn + npd],
                                X[sn] + u[sn], X[sn + npd] + u[sn + npd])[0]
-        wn = dt2 * (nx * nx * wx + ny * ny * wy + 2.0 * nx * ny * wxy)
         ln = lam[k, 0]
-        ln_new = _normal_update(int(pair_par[p, LAW]), pair_par[p, LAW_COEFFICIENT], pair_par[p, LAW_EXPONENT],
-                                law_tab[p], s_area[k], g, ln, wn)
-        dn = ln_new - ln
-        # tangential: relative tangential increment over the step (the master's surface velocity removed),
-        # including the normal correction
-        rx = v[sn] - n0 * v[a] - n1 * v[b] + dt * dn * nx * wx + dt * dn * ny * wxy
-        ry = v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd] + dt * dn * ny * wy + dt * dn * nx * wxy
-        st = dt * (rx * tx + ry * ty - geo[k, GEO_SURFACE_VELOCITY])
-        wt = dt2 * (tx * tx * wx + ty * ty * wy + 2.0 * tx * ty * wxy)
         lt = lam[k, 1]
-        lt_new, state = _tangential_update(lt, st, wt, ln_new, mu[k], pair_par[p], dt)
-        if ln_new == 0.0:
-            state = 0
+        ln_new, lt_new, state, wn, wt = _multiplier_update(
+            pair_par[p], law_tab[p], s_area[k], mu[k], dt, g, ln, lt, v[sn] - n0 * v[a] - n1 * v[b],
+            v[sn + npd] - n0 * v[a + npd] - n1 * v[b + npd], nx, ny, tx, ty, geo[k, GEO_SURFACE_VELOCITY], wx, wxy, wy)
+        dn = ln_new - ln
         dtn = lt_new - lt
         if dn != 0.0 or dtn != 0.0:  # an open node far from its master (most of them) moves nothing
             _apply_contact_force(u, v, npd, dt, minv_c, wmat, cnode_slot, vold_c, sn, a, b, n0, n1,

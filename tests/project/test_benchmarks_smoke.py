@@ -24,7 +24,8 @@ POSITIVE = {
                         "curved_fraction_of_bare_stencil", "curved_stencil_fraction_of_bare_stencil",
                         "rough_fraction_of_bare_stencil", "rough_no_contact_fraction_of_bare_stencil",
                         "rough_no_contact_stencil_fraction_of_bare_stencil", "reduced_speedup", "reduced_setup_s",
-                        "parallel_1thread_dof_updates_per_s"],
+                        "parallel_1thread_dof_updates_per_s", "reduced_fine_vs_coarse_step_cost_ratio",
+                        "reduced_fine_vs_coarse_loop_ratio"],
     "bench_modes.py": ["n_dofs", "modes_s", "lu_s", "cea_s", "full_order_point_s", "cea_speedup"],
     "bench_damping.py": ["rayleigh_wall_s", "band_limited_wall_s", "rayleigh_steps_per_s", "fast_speedup",
                          "fast_rms_ratio"],
@@ -35,7 +36,7 @@ POSITIVE = {
     "bench_ingest.py": ["rows", "rows_per_s", "fivid_ingest_s", "pandas_pyarrow_s", "time_ratio_vs_pandas_pyarrow"],
     "bench_update.py": ["update_params", "update_evaluations", "update_s", "ema_s"],
     "bench_pipeline.py": ["fine_wall_s", "coarse_wall_s", "fine_vs_coarse_wall_ratio", "fine_cold_wall_s",
-                          "coarse_cold_wall_s", "fine_cpu_s", "fine_cold_cpu_s"],
+                          "coarse_cold_wall_s", "fine_cpu_s", "fine_cold_cpu_s", "fine_vs_coarse_simulate_stage_ratio"],
     "bench_prestress.py": ["ring_dofs", "rig_dofs", "steps", "step_s", "prestress_step_s", "steps_rig", "step_s_rig",
                            "prestress_step_s_rig"],
 }

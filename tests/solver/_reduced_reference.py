@@ -1,8 +1,10 @@
 """Reference for the modal stepping of the reduced path (tests/solver/test_reduced_modal.py): the reduced system
 stepped in its physical Craig-Bampton coordinates with the dense inverse mass ``M_FF^-1`` -- fivid's own kernel
-before the modal coordinates (``fivid/solver/_reduced_kernels.py`` at commit d5535b7; the contact forces on the
-boundary, the group reactions, the energy rates and the damped displacement from the shared kernels of
-:mod:`fivid.solver._reduced_kernels`), compiled without the on-disk cache.
+before the modal coordinates (``fivid/solver/_reduced_kernels.py`` at commit d5535b7; the contact solve
+(``delassus_contact_solve``, which replaced the shared ``contact_step`` there), the contact forces on the boundary,
+the group reactions, the energy rates and the damped displacement from the shared kernels of
+:mod:`fivid.solver._reduced_kernels`), compiled without the on-disk cache. The contact solve is tested against the
+shared projected Gauss-Seidel on its own (test_reduced_modal.py).
 
 Coordinates ``q``: the x then the y displacements of the ``nb`` boundary nodes, the fixed-interface modes, then the
 groups; stiffness dense ``kc`` over the constraint coordinates ``cidx`` and diagonal ``kdiag`` over the modes.
@@ -12,10 +14,16 @@ import numpy as np
 from numba import njit
 
 from fivid.contact._layout_kernels import CNODE_V_STEP, N_CNODE, N_GEO
-from fivid.solver._contact_kernels import contact_step, contact_work
+from fivid.solver._contact_kernels import contact_work
 from fivid.solver._kernels import OK, constrained_velocity
 from fivid.solver._loop_kernels import add_step_work, finish_record, group_velocities, start_record
-from fivid.solver._reduced_kernels import _mid_step_work, contact_impulse, damped_displacement, group_reactions
+from fivid.solver._reduced_kernels import (
+    _mid_step_work,
+    contact_impulse,
+    damped_displacement,
+    delassus_contact_solve,
+    group_reactions,
+)
 
 kernel = njit(cache=False)
 reassociating_kernel = njit(cache=False, fastmath={"contract", "reassoc"})
@@ -75,6 +83,9 @@ def run_reduced_steps(
     n_out = nsteps // n_sub
     ns = slave_node.shape[0]
     mag = np.zeros(ng)
+    act, closed = np.zeros(ns, dtype=np.int64), np.zeros(ns, dtype=np.int64)
+    cmat, resp, rel = np.zeros((ns, ns, 4)), np.zeros((ns, 2, 2 * nb)), np.zeros((ns, 4))
+    applied, dmat = np.zeros((ns, 2)), np.zeros((2 * ns, 2 * ns + 1))
     for r in range(n_out):
         start_record(react_acc, rec_contact[r])
         for sub in range(n_sub):
@@ -105,9 +116,9 @@ def run_reduced_steps(
                     nd = cnodes[c]
                     vold_c[c, CNODE_V_STEP] = vold[nd]
                     vold_c[c, CNODE_V_STEP + 1] = vold[nd + nb]
-                contact_step(X, q, qd, nb, dt, t + dt, minv_c, wmat, slave_node, slave_pair, master_ptr, master_nodes,
-                             pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_tab, mu_rate, mu_now,
-                             gs_max_iter, gs_tol, acc, cnode_slot, vold_c)
+                delassus_contact_solve(X, q, qd, nb, dt, t + dt, wmat, slave_node, slave_pair, master_ptr, master_nodes,
+                                       pair_sign, pair_par, law_tab, s_area, seg, geo, lam, cstate, mu_tab, mu_rate,
+                                       mu_now, gs_max_iter, gs_tol, acc, act, cmat, resp, rel, applied, closed, dmat)
                 contact_impulse(cimp, nb, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par, geo, lam,
                                 cstate)
                 _matvec(minv_ff, cimp, scratch, nbd, nf, nbd)

@@ -70,3 +70,62 @@ def test_modal_arrays_diagonalise_the_free_part():
     np.testing.assert_allclose(m["wmat"], np.linalg.inv(M[:nf, :nf])[:2 * nb, :2 * nb], rtol=1e-10)
     np.testing.assert_array_equal(m["kgf"], m["kfg"].T)
     np.testing.assert_array_equal(m["bgf"], m["bfg"].T)
+
+
+def test_delassus_contact_solve_reaches_the_shared_solves_multipliers(coarse):
+    """Two slaves on a three-node master edge with a dense symmetric positive definite inverse mass ``W`` whose
+    coupling pulls slave 1 down when slave 0 is pushed out: slave 0 starts 1 mm inside its master, slave 1 1.5 mm
+    outside (beyond the candidate margin: idle, so it joins the sweeps only after the first pass closes it; its
+    force then lifts slave 0 off, which ends open). The
+    Delassus solve of the reduced loop (its sweeps and exact steps) and the shared projected Gauss-Seidel
+    (``contact_solve`` with the dense ``W``, every slave swept) reach the same multipliers, states and corrected
+    ``u``, ``v``.
+
+    Tolerance: both iterate until an increment moves no node pair by more than ``tol = 1e-16`` m against
+    corrections of ~1e-3 m, so each stops within ``1e-13 / (1 - r)`` (relative) of the common fixed point for a
+    contraction rate ``r`` of the sweeps; 1e-9 allows ``r`` up to ``1 - 1e-4``."""
+    from fivid.contact import kernel_row, kernel_tables
+    from fivid.contact._layout_kernels import N_CNODE, N_GEO
+    from fivid.solver._contact_kernels import contact_solve
+    from fivid.solver._kernels import GS_SWEEPS, N_ACC
+    from fivid.solver._reduced_kernels import delassus_contact_solve
+
+    c = coarse.contacts[0]
+    pair_par = np.array([kernel_row(c.law, c.friction, c.rigid)], dtype=float)
+    tabs = kernel_tables([c.law])
+    nb, ns, dt, tol = 5, 2, 1e-3, 1e-16
+    X = np.array([0.5, 1.5, 0.0, 1.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # master nodes 2, 3, 4 along y = 0
+    rng = np.random.default_rng(2)
+    A = rng.standard_normal((2 * nb, 2 * nb))
+    W = A @ A.T / 10.0 + np.eye(2 * nb)
+    W[6, 5] = W[5, 6] = -0.9 * np.sqrt(W[5, 5] * W[6, 6])
+    W += 0.2 * np.eye(2 * nb)
+    assert np.linalg.eigvalsh(W).min() > 0.0
+    u0 = np.zeros(2 * nb)
+    u0[nb], u0[nb + 1] = -1e-3, 1.5e-3
+    v0 = 1e-3 * rng.standard_normal(2 * nb)
+    slaves, pairs, ptr, masters = np.array([0, 1]), np.array([0, 0]), np.array([0, 3]), np.array([2, 3, 4])
+    mu = np.full(ns, 0.3)
+    out = {}
+    for name in ("shared", "delassus"):
+        u, v = u0.copy(), v0.copy()
+        seg, geo, lam, cstate = np.array([0, 1]), np.zeros((ns, N_GEO)), np.zeros((ns, 2)), np.zeros(ns, np.int64)
+        if name == "shared":
+            contact_solve(X, u, v, nb, dt, dt, np.zeros(2 * nb), W, slaves, pairs, ptr, masters, np.array([1.0]),
+                          pair_par, tabs, np.ones(ns), seg, geo, lam, cstate, mu, 500, tol, np.arange(nb),
+                          np.zeros((nb, N_CNODE)), np.inf)
+        else:
+            acc = np.zeros(N_ACC)
+            delassus_contact_solve(X, u, v, nb, dt, dt, W, slaves, pairs, ptr, masters, np.array([1.0]), pair_par,
+                                   tabs, np.ones(ns), seg, geo, lam, cstate, mu[None, :], 0.0, np.zeros(ns), 500, tol,
+                                   acc, np.zeros(ns, np.int64), np.zeros((ns, ns, 4)), np.zeros((ns, 2, 2 * nb)),
+                                   np.zeros((ns, 4)), np.zeros((ns, 2)), np.zeros(ns, np.int64),
+                                   np.zeros((2 * ns, 2 * ns + 1)))
+            assert 0 < acc[GS_SWEEPS] < 500
+        out[name] = (u, v, lam, cstate)
+    (ua, va, la, ca), (ub, vb, lb, cb) = out["shared"], out["delassus"]
+    assert la[1, 0] > 0.0 and ca.tolist() == [0, 1]  # slave 1 joined and sticks; slave 0, lifted by it, opened
+    np.testing.assert_array_equal(cb, ca)
+    np.testing.assert_allclose(lb, la, rtol=1e-9)
+    assert np.abs(ub - ua).max() <= 1e-9 * np.abs(ua - u0).max()
+    assert np.abs(vb - va).max() <= 1e-9 * np.abs(va - v0).max()
