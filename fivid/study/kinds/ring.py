@@ -135,8 +135,7 @@ def _bore_analysis(model, run, data, coords, conditions, *, prestress: bool = Tr
     step = max(1, t.size // MAP_SAMPLES)
     sel = slice(0, step * (t.size // step), step)
     ur = disp[sel][:, r_idx]
-    vt = vel[sel][:, t_idx]
-    state = np.where(np.abs(vt - c.rigid.angular_velocity * c.rigid.radius) <= STICK_SPEED * speed, 0, 1)
+    state = np.where(stuck[sel], 0, 1)  # the map's states: the stick test above, subsampled
     if c.law is not None and c.law.is_penalty:  # compliant: closed while inside the expanded core (d > 0)
         gap = ur - resolve_expansions(model).contacts[0].rigid.expansion
     else:  # rigid: the closed nodes share the cylinder's radius
