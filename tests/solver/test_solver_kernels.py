@@ -88,7 +88,7 @@ def _prepare(model, n_int, n_sub, dt):
     return st, ka, fric
 
 
-def _run(fn, model, st, ka, fric, n_int, n_sub, dt, u0, v0):
+def _run(fn, model, st, ka, fric, n_int, n_sub, dt, u0, v0, active=None):
     from fivid.solver import _kernels as K
     from fivid.solver import _loop_kernels as L
     from fivid.solver.integrate import loop_arguments, loop_state
@@ -100,6 +100,8 @@ def _run(fn, model, st, ka, fric, n_int, n_sub, dt, u0, v0):
     sens = np.zeros((n_int, ka.sens_node.size, 2))
     contact = np.zeros((n_int, npairs, 5))
     fixed = loop_arguments(model, st, ka, fric, dt, 100, 1e-12)
+    if active is not None:  # the predictor's dof ranges (default: the dofs with mass)
+        fixed = (fixed[0], fixed[1]._replace(active=active), *fixed[2:])
     cs, state = loop_state(st, ka, u, v, model.rayleigh_beta)
     records = L.Records(rec, sens, contact, np.zeros(2, dtype=np.int64), ka.sens_node, ka.sens_dir)
     status, done = fn(0, n_int * n_sub, dt, n_sub, 2.0, *fixed, cs, state, records)
@@ -157,6 +159,41 @@ def test_time_loop_equals_naive_numpy_central_difference(cutoff):
     scale = np.abs(ur).max()
     assert np.abs(u - ur).max() <= n_int * n_sub * EPS * scale * roundings
     assert np.abs(v - vr).max() <= n_int * n_sub * EPS * np.abs(vr).max() * roundings
+
+
+@pytest.mark.parametrize("cutoff", [False, True])
+def test_predictor_over_the_massive_dofs_equals_the_full_loop(cutoff):
+    """The predictor integrates only the dofs with mass (``Structure.active``, :func:`massive_ranges`): on a block
+    coarsening in tied levels (its tied nodes massless) the run is bit for bit the one whose predictor sweeps every
+    entry -- every dof's displacement and velocity and every record -- with classic and band-limited damping."""
+    from fivid.fe.transition import transition_model
+    from fivid.solver import _loop_kernels as L
+    from fivid.solver.integrate import massive_ranges
+    from fivid.solver.timestep import stable_step
+    from tests.fe.test_fe_transition import _block
+
+    import dataclasses
+
+    model = transition_model(_block(96, 1, length=12e-3, depth=2e-3, amplitude=5e-6), ["lower"], max_width=1e-3)
+    model = dataclasses.replace(model, rayleigh_alpha=300.0, rayleigh_beta=1e-9,
+                                damping_cutoff=2e5 if cutoff else np.inf)
+    dt = 0.9 * stable_step(model).critical_time_step
+    n_int, n_sub = 5, 20
+    st, ka, fric = _prepare(model, n_int, n_sub, dt)
+    ranges = massive_ranges(ka.mass)
+    assert 1 < ranges.shape[0] and (ranges[:, 1] - ranges[:, 0]).sum() < 0.9 * ka.mass.size  # tied rows skipped
+    rng = np.random.default_rng(4)
+    u0 = 1e-7 * rng.standard_normal(model.n_dofs)
+    v0 = 1e-2 * rng.standard_normal(model.n_dofs)
+    for x in (u0, v0):
+        x[model.fixed_dofs] = 0.0
+        x[model.tied_dofs] = 0.0  # a tied node has no state of its own
+    out = _run(L.run_steps, model, st, ka, fric, n_int, n_sub, dt, u0, v0)
+    full = _run(L.run_steps, model, st, ka, fric, n_int, n_sub, dt, u0, v0,
+                active=np.array([[0, ka.mass.size]], dtype=np.int64))
+    for a, b in zip(out, full):
+        np.testing.assert_array_equal(a, b)
+    assert np.abs(out[0]).max() > 1e-7  # it moved
 
 
 def test_kernel_equals_py_func_with_contact_and_friction():
