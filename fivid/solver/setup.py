@@ -22,7 +22,8 @@ from fivid.fe.loads import pressure_forces
 from fivid.fe.prestress import geometric_stiffness_matrix
 from fivid.solver.stencil import BlockStencils
 
-__all__ = ["LoadingSequence", "KernelArrays", "kernel_arrays", "KIND_FIXED", "KIND_DISPLACEMENT", "KIND_VELOCITY"]
+__all__ = ["LoadingSequence", "KernelArrays", "kernel_arrays", "constrained_contact_dofs", "KIND_FIXED",
+           "KIND_DISPLACEMENT", "KIND_VELOCITY"]
 
 KIND_FIXED = 0
 KIND_DISPLACEMENT = 1

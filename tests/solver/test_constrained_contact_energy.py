@@ -1,5 +1,5 @@
-"""Contact nodes on constrained dofs: their constraint takes the contact force (fivid.solver.setup.constrained_contact_dofs,
-fivid.solver._contact_kernels.contact_reactions).
+"""Contact nodes on constrained dofs: their constraint takes the contact force
+(fivid.solver.setup.constrained_contact_dofs, fivid.solver._contact_kernels.contact_reactions).
 
 The model is the 5 x 1 mm flat cut of configs/models/rough_pair_short.yaml (two 5 x 1 mm steel blocks, 20 x 2
 elements each, flat edges, mu 0.2, a 5 kPa dead load = 0.25 N, the slider driven at 30 mm/s by its left edge):
