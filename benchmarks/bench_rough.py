@@ -26,7 +26,13 @@ node count, measured in this run, as ``bench_solver.py``'s ``rough_fraction_of_b
 contact pair (``full_scale_no_contact_fraction_of_bare_stencil``: the mapped stencil's own cost), the contact's
 share of the step ``full_scale_contact_share`` (the same three from the process's CPU time, ``full_scale_cpu_*``,
 for a loaded machine) and ``full_scale_steps`` of a short preload-and-slide record
-(30 mm/s). With ``--quick`` the full-scale figures come from a 12 mm cut at the same spacing (the smoke run).
+(30 mm/s) at the paper-scale study's recording rate (``configs/studies/roughness_paper.yaml``: 2 MHz, recorded
+internally at 4x, ``full_scale_steps_per_record`` steps per record, each record one extra stencil pass for the
+energies) and with its model's damping (``rough_pair_paper.yaml``: no mass term, band-limited stiffness term), so
+the step is the study's (before the 2026-11-27 afternoon session: rough_pair.yaml's classic Rayleigh damping and a
+record every 4 steps, whose energy pass -- one stencil pass, ~0.9 ms, per 4 steps of ~2.3 ms -- was ~10 % of the
+step, which the study pays once per ~40 steps). With ``--quick`` the full-scale figures come from a 12 mm cut at
+the same spacing (the smoke run).
 With ``--transition`` the full-scale pair coarsens along x with depth (:mod:`fivid.fe.transition`, as the
 paper-scale study's ``transition: true``) instead: only its surface level has the Rsm/8 columns
 (``full_scale_mesh`` names which), and its surface levels are mass-scaled as the paper-scale study's
@@ -65,13 +71,15 @@ def main(argv=None) -> int:
                          "points.roughness.surface_added_mass; 0: none)")
     args, load = parse_guarded(ap, argv)
     out = {"benchmark": "rough", "quick": bool(args.quick)}
+    from fivid.study.config import load_study
+
+    paper = load_study(ROOT / "configs/studies/roughness_paper.yaml")
     added = args.surface_added_mass
     if added is None:
-        from fivid.study.config import load_study
-
-        added = load_study(ROOT / "configs/studies/roughness_paper.yaml").points["roughness"].get("surface_added_mass")
+        added = paper.points["roughness"].get("surface_added_mass")
     out.update(_full_scale(2 if args.quick else 3, 60 if args.quick else 300, 0.012 if args.quick else 0.12,
-                           transition=args.transition, added_mass=float(added or 0.0) if args.transition else 0.0))
+                           transition=args.transition, added_mass=float(added or 0.0) if args.transition else 0.0,
+                           study=paper))
     if args.full_scale_only:
         out["load_average_1min"] = load
         print(json.dumps(out))
@@ -144,10 +152,11 @@ def main(argv=None) -> int:
     return 0
 
 
-def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12, transition=False):
+def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12, transition=False, damping=None):
     """The full-scale rough pair (see the module docstring): ``configs/models/rough_pair.yaml`` with
     ``ceil(length / (rsm / per_rsm))`` divisions along x over ``length`` [m] (0.12: the paper's blocks) and
-    Gaussian profiles of ``ra``, ``rsm`` [m]; ``transition``: coarsening along x with depth."""
+    Gaussian profiles of ``ra``, ``rsm`` [m]; ``transition``: coarsening along x with depth; ``damping``: a model
+    config's ``damping`` mapping instead of the file's."""
     import math
 
     import yaml
@@ -158,6 +167,8 @@ def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12, transition=Fals
     from fivid.surface.rough_pair import RSM_PER_CORRELATION_LENGTH, synthetic_rough_profiles
 
     data = yaml.safe_load((ROOT / "configs/models/rough_pair.yaml").read_text())
+    if damping is not None:
+        data["damping"] = damping
     nx = math.ceil(length / (rsm / per_rsm))
     for body in data["bodies"].values():
         body["divisions"] = [nx, body["divisions"][1]]
@@ -172,10 +183,13 @@ def _full_scale_pair(rsm=92e-6, ra=1e-6, per_rsm=8, length=0.12, transition=Fals
     return load_model(cfg)
 
 
-def _full_scale(rounds, steps, length=0.12, transition=False, added_mass=0.0):
-    """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run, best of ``rounds``, on
-    blocks ``length`` [m] long (``--quick``: a 12 mm cut at the same surface spacing, so the smoke run stays short);
-    ``added_mass``: the surface levels' mass scaling (:func:`fivid.fe.mass_scaling.surface_mass_scaling`)."""
+def _full_scale(rounds, steps, length=0.12, transition=False, added_mass=0.0, study=None):
+    """``full_scale_*`` figures (module docstring): about ``steps`` time steps per run (at least two of the study's
+    records), best of ``rounds``, on blocks ``length`` [m] long (``--quick``: a 12 mm cut at the same surface
+    spacing, so the smoke run stays short); ``added_mass``: the surface levels' mass scaling
+    (:func:`fivid.fe.mass_scaling.surface_mass_scaling`); ``study``: the paper-scale study (its model's damping,
+    its recording rate)."""
+    import yaml
     import dataclasses
 
     import numpy as np
@@ -188,7 +202,9 @@ def _full_scale(rounds, steps, length=0.12, transition=False, added_mass=0.0):
 
     from fivid.fe.mass_scaling import surface_mass_scaling
 
-    model = _full_scale_pair(length=length, transition=transition)
+    damping = yaml.safe_load(Path(study.model_path).read_text())["damping"]
+    rate = float(study.points["transient"]["sample_rate"])
+    model = _full_scale_pair(length=length, transition=transition, damping=damping)
     dt_unscaled = 0.9 * stable_step(model).critical_time_step
     model, scaling = surface_mass_scaling(model, max_added_mass=added_mass)
     st = block_stencils(load_model(ROOT / "configs/models/triboair.yaml"))
@@ -196,21 +212,23 @@ def _full_scale(rounds, steps, length=0.12, transition=False, added_mass=0.0):
     bare = _bare_kernels()[0]
     dt = 0.9 * stable_step(model).critical_time_step
     kw = dict(condition=OperatingCondition(sliding_velocity=0.03),
-              schedule=RunSchedule(duration=steps * dt, sample_rate=1.0 / (16 * dt), preload_time=2 * dt,
+              schedule=RunSchedule(duration=max(steps * dt, 2.0 / rate), sample_rate=rate, preload_time=2 * dt,
                                    settle_time=0.0, base_ramp_time=2 * dt))
-    out = {"full_scale_model": f"configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um), {length * 1e3:g} mm long",
+    out = {"full_scale_model": f"configs/models/rough_pair.yaml at Rsm/8 (Ra 1 um, Rsm 92 um), {length * 1e3:g} mm long, "
+                               f"the damping of {Path(study.model_path).name}",
            "full_scale_mesh": "transition" if transition else "graded",
            "full_scale_slave_nodes": int(sum(c.slave_nodes.size for c in model.contacts)),
            "full_scale_dofs": int(model.n_dofs), "full_scale_time_step_s": dt,
            "full_scale_unscaled_time_step_s": dt_unscaled, "full_scale_surface_added_mass": added_mass,
            "full_scale_mass_scaling": {k: {"density_factor": r["factor"], "added_mass_fraction": r["added_mass_fraction"]}
                                        for k, r in scaling.items()}}
-    frac, cpu, sweeps, step_cpu = _step_fraction(model, c_rect, bare, kw, rounds)
-    frac0, cpu0, _, _ = _step_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, rounds)
+    frac, cpu, sweeps, step_cpu, (n_steps, per_record) = _step_fraction(model, c_rect, bare, kw, rounds)
+    frac0, cpu0, _, _, _ = _step_fraction(dataclasses.replace(model, contacts=()), c_rect, bare, kw, rounds)
     out.update({"full_scale_fraction_of_bare_stencil": frac, "full_scale_no_contact_fraction_of_bare_stencil": frac0,
                 "full_scale_contact_share": 1.0 - frac / frac0, "full_scale_cpu_fraction_of_bare_stencil": cpu,
                 "full_scale_cpu_no_contact_fraction_of_bare_stencil": cpu0, "full_scale_cpu_contact_share": 1.0 - cpu / cpu0,
-                "full_scale_contact_gs_mean_sweeps": sweeps, "full_scale_steps": steps,
+                "full_scale_contact_gs_mean_sweeps": sweeps, "full_scale_steps": n_steps,
+                "full_scale_steps_per_record": per_record, "full_scale_record_rate_hz": rate,
                 "full_scale_cpu_us_per_step": 1e6 * step_cpu,
                 # the paper-scale study's 1.25 ms record at this step and per-step CPU (the run's setup not included)
                 "full_scale_point_projected_cpu_s": step_cpu * 1.25e-3 / dt})
@@ -218,7 +236,8 @@ def _full_scale(rounds, steps, length=0.12, transition=False, added_mass=0.0):
 
 
 def _step_fraction(model, c_rect, bare, kw, rounds):
-    """``(wall, cpu, mean Gauss-Seidel sweeps, CPU seconds per step of the model)``: the bare rectangular stencil + update on a ghost-padded grid of the
+    """``(wall, cpu, mean Gauss-Seidel sweeps, CPU seconds per step of the model, (steps, steps per recorded
+    interval))``: the bare rectangular stencil + update on a ghost-padded grid of the
     model's node count per block (``bench_solver.py``'s reference) over the model's full step
     (:meth:`fivid.solver.driver.PreparedRun.run` per step), by wall time and by the process's CPU time (which the
     shared machine's load inflates less), interleaved rounds, best of each."""
@@ -240,7 +259,7 @@ def _step_fraction(model, c_rect, bare, kw, rounds):
             best[key] = min(best[key], time.perf_counter() - t0)
             best[key + "_cpu"] = min(best[key + "_cpu"], time.process_time() - c0)
     return (best["bare"] / best["run"], best["bare_cpu"] / best["run_cpu"], ds.attrs.get("contact_gs_mean_sweeps"),
-            best["run_cpu"] / steps)
+            best["run_cpu"] / steps, (steps, prep.settings.steps_per_interval))
 
 
 if __name__ == "__main__":

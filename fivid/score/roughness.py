@@ -1,7 +1,12 @@
 """What a rough-pair run tells about roughness noise (seed 003), over its steady part:
 
 * ``vibration_level`` Lv [dB] = 20 log10(V_RMS / 1e-9 m s-1), V_RMS the RMS over time and back-face nodes of the
-  normal velocity (each node's mean removed) -- seed 003's definition;
+  normal velocity (each node's mean removed) -- seed 003's definition, over the whole record bandwidth (up to the
+  output Nyquist frequency, 1 MHz at 2 MHz);
+* ``band_vibration_level`` (:func:`band_vibration_level`): the same level restricted to :data:`LV_BAND`, 1-20 kHz,
+  the audible band seed 003's roughness noise lives in: the full-band level of a rigid-contact model is carried
+  by the asperity impacts' content at hundreds of kHz-MHz, which the surface mesh sets (docs/roughness.md,
+  "Where Lv's power lives");
 * shocks (:func:`detect_shocks`): closing events of the contact, with rate [s-1] and mean impulse [N s];
 * ``friction_power`` [W]: slope of ``friction_dissipation`` (least squares) over the steady part, mu Fn V on
   average (until 2026-11 called ``dissipated_power``: it is not seed 003's vibratory power);
@@ -16,14 +21,20 @@
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
-from fivid.signal.levels import VELOCITY_REFERENCE
+from fivid.errors import ConfigError
+from fivid.signal.levels import VELOCITY_REFERENCE, bin_weights
 from fivid.signal.steady import steady_part
 
-__all__ = ["LV_REFERENCE", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level", "detect_shocks",
+__all__ = ["LV_REFERENCE", "LV_BAND", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level",
+           "band_vibration_level", "detect_shocks",
            "friction_power", "vibratory_power", "impact_power", "dissipation_rate", "roughness_metrics",
            "friction_coefficient_statistics", "steady_record"]
+
+log = logging.getLogger(__name__)
 
 #: seed 003's velocity reference of the vibration level [m s-1] (ISO 1683's, :data:`fivid.signal.levels.VELOCITY_REFERENCE`)
 LV_REFERENCE = VELOCITY_REFERENCE
@@ -41,6 +52,55 @@ def vibration_level(ds, *, start=None, reference: float = LV_REFERENCE) -> tuple
     v = v.reshape(v.shape[0], -1)
     v = v - v.mean(axis=0)
     vrms = float(np.sqrt(np.mean(v * v)))
+    return (20.0 * np.log10(vrms / reference) if vrms > 0 else -np.inf), vrms
+
+
+#: band of :func:`band_vibration_level` [Hz]: seed 003's subject is audible noise (upper edge 20 kHz); its
+#: ~1 ms records resolve nothing below ~1 kHz (lower edge) -- docs/roughness.md, "The band of Lv"
+LV_BAND = (1.0e3, 20.0e3)
+
+
+def band_vibration_level(ds, band=LV_BAND, *, start=None, reference: float = LV_REFERENCE) -> tuple[float, float]:
+    """(Lv_band [dB], V_band [m s-1]): the vibration level of :func:`vibration_level` restricted to ``band``.
+
+    ``V_band**2`` is the mean over the back-face sensors of ``sum(P_i * w)``, ``P_i`` the one-sided periodogram
+    [m2 s-2 Hz-1] of sensor ``i``'s ``sensor_velocity`` over the steady record (``start`` [s] as in
+    :func:`steady_record`; mean removed, periodic Hann taper, density scaling: its integral is the variance of a
+    broadband record) and ``w`` the share of each bin's rectangle inside ``band`` times its width
+    (:func:`fivid.signal.levels.bin_weights`); ``Lv_band = 20 log10(V_band / reference)``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A rough-pair run with ``sensor_velocity`` [m s-1] (``time`` x ``sensor``, or ``time``).
+    band : (float, float)
+        ``(f_lo, f_hi)`` [Hz], ``0 < 1 / (2 T) <= f_lo < f_hi <= fs / 2`` for a steady record of ``T`` [s]
+        sampled at ``fs`` [Hz] (its first bin above 0 Hz is centred on ``1 / T``).
+    start : float, optional
+        Start of the steady record [s].
+    reference : float
+        Velocity reference [m s-1] (seed 003: 1e-9).
+
+    Raises
+    ------
+    fivid.errors.ConfigError
+        If the band is empty, reaches the 0 Hz bin of a record of this length, or passes the Nyquist frequency.
+    """
+    from scipy.signal import periodogram  # noqa: PLC0415 (scipy.signal: imported where used)
+
+    part = steady_record(ds, start)
+    t = np.asarray(part["time"].values, float)
+    v = np.asarray(part["sensor_velocity"].values, float).reshape(t.size, -1)
+    f_lo, f_hi = (float(b) for b in band)
+    fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else np.inf
+    span = t.size / fs
+    if not (0.0 < f_lo < f_hi <= fs / 2.0 * (1 + 1e-12)) or f_lo < 0.5 / span * (1 - 1e-9):
+        raise ConfigError(f"Lv band [{f_lo:g}, {f_hi:g}] Hz for a steady record of {span * 1e3:.4g} ms at "
+                          f"{fs:g} Hz: needs 1/(2T) = {0.5 / span:g} Hz <= f_lo < f_hi <= fs/2 = {fs / 2:g} Hz "
+                          "(a longer record resolves a lower edge)", key="band")
+    f, p = periodogram(v, fs=fs, window="hann", detrend="constant", axis=0, scaling="density")
+    power = float(np.mean(bin_weights(f, f_lo, f_hi) @ p))
+    vrms = float(np.sqrt(power))
     return (20.0 * np.log10(vrms / reference) if vrms > 0 else -np.inf), vrms
 
 
@@ -118,14 +178,20 @@ def impact_power(ds, *, start=None) -> float:
 
 
 def roughness_metrics(ds, n_slave: int, *, start=None, **shock_options) -> dict:
-    """Lv, V_RMS, shocks (rate, impulse, vibratory energy per shock), friction, vibratory and impact power and mean
+    """Lv and V_RMS (full band and :data:`LV_BAND`), shocks (rate, impulse, vibratory energy per shock), friction, vibratory and impact power and mean
     forces of a rough-pair run (steady part)."""
     part = steady_record(ds, start)
     lv, vrms = vibration_level(ds, start=start)
+    try:
+        lv_band, vrms_band = band_vibration_level(ds, start=start)
+    except ConfigError as exc:  # a record shorter than 0.5 ms resolves no 1 kHz edge: no band level, not no point
+        log.warning("no band vibration level: %s", exc)
+        lv_band, vrms_band = np.nan, np.nan
     sh = detect_shocks(part["time"].values, part["contact_normal_force"].values, part["open_fraction"].values,
                        n_slave, **shock_options)
     pv = vibratory_power(ds, start=start)
-    return {"vibration_level": lv, "velocity_rms": vrms, "shock_rate": sh["rate"], "shock_impulse": sh["mean_impulse"],
+    return {"vibration_level": lv, "velocity_rms": vrms, "band_vibration_level": lv_band,
+            "band_velocity_rms": vrms_band, "shock_rate": sh["rate"], "shock_impulse": sh["mean_impulse"],
             "shock_count": sh["count"], "friction_power": friction_power(ds, start=start), "vibratory_power": pv,
             "shock_energy": pv / sh["rate"] if sh["rate"] > 0 else np.nan,
             "impact_power": impact_power(ds, start=start),

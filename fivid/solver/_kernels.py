@@ -7,7 +7,8 @@ reduced system's loop. This module holds what they share: the one compilation se
 slots of the energy accumulator and of the output records, the status codes, and the smooth ramp of the
 imposed motions.
 
-Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / int64, C-contiguous):
+Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / int64, C-contiguous; the mapped
+stencil coefficients ``c_map`` float32):
 
 - dof vectors ``u, v, w, f`` have ``2*npd`` entries: the x components of all nodes, then the y
   components (structure of arrays, so the stencil loops vectorise); node ``p`` sits at index
@@ -20,7 +21,8 @@ Data layout (prepared by :mod:`fivid.solver.stencil` and the driver; float64 / i
   node ``p + dj*stride + di``; in a uniform block the interior nodes share one set and so do the nodes of
   each edge (corners excluded): five patches; a ring or arc is one patch with one stencil per row in the
   columns' frames (``rot``: the columns' angles; the displacements turned into those frames in the scratch
-  ``wr``); another mapped block is one patch with per-node coefficients (component-major, ``c_map[k, node]``);
+  ``wr``); another mapped block is one patch with per-node coefficients (component-major, ``c_map[k, node]``, float32,
+  in difference form: the 8 neighbours' couplings applied to ``w_k - w_m``);
   block corners and the end or seam columns of rings and arcs are listed node by node with explicit
   neighbour indices.
 - pressure loads: dofs ``ld_dof`` carry the full nodal forces ``ld_force``, ramped per load

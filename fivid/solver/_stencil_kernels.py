@@ -92,19 +92,20 @@ def _rect_component(wx, wy, fo, c, a, first, ncols, nrows, stride):
 
 @fma_kernel
 def _mapped_component(wx, wy, fo, cm, col0, a, first, ncols, nrows, stride):
-    """Force component ``a`` on a patch of nodes with per-node stencils ``cm[:, col0 + row*ncols + column]``.
+    """Force component ``a`` on a patch of nodes with per-node stencils in difference form,
+    ``cm[:, col0 + row*ncols + column]`` (float32, :data:`fivid.solver.stencil.MAPPED_DTYPE`): ``f_m = sum_k
+    C_mk (w_k - w_m)`` over the 8 neighbours ``k``, the node's own coupling being minus the sum of the others
+    (rigid translations exact); the products and sums in float64.
 
-    Component-major storage: each coefficient is contiguous over a row of nodes; taking the 18 row slices
+    Component-major storage: each coefficient is contiguous over a row of nodes; taking the 16 row slices
     first (views, no copy) lets the row loop vectorise (indexing ``cm[k, q]`` inside it measured 2.8x slower:
-    the coefficient loads were not recognised as unit-stride).
+    the coefficient loads were not recognised as unit-stride). Neighbour position ``p`` (0..8 row-major from
+    ``(-1, -1)``, 4 the node itself) holds ``cm[4 p' + 2 a + b]`` with ``p' = p`` below 4 and ``p - 1`` above.
 
     The patch is a whole block, so its first node row has no neighbours below and its last none above: their
-    6 coefficients per component are exactly zero and are not read (a third of those rows' coefficient stream;
-    the thin surface level of a rough block is mostly such rows: 2 of Ra 1's 3). The result is the full sum's to
-    round-off (measured 1e-16 of the largest force on the paper pair's Ra 1 and Ra 26 surfaces: LLVM contracts
-    the shorter chain into other multiply-adds)."""
+    coefficients are exactly zero and are not read (the thin surface level of a rough block is mostly such rows:
+    2 of Ra 1's 3)."""
     st = uint64(stride)
-    one = uint64(1)
     k = 2 * a
     for j in range(nrows):
         b = uint64(first + j * stride)
@@ -126,33 +127,44 @@ def _mapped_component(wx, wy, fo, cm, col0, a, first, ncols, nrows, stride):
         c25 = cm[k + 25, q0:q1]
         c28 = cm[k + 28, q0:q1]
         c29 = cm[k + 29, q0:q1]
-        c32 = cm[k + 32, q0:q1]
-        c33 = cm[k + 33, q0:q1]
         if j == 0:  # no row below: c0..c9 are zero
             for i in range(ncols):
                 m = b + uint64(i)
-                n = m + st
-                fo[m] = (c12[i] * wx[m - one] + c13[i] * wy[m - one]
-                         + c16[i] * wx[m] + c17[i] * wy[m] + c20[i] * wx[m + one] + c21[i] * wy[m + one]
-                         + c24[i] * wx[n - one] + c25[i] * wy[n - one] + c28[i] * wx[n] + c29[i] * wy[n]
-                         + c32[i] * wx[n + one] + c33[i] * wy[n + one])
-        elif j == nrows - 1:  # no row above: c24..c33 are zero
+                x = wx[m]
+                y = wy[m]
+                fo[m] = (_sides(wx, wy, c12[i], c13[i], c16[i], c17[i], m, x, y)
+                         + _row(wx, wy, c20[i], c21[i], c24[i], c25[i], c28[i], c29[i], m + st, x, y))
+        elif j == nrows - 1:  # no row above: c20..c29 are zero
             for i in range(ncols):
                 m = b + uint64(i)
-                s = m - st
-                fo[m] = (c0[i] * wx[s - one] + c1[i] * wy[s - one] + c4[i] * wx[s] + c5[i] * wy[s]
-                         + c8[i] * wx[s + one] + c9[i] * wy[s + one] + c12[i] * wx[m - one] + c13[i] * wy[m - one]
-                         + c16[i] * wx[m] + c17[i] * wy[m] + c20[i] * wx[m + one] + c21[i] * wy[m + one])
+                x = wx[m]
+                y = wy[m]
+                fo[m] = (_row(wx, wy, c0[i], c1[i], c4[i], c5[i], c8[i], c9[i], m - st, x, y)
+                         + _sides(wx, wy, c12[i], c13[i], c16[i], c17[i], m, x, y))
         else:
             for i in range(ncols):
                 m = b + uint64(i)
-                s = m - st
-                n = m + st
-                fo[m] = (c0[i] * wx[s - one] + c1[i] * wy[s - one] + c4[i] * wx[s] + c5[i] * wy[s]
-                         + c8[i] * wx[s + one] + c9[i] * wy[s + one] + c12[i] * wx[m - one] + c13[i] * wy[m - one]
-                         + c16[i] * wx[m] + c17[i] * wy[m] + c20[i] * wx[m + one] + c21[i] * wy[m + one]
-                         + c24[i] * wx[n - one] + c25[i] * wy[n - one] + c28[i] * wx[n] + c29[i] * wy[n]
-                         + c32[i] * wx[n + one] + c33[i] * wy[n + one])
+                x = wx[m]
+                y = wy[m]
+                fo[m] = (_row(wx, wy, c0[i], c1[i], c4[i], c5[i], c8[i], c9[i], m - st, x, y)
+                         + _sides(wx, wy, c12[i], c13[i], c16[i], c17[i], m, x, y)
+                         + _row(wx, wy, c20[i], c21[i], c24[i], c25[i], c28[i], c29[i], m + st, x, y))
+
+
+@fma_kernel
+def _row(wx, wy, a0, b0, a1, b1, a2, b2, p, x, y):
+    """A mapped node's coupling with the three neighbours ``p - 1, p, p + 1`` of the row below or above it, in
+    difference form (:func:`_mapped_component`): coefficients ``a`` on x, ``b`` on y; ``(x, y)`` the node's own."""
+    one = uint64(1)
+    return (a0 * (wx[p - one] - x) + b0 * (wy[p - one] - y) + a1 * (wx[p] - x) + b1 * (wy[p] - y)
+            + a2 * (wx[p + one] - x) + b2 * (wy[p + one] - y))
+
+
+@fma_kernel
+def _sides(wx, wy, a0, b0, a2, b2, m, x, y):
+    """A mapped node's coupling with its left and right neighbours ``m - 1, m + 1`` (as :func:`_row`)."""
+    one = uint64(1)
+    return a0 * (wx[m - one] - x) + b0 * (wy[m - one] - y) + a2 * (wx[m + one] - x) + b2 * (wy[m + one] - y)
 
 
 @fma_kernel
@@ -269,14 +281,14 @@ def block_forces(w, f, stencil):
         Patches: ``first x-index, columns, rows, row stride, kind, coefficients, block start, angles``; kind 0:
         one shared stencil ``c_uni[coefficients]`` (18 terms per force), 1: the same for rectangular elements
         (the xy couplings with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
-        ``c_map[:, coefficients + row*columns + column]``, 3: rows that are rotations of one stencil, in the
-        column frames ``c_uni[coefficients + row]``, the block's column angles at ``rot[:, angles + column]``
-        from its first x-index ``block start`` (:func:`_rotated_patch`). Neighbours outside a block have zero
+        ``c_map[:, coefficients + row*columns + column]`` in difference form (:func:`_mapped_component`), 3: rows
+        that are rotations of one stencil, in the column frames ``c_uni[coefficients + row]``, the block's column
+        angles at ``rot[:, angles + column]`` from its first x-index ``block start`` (:func:`_rotated_patch`). Neighbours outside a block have zero
         coefficients (the padding keeps their indices in bounds).
     c_uni : ndarray (n_uniform, 36)
         Shared stencils [N m-1].
-    c_map : ndarray (36, n_mapped)
-        Per-node stencils of mapped patches [N m-1].
+    c_map : float32 ndarray (32, n_mapped)
+        Per-node stencils of mapped patches in difference form (the 8 neighbours' couplings) [N m-1].
     rot : ndarray (2, n_angles)
         Cosine and sine of the column angles of rotated patches' blocks.
     wr : ndarray (2*npd,)

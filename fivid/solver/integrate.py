@@ -14,7 +14,7 @@ from fivid.contact._layout_kernels import N_CNODE, N_GEO
 from fivid.errors import SimulationDiverged
 
 __all__ = ["RawRecords", "integrate", "loop_arguments", "loop_state", "velocity_filter_gain", "chunked",
-           "shortest_master_segment", "RUNAWAY_FACTOR"]
+           "massive_ranges", "shortest_master_segment", "RUNAWAY_FACTOR"]
 
 #: guard: the stiffness-damping loss inferred as W_int - U may not fall below -RUNAWAY_FACTOR x (KE + U)
 RUNAWAY_FACTOR = 2.0
@@ -47,14 +47,23 @@ def velocity_filter_gain(cutoff: float, dt: float) -> float:
     return float(-math.expm1(-2.0 * math.pi * cutoff * dt))
 
 
+def massive_ranges(mass: np.ndarray) -> np.ndarray:
+    """The ranges ``[start, end)`` (n_ranges, 2) int64 of the consecutive entries of ``mass`` [kg] (kernel layout)
+    that are > 0: the dofs the time loop's predictor integrates (tied nodes and the padding are massless). A mesh
+    coarsening in levels gives a few dozen ranges (the 120 mm rough pair: 24, over 58 % of the entries)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], (np.asarray(mass) > 0).astype(np.int8), [0]])))
+    return np.ascontiguousarray(edges.reshape(-1, 2), dtype=np.int64)
+
+
 def loop_arguments(model, st, ka, fric, dt: float, gs_max_iterations: int, gs_tol: float) -> tuple:
     """The argument groups of :func:`fivid.solver._loop_kernels.run_steps` that describe the model and stay
     fixed over a run: ``(stencil, structure, motions, loads, contact, friction)`` (the motions' and loads'
     scratch arrays are allocated here). ``gs_tol`` [m] is the absolute Gauss-Seidel tolerance."""
     from fivid.solver import _loop_kernels as L  # lazy: pulls numba
 
-    structure = L.Structure(ka.mass, ka.minv, ka.spr_dof, ka.spr_kc, float(model.rayleigh_alpha),
-                            float(model.rayleigh_beta), velocity_filter_gain(model.damping_cutoff, dt))
+    structure = L.Structure(ka.mass, ka.minv, massive_ranges(ka.mass), ka.spr_dof, ka.spr_kc,
+                            float(model.rayleigh_alpha), float(model.rayleigh_beta),
+                            velocity_filter_gain(model.damping_cutoff, dt))
     motions = L.Motions(ka.con_dof, ka.con_grp, ka.grp_par, ka.con_react, np.zeros((ka.grp_par.shape[0], 2)))
     loads = L.Loads(ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]),
                     np.zeros(ka.ld_dof.size))

@@ -13,15 +13,16 @@ except the last:
   ``rot``; the kernel turns the displacements into the column frames, applies the row's stencil and turns the
   forces back. The end (arc) or seam (ring) columns are listed;
 - mapped blocks (profiled or general quadrilaterals): per-node coefficients ``c_map`` in component-major layout
-  ``(36, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch covering the whole block
+  ``(32, n)`` (consecutive nodes contiguous, so the row loop vectorises), one patch covering the whole block
   (neighbours outside it have zero coefficients; the padding keeps their indices in bounds); on a periodic ring
-  the patch covers columns 1..nx-2;
+  the patch covers columns 1..nx-2. Stored in float32 in difference form (:func:`_difference_form`): the force
+  is ``sum_k C_k (w_k - w_m)`` over the 8 neighbours, the node's own coupling being minus the others' sum;
 - listed nodes with explicit neighbour indices: the corners of uniform blocks and the end or seam columns of
   rotated patches and periodic rings.
 
 Speed of mapped patches (issue 30 item 5; bench_solver ``curved_fraction_of_bare_stencil`` and
 ``*_stencil_fraction_of_bare_stencil``, measured on a loaded 2-core EPYC, AVX-512): the per-node row loop is
-vectorised (8 lanes of 18 FMAs per force component), but a mapped node streams its 36 coefficients (288 B) from
+vectorised (8 lanes of 18 FMAs per force component), but a mapped node streamed its 36 float64 coefficients (288 B) from
 L3 every step (the ring's 2.2 MB do not fit the L2), about 470 B per node and step with the update pass's
 arrays: the step is bound by L3 bandwidth (main's kernel ~5 ns/node idle, the bare rectangular stencil ~1.4).
 Deduplicating the coefficient table does not apply: no two nodes of the ring or of the rough pair have equal
@@ -32,6 +33,17 @@ coefficients per row instead of per node, +8 multiply-adds per node for the two 
 and not kept (branches ``speed-tiled-experiment``, ``speed-symmetric-experiment``): tiles of 16 nodes with both
 components in one pass (no faster on the ring, 1.2x on the rough pair) and the 19 independent coefficients of a
 symmetric stencil (+5-10 %, results change at 1e-16).
+
+The mapped coefficients in float32, difference form (issue 26 item 5): the rough pair's surface level streamed 36
+float64 coefficients per node (288 B; 18 MB on the 120 mm Ra 1 pair, which with the step's 17 MB of state arrays
+exceeds the 32 MB L3); 32 float32 (128 B) halve and more that stream. Accuracy: each coefficient is rounded to
+float32, relative error <= 2^-24 (round to nearest), so a node's force moves by at most ``2^-24 sum_k |C_k| |w_k -
+w_m|`` -- 6e-8 of the sum of the absolute coupling forces, i.e. of the local deformation's forces, not of the
+displacement: in difference form a rigid translation gives exactly zero (``w_k - w_m`` is exactly 0), whatever
+its size (a slider 60 um along, 1e4 times its strain displacements). Natural frequencies move by the same relative
+order (< 1e-7), far below any criterion of the studies (1 dB, mode shifts of 1e-3). The stiffness applied is
+then symmetric to that order, not to round-off: the energy balance's internal work and strain energy agree to
+~1e-7 of the strain energy instead of 1e-15. The state (``u, v, w, f``) and every product and sum stay float64.
 """
 
 from __future__ import annotations
@@ -43,7 +55,7 @@ import numpy as np
 from fivid.fe.assembly import block_element_stiffness
 from fivid.fe.prestress import block_geometric_stiffness
 
-__all__ = ["BlockStencils", "block_stencils", "stencil_index", "apply_stencils"]
+__all__ = ["BlockStencils", "block_stencils", "stencil_index", "apply_stencils", "MAPPED_DTYPE"]
 
 # local corner offsets (i, j) of a Q4 element, counter-clockwise from its (i, j) node
 _CORNERS = ((0, 0), (1, 0), (1, 1), (0, 1))
@@ -53,6 +65,11 @@ def stencil_index(dj: int, di: int, a: int, b: int) -> int:
     """Position in a node's 36 coefficients of the coupling of its dof ``a`` with dof ``b`` of neighbour ``(di, dj)``."""
     return ((dj + 1) * 3 + (di + 1)) * 4 + 2 * a + b
 
+
+#: storage type of the mapped patches' per-node coefficients (difference form, :func:`_difference_form`)
+MAPPED_DTYPE = np.float32
+#: the node's own coupling (neighbour position 4 of 0..8) is not stored in difference form
+_OWN = slice(16, 20)
 
 # patch kinds (column 4 of BlockStencils.blocks)
 PATCH_UNIFORM = 0
@@ -82,8 +99,10 @@ class BlockStencils:
         columns are 0 for the other kinds.
     c_uni : ndarray, shape (n_uniform, 36)
         Shared stencils [N m-1].
-    c_map : ndarray, shape (36, n_mapped)
-        Per-node stencils of mapped patches [N m-1], component-major.
+    c_map : ndarray of float32, shape (32, n_mapped)
+        Per-node stencils of mapped patches [N m-1], component-major, in difference form: the couplings with the
+        8 neighbours (positions 0-3 and 5-8 of :func:`stencil_index`'s, the node's own left out:
+        :func:`_difference_form`).
     rot : ndarray, shape (2, n_angles)
         Cosine and sine of the column angles of the rotated patches' blocks.
     lst_idx : ndarray of int64, shape (n_list,)
@@ -290,7 +309,7 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
                 i0, i1 = (1, block.nx - 1) if block.periodic else (0, block.n_cols)
                 rows.append((o + i0, i1 - i0, block.ny + 1, stride, PATCH_MAPPED, n_map, 0, 0))
                 patch = c[:, i0:i1].reshape(-1, 36)
-                map_coef.append(patch.T)
+                map_coef.append(_difference_form(patch, block.name))
                 n_map += patch.shape[0]
                 if block.periodic:
                     listed[:, [0, -1]] = True
@@ -304,13 +323,33 @@ def block_stencils(model, prestress=None, *, rotated: bool = True) -> BlockStenc
         npd=npd,
         blocks=np.array(rows, dtype=np.int64).reshape(-1, 8),
         c_uni=np.array(uni_coef, dtype=float).reshape(-1, 36),
-        c_map=np.ascontiguousarray(np.concatenate(map_coef, axis=1) if map_coef else np.zeros((36, 0))),
+        c_map=np.ascontiguousarray(np.concatenate(map_coef, axis=1) if map_coef else np.zeros((32, 0)),
+                                   dtype=MAPPED_DTYPE),
         rot=np.ascontiguousarray(np.concatenate(rot, axis=1) if rot else np.zeros((2, 0))),
         lst_idx=np.concatenate(lst_idx).astype(np.int64),
         lst_nbr=np.ascontiguousarray(np.concatenate(lst_nbr), dtype=np.int64).reshape(-1, 9),
         lst_coef=np.ascontiguousarray(np.concatenate(lst_coef), dtype=float).reshape(-1, 36),
         **_tie_arrays(model, pad),
     )
+
+
+def _difference_form(patch: np.ndarray, name: str) -> np.ndarray:
+    """The mapped coefficients ``(32, n)`` in :data:`MAPPED_DTYPE` of node stencils ``patch`` (n, 36): the 8
+    neighbours' 2x2 couplings, component-major, the node's own left out.
+
+    ``K w`` at node ``m`` is ``sum_k C_k w_k``; a rigid translation gives no force, so ``C_m = -sum_(k != m) C_k``
+    and ``K w = sum_(k != m) C_k (w_k - w_m)``. That identity holds to the element integration's round-off; it is
+    checked here against float32's resolution: a block whose 2x2 row sums exceed ``2^-24`` of the sum of their
+    absolute values (an element stiffness that is not translation-invariant) would lose more by leaving out its
+    own coupling than the float32 rounding does, and is refused (``ValueError``; no element of fivid.fe does)."""
+    own = np.abs(patch.reshape(-1, 9, 2, 2).sum(axis=1))
+    scale = np.abs(patch.reshape(-1, 9, 2, 2)).sum(axis=1)
+    if np.any(own > np.finfo(np.float32).eps / 2 * scale):
+        worst = int(np.argmax((own / np.maximum(scale, 1e-300)).reshape(len(patch), -1).max(axis=1)))
+        raise ValueError(f"block {name!r}: the stiffness stencil of its node {worst} does not vanish for a rigid "
+                         f"translation (2x2 row sums up to {own.max():.3g} N/m against {scale.max():.3g}): the "
+                         "difference form of the mapped stencil needs a translation-invariant element stiffness")
+    return np.ascontiguousarray(np.delete(patch, np.r_[_OWN], axis=1).T, dtype=MAPPED_DTYPE)
 
 
 def _halving_joint(tie):

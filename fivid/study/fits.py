@@ -115,7 +115,9 @@ def roughness_noise_fits(points: list[dict]) -> dict:
 
     * ``n``, ``m``: ``Lv = 20 n log10 Ra + 20 m log10 V + c``, i.e. the exponents of the power law fitted to the
       back-face ``velocity_rms`` over ``roughness_ra`` and ``sliding_velocity`` (:func:`power_law_fit`): each
-      ``{"value", "ci": [lo, hi]}`` (95 %), null when that axis does not vary;
+      ``{"value", "ci": [lo, hi]}`` (95 %), null when that axis does not vary; ``n_band``, ``m_band``: the same
+      from ``band_velocity_rms`` (the 1-20 kHz level, :func:`fivid.score.roughness.band_vibration_level`; left
+      out when no point has one) and ``fits.band_velocity_rms``;
     * ``fits.vibration_level_vs_rz_rsm``: ``Lv = a log10(Rz / Rsm) + b`` (OLS): ``slope`` [dB per decade], ``ci``,
       ``r2``, ``n`` (Rz, Rsm of the generated lower profiles); ``fits.vibration_level_vs_rz_rsm_per_speed``: the same
       per sliding velocity (keyed by its repr in m/s);
@@ -128,13 +130,16 @@ def roughness_noise_fits(points: list[dict]) -> dict:
     import statsmodels.api as sm
 
     out, fits = {"n": None, "m": None}, {}
-    lv = power_law_fit(points, "velocity_rms")
-    if lv is not None:
-        fits["velocity_rms"] = lv
+    for response, suffix in (("velocity_rms", ""), ("band_velocity_rms", "_band")):
+        lv = power_law_fit(points, response)
+        if lv is None:
+            continue
+        fits[response] = lv
         for axis, key in (("roughness_ra", "n"), ("sliding_velocity", "m")):
             if axis in lv["exponents"]:
                 e = lv["exponents"][axis]
-                out[key] = {"value": e["value"], "ci": e["ci"], "stderr": e["stderr"], "r2": lv["r2"], "n": lv["n"]}
+                out[key + suffix] = {"value": e["value"], "ci": e["ci"], "stderr": e["stderr"], "r2": lv["r2"],
+                                     "n": lv["n"]}
     rows = [p for p in points if p.get("status") == "done" and p.get("vibration_level") is not None
             and (p.get("profile_Rz") or 0) > 0 and (p.get("profile_Rsm") or 0) > 0]
     if len({round(p["profile_Rz"] / p["profile_Rsm"], 12) for p in rows}) > 1 and len(rows) >= 3:

@@ -21,6 +21,7 @@ from fivid.fe.mass_scaling import surface_mass_scaling
 from fivid.fe.rough_pair import profiled_length, rough_pair_config
 from fivid.fe.transition import transition_model
 from fivid.score.roughness import (
+    LV_BAND,
     LV_REFERENCE,
     SHOCK_BASELINE,
     SHOCK_MIN_CLOSING,
@@ -232,6 +233,11 @@ def evaluate_roughness_point(model_path, tasks: dict, conditions: dict) -> dict:
         "vibration_level": ((), r["vibration_level"], {"units": "dB", "long_name": "vibration level Lv re 1e-9 m s-1 "
                                                        "(RMS normal velocity over the back-face nodes)"}),
         "velocity_rms": ((), r["velocity_rms"], {"units": "m s-1", "long_name": "RMS back-face normal velocity"}),
+        "band_vibration_level": ((), r["band_vibration_level"], {
+            "units": "dB", "long_name": f"vibration level Lv re 1e-9 m s-1 in {LV_BAND[0]:g}-{LV_BAND[1]:g} Hz "
+                                        "(fivid.score.roughness.band_vibration_level)", "band": list(LV_BAND)}),
+        "band_velocity_rms": ((), r["band_velocity_rms"], {
+            "units": "m s-1", "long_name": f"RMS back-face normal velocity in {LV_BAND[0]:g}-{LV_BAND[1]:g} Hz"}),
         "shock_rate": ((), r["shock_rate"], {"units": "s-1", "long_name": "contact closing events per second",
                                              "min_closing": sh["min_closing"], "baseline_time": sh["baseline_time"]}),
         "shock_impulse": ((), r["shock_impulse"], {"units": "N s", "long_name": "mean impulse per shock"}),
@@ -314,6 +320,8 @@ def roughness_settings(study) -> dict:
         "friction_coefficient": "mu(t) = |friction_force (transducer)| / mean contact_normal_force, steady part",
         "sensors": f"velocity (y) on every {spec['sensor_every']}th node of the lower body's back face",
         "lv_reference": LV_REFERENCE,
+        "lv_band": {"band": list(LV_BAND), "estimator": "mean over sensors of the Hann periodogram's band power "
+                                                      "(fivid.score.roughness.band_vibration_level)"},
         "shock_detector": {"min_closing_nodes": SHOCK_MIN_CLOSING, "baseline_time": SHOCK_BASELINE},
         "contact_gauss_seidel": {"tolerance": spec["gs_tolerance"], "max_iterations": spec["gs_max_iterations"]},
     }

@@ -74,10 +74,11 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
     page.heading("Roughness noise (seed 003)", level=3)
     fits = summary.get("fits") or {}
     rows = []
-    for key, what in (("n", "Ra exponent n"), ("m", "V exponent m")):
+    for key, what, lv in (("n", "Ra exponent n", "Lv"), ("m", "V exponent m", "Lv"),
+                          ("n_band", "Ra exponent n", "Lv 1-20 kHz"), ("m_band", "V exponent m", "Lv 1-20 kHz")):
         e = summary.get(key)
         if e:
-            rows.append([f"{what} (Lv = 20 n log Ra + 20 m log V + c)", _fmt(e["value"]), _fmt(e["ci"][0]),
+            rows.append([f"{what} ({lv} = 20 n log Ra + 20 m log V + c)", _fmt(e["value"]), _fmt(e["ci"][0]),
                          _fmt(e["ci"][1]), _fmt(e.get("r2")), e.get("n")])
     rz = fits.get("vibration_level_vs_rz_rsm")
     if rz:
@@ -119,6 +120,10 @@ def roughness_section(page: Page, ds, summary: dict) -> None:
     page.figure(_panels(ds, "vibration_level", "Lv [dB re 1e-9 m/s]"),
                 "Vibration level of the back face against Ra (per V) and against V (per Ra); circles replicate 0, "
                 "squares replicate 1.", "Lv")
+    if "band_vibration_level" in ds and np.any(np.isfinite(ds["band_vibration_level"].values)):
+        page.figure(_panels(ds, "band_vibration_level", "Lv 1-20 kHz [dB re 1e-9 m/s]"),
+                    "Vibration level of the back face in the audible band (1-20 kHz, "
+                    "fivid.score.roughness.band_vibration_level) against Ra and V.", "Lv 1-20 kHz")
     if {"profile_Rz", "profile_Rsm"} <= set(ds.data_vars):
         page.figure(_rz_rsm_figure(ds, rz), "Lv against the lower profile's Rz/Rsm, per V.", "Lv vs Rz/Rsm")
     page.figure(_panels(ds, "shock_rate", "shocks per second", log_y=True),

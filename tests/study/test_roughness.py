@@ -144,7 +144,8 @@ def test_a_rough_run_goes_through_fivid_identify(tiny_base, tmp_path):
 
 
 def test_roughness_noise_fits_recover_known_exponents():
-    """Synthetic points with V_RMS = c Ra^0.6 V^0.9 x lognormal scatter: n and m inside their 95 % intervals;
+    """Synthetic points with V_RMS = c Ra^0.6 V^0.9 x lognormal scatter (the 1-20 kHz V_RMS: c' Ra^0.8 V^0.9 with
+    the same scatter): n and m (n_band, m_band) inside their 95 % intervals;
     Lv against log10(Rz/Rsm) (Rz = 7 Ra, Rsm fixed) has slope 20 n dB per decade."""
     from fivid.study.fits import roughness_noise_fits
 
@@ -154,10 +155,15 @@ def test_roughness_noise_fits_recover_known_exponents():
         for v in (0.01, 0.03, 0.1):
             vrms = 1e-5 * (ra / 1e-6) ** 0.6 * (v / 0.01) ** 0.9 * np.exp(0.05 * rng.standard_normal())
             points.append({"status": "done", "roughness_ra": ra, "sliding_velocity": v, "velocity_rms": vrms,
+                           "band_velocity_rms": 1e-3 * vrms * (ra / 1e-6) ** 0.2,
                            "vibration_level": 20 * np.log10(vrms / 1e-9), "profile_Rz": 7 * ra,
                            "profile_Rsm": 0.3e-3, "shock_rate": 100.0 * ra / 1e-6})
     out = roughness_noise_fits(points)
     for key, true in (("n", 0.6), ("m", 0.9)):
+        lo, hi = out[key]["ci"]
+        assert lo < true < hi and hi - lo < 0.2
+    # the band level's law: Ra^0.8 V^0.9 (the same scatter): its own exponents, not the full band's
+    for key, true in (("n_band", 0.8), ("m_band", 0.9)):
         lo, hi = out[key]["ci"]
         assert lo < true < hi and hi - lo < 0.2
     lv = out["fits"]["vibration_level_vs_rz_rsm"]

@@ -20,8 +20,8 @@ from fivid.study.roughness_report import roughness_section
 __all__ = ["RoughnessSettings", "RoughnessNoise", "KIND", "ROUGHNESS_KEYS"]
 
 #: per-point results of a roughness-noise point copied into summary.json
-ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "shock_rate", "shock_impulse", "shock_count", "shock_energy",
-                  "friction_power", "vibratory_power", "impact_power",
+ROUGHNESS_KEYS = ("vibration_level", "velocity_rms", "band_vibration_level", "band_velocity_rms", "shock_rate",
+                  "shock_impulse", "shock_count", "shock_energy", "friction_power", "vibratory_power", "impact_power",
                   "mean_normal_force", "mean_friction_force", "open_fraction", "friction_coefficient",
                   "friction_coefficient_rms", "profile_rsm_target", "profile_Ra", "profile_Rq",
                   "profile_Rz", "profile_Rsm", "simulation_seconds", "simulation_cpu_seconds", "mesh_step",
