@@ -63,11 +63,14 @@ LV_BAND = (1.0e3, 20.0e3)
 def band_vibration_level(ds, band=LV_BAND, *, start=None, reference: float = LV_REFERENCE) -> tuple[float, float]:
     """(Lv_band [dB], V_band [m s-1]): the vibration level of :func:`vibration_level` restricted to ``band``.
 
-    ``V_band**2`` is the mean over the back-face sensors of ``sum(P_i * w)``, ``P_i`` the one-sided periodogram
-    [m2 s-2 Hz-1] of sensor ``i``'s ``sensor_velocity`` over the steady record (``start`` [s] as in
-    :func:`steady_record`; mean removed, periodic Hann taper, density scaling: its integral is the variance of a
-    broadband record) and ``w`` the share of each bin's rectangle inside ``band`` times its width
-    (:func:`fivid.signal.levels.bin_weights`); ``Lv_band = 20 log10(V_band / reference)``.
+    ``V_band**2`` is the mean over the back-face sensors of ``s_i * sum(P_i * w) / sum(P_i * df)``: the mean square
+    ``s_i`` of sensor ``i``'s ``sensor_velocity`` over the steady record (``start`` [s] as in :func:`steady_record`;
+    mean removed: every sample weighs the same, as in :func:`vibration_level` and seed 003's definition) times the
+    band's share of its one-sided periodogram ``P_i`` (mean removed, periodic Hann taper), ``w`` the share of each
+    bin's rectangle inside ``band`` times its width (:func:`fivid.signal.levels.bin_weights`). The taper weighs the
+    record's middle most; taking only the band's *share* from it keeps a record that is quiet at one end (a
+    slider landing in the window) from reading louder in the band than over all frequencies: ``V_band <=``
+    V_RMS always. ``Lv_band = 20 log10(V_band / reference)``.
 
     Parameters
     ----------
@@ -98,8 +101,12 @@ def band_vibration_level(ds, band=LV_BAND, *, start=None, reference: float = LV_
         raise ConfigError(f"Lv band [{f_lo:g}, {f_hi:g}] Hz for a steady record of {span * 1e3:.4g} ms at "
                           f"{fs:g} Hz: needs 1/(2T) = {0.5 / span:g} Hz <= f_lo < f_hi <= fs/2 = {fs / 2:g} Hz "
                           "(a longer record resolves a lower edge)", key="band")
-    f, p = periodogram(v, fs=fs, window="hann", detrend="constant", axis=0, scaling="density")
-    power = float(np.mean(bin_weights(f, f_lo, f_hi) @ p))
+    v = v - v.mean(axis=0)
+    f, p = periodogram(v, fs=fs, window="hann", detrend=False, axis=0, scaling="density")
+    total = p.sum(axis=0)
+    share = np.divide(bin_weights(f, f_lo, f_hi) @ p, total * (f[1] - f[0]), out=np.zeros_like(total),
+                      where=total > 0)
+    power = float(np.mean(np.mean(v * v, axis=0) * share))
     vrms = float(np.sqrt(power))
     return (20.0 * np.log10(vrms / reference) if vrms > 0 else -np.inf), vrms
 

@@ -320,8 +320,9 @@ def roughness_settings(study) -> dict:
         "friction_coefficient": "mu(t) = |friction_force (transducer)| / mean contact_normal_force, steady part",
         "sensors": f"velocity (y) on every {spec['sensor_every']}th node of the lower body's back face",
         "lv_reference": LV_REFERENCE,
-        "lv_band": {"band": list(LV_BAND), "estimator": "mean over sensors of the Hann periodogram's band power "
-                                                      "(fivid.score.roughness.band_vibration_level)"},
+        "lv_band": {"band": list(LV_BAND), "estimator": "mean over sensors of the mean square times the band's share "
+                                                      "of the Hann periodogram (fivid.score.roughness."
+                                                      "band_vibration_level)"},
         "shock_detector": {"min_closing_nodes": SHOCK_MIN_CLOSING, "baseline_time": SHOCK_BASELINE},
         "contact_gauss_seidel": {"tolerance": spec["gs_tolerance"], "max_iterations": spec["gs_max_iterations"]},
     }

@@ -2,8 +2,9 @@
 
 Synthetic records (labelled synthetic; generator: ``_record`` below): sums of sinusoids whose frequencies are
 whole multiples of 1/T over a record of length T, so that the periodic Hann taper puts each one's power into three
-bins (k - 1, k, k + 1) and the density-scaled periodogram integrates to A**2 / 2 exactly: the band's mean square is
-then the sum of A**2 / 2 over the sinusoids inside the band, to round-off."""
+bins (k - 1, k, k + 1): the band's share of the periodogram is that of the sinusoids inside it, exactly, and the
+record's mean square is the sum of A**2 / 2, so the band's mean square is the sum of A**2 / 2 over the sinusoids
+inside the band, to round-off."""
 
 import numpy as np
 import pytest
@@ -64,3 +65,17 @@ def test_a_record_too_short_for_the_band_or_a_band_past_nyquist_is_refused():
     ds, _ = _record([(3, 1e-3)])
     with pytest.raises(ConfigError, match="fs/2"):
         band_vibration_level(ds, (1e3, 1.5e6), start=float(ds.time[0]))
+
+
+def test_a_record_quiet_at_one_end_is_not_louder_in_the_band_than_over_all_frequencies():
+    """A slider landing mid-window (synthetic: silence, then a 5 kHz line and a 300 kHz line): the band level is
+    the whole record's mean square times the band's share, below the full-band level by the 300 kHz line's share."""
+    ds, _ = _record([(5, 1e-3), (300, 1e-3)], n_sensors=1)
+    v = ds["sensor_velocity"].values
+    v[: v.shape[0] // 2] = 0.0
+    ds["sensor_velocity"].values = v
+    start = float(ds.time[0])
+    lv_full, vfull = vibration_level(ds, start=start)
+    lv_band, vband = band_vibration_level(ds, start=start)
+    assert vband < vfull
+    assert 2.0 < lv_full - lv_band < 4.0  # about half the power is the 300 kHz line's: ~3 dB
