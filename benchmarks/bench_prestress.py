@@ -23,7 +23,9 @@ the process's CPU time, which waiting for a core does not inflate (contention fo
 still does, hence the minimum); the wall-time keys are kept beside them. ``*_cpu_spread`` is the range of the
 per-round paired CPU overheads: the figure is trustworthy when it is small against the 0.20 target.
 
-Idle figures: ``python benchmarks/bench_prestress.py`` (about 2 minutes on an idle 2-core machine).
+Idle figures: ``python benchmarks/bench_prestress.py`` (about 5 minutes on an idle 2-core machine, estimated
+from the ``--quick`` step times: a run of the full ring takes longer than a sample, so its samples are single
+runs of ~10 s; the rig's repeat ~15 runs each).
 """
 
 from __future__ import annotations
