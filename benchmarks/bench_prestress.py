@@ -14,8 +14,8 @@ Prints one JSON line. The explicit solver carries ``K_sigma`` folded into the st
   varies, so with the prestress they leave the uniform stencil for the mapped one -- the worst case:
   ``prestress_step_overhead_rig``.
 
-Timing (robust on a shared machine): a figure taken from four ~0.1 s runs, best of four, moved from 0.08 to 0.41
-with a busy neighbour. Now each *sample* repeats the run until it has used ``--sample-seconds`` of process CPU time
+Timing (robust on a shared machine): the ring's overhead taken as the best of four single short runs moved from
+0.08 to 0.41 with a busy neighbour. Now each *sample* repeats the run until it has used ``--sample-seconds`` of process CPU time
 (default 2 s, ``--quick`` 0.05 s) and reports the time per run; the two variants alternate within each of
 ``--rounds`` rounds (default 7; ABBA order, so a drift of the load hits both alike), and a figure is the
 minimum over the rounds (the run's time plus the other jobs' interference, which only adds). ``*_cpu`` variants use
