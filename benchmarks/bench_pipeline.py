@@ -19,6 +19,13 @@ every later run, e.g. a new data set on the same rig). Prints one JSON line:
   key ``estimate_db``; acceptance <= 1), ``coarse_discretisation_error_db``; the verdicts, the solver paths and
   ``fine_simulate_stage_s`` / ``coarse_simulate_stage_s`` (the simulate stage's own wall time) and their ratio
   ``fine_vs_coarse_simulate_stage_ratio``;
+- where the difference lives: ``fine_stages_s`` / ``coarse_stages_s`` (every stage's wall time [s] of the warm jobs),
+  ``fine_sim_task_mean_s`` / ``coarse_sim_task_mean_s`` (a simulate task's mean wall time on its worker: set-up,
+  time loop, records) and their ratio ``fine_vs_coarse_sim_task_ratio``, and per simulation the solver steps
+  (``fine_sim_steps``, ``coarse_sim_steps``: the fine rig's reduced step is 1.44 x the coarse one's, band-limited
+  damping against classic Rayleigh), the reduced system's size and boundary nodes (``fine_reduced_size``,
+  ``fine_reduced_boundary_nodes``, ``coarse_...``; means over the tasks, the boundary growing with the velocity's
+  sliding range);
 - ``load_average_1min`` at the start (the benchmark refuses to run above the core count unless ``--force``).
 
 The README's figures (wall and CPU time of the main job) are ``fine_cold_wall_s`` and ``fine_cold_cpu_s``.
@@ -63,6 +70,23 @@ def _config(tmp: Path, model: str, quick: bool) -> Path:
     return path
 
 
+def _simulate_tasks(out: Path) -> dict:
+    """The simulate stage's tasks of the run in ``out``: their mean wall time on the worker [s] (the pipeline's cache
+    records) and the mean solver steps and reduced-system sizes of the simulations they wrote (the files' attrs)."""
+    import xarray as xr
+
+    records = [json.loads(p.read_text(encoding="utf-8")) for p in sorted((out / ".fivid-cache" / "simulate").glob("*.json"))]
+    attrs = []
+    for rec in records:
+        for item in rec.get("outputs", {}).values():
+            with xr.open_dataset(item["path"]) as ds:
+                attrs.append(dict(ds.attrs))
+    mean = lambda key: (sum(float(a.get(key, 0)) for a in attrs) / len(attrs)) if attrs else None  # noqa: E731
+    return {"task_mean_s": (sum(r["seconds"] for r in records) / len(records)) if records else None,
+            "steps": mean("steps"), "reduced_size": mean("reduced_size"),
+            "boundary_nodes": mean("reduced_boundary_nodes")}
+
+
 def _job(config: Path, out: Path, cache: Path) -> dict:
     """Wall and CPU time of one pipeline run in a fresh process, and what its report says."""
     env = {**os.environ, "FIVID_CACHE_DIR": str(cache)}
@@ -81,7 +105,8 @@ def _job(config: Path, out: Path, cache: Path) -> dict:
             "estimate_db": disc.get("estimate_db"), "verdict": summary.get("verdict"),
             "solver_paths": disc.get("reduction", {}).get("paths"), "exit": proc.returncode,
             "simulate_stage_s": next((s["seconds"] for s in summary.get("stages", []) if s["name"] == "simulate"),
-                                     None)}
+                                     None),
+            "stages_s": {s["name"]: s["seconds"] for s in summary.get("stages", [])}, **_simulate_tasks(out)}
 
 
 def _warm_kernels(model: str, tmp: Path) -> None:
@@ -127,6 +152,18 @@ def main(argv=None) -> int:
         "fine_vs_coarse_simulate_stage_ratio": (fine["simulate_stage_s"] / coarse["simulate_stage_s"]
                                                 if fine["simulate_stage_s"] and coarse["simulate_stage_s"] else None),
         "fine_cold_simulate_stage_s": jobs["fine_cold"]["simulate_stage_s"],
+        "fine_stages_s": fine["stages_s"],
+        "coarse_stages_s": coarse["stages_s"],
+        "fine_sim_task_mean_s": fine["task_mean_s"],
+        "coarse_sim_task_mean_s": coarse["task_mean_s"],
+        "fine_vs_coarse_sim_task_ratio": (fine["task_mean_s"] / coarse["task_mean_s"]
+                                          if fine["task_mean_s"] and coarse["task_mean_s"] else None),
+        "fine_sim_steps": fine["steps"],
+        "coarse_sim_steps": coarse["steps"],
+        "fine_reduced_boundary_nodes": fine["boundary_nodes"],
+        "coarse_reduced_boundary_nodes": coarse["boundary_nodes"],
+        "fine_reduced_size": fine["reduced_size"],
+        "coarse_reduced_size": coarse["reduced_size"],
         "discretisation_error_db": fine["estimate_db"],
         "coarse_discretisation_error_db": coarse["estimate_db"],
         "fine_verdict": fine["verdict"],

@@ -112,12 +112,26 @@ class Interrupted(KeyboardInterrupt):
     """
 
     received: int | None = None  # set by the CLI's handler: a signal seen even if a library swallowed the exception
+    #: True once the command's outcome is final and its outputs are complete (``fivid run``: summary.json written,
+    #: :meth:`settle`); the CLI's handler then no longer raises: a later SIGINT/SIGTERM keeps the command's own
+    #: exit status (see :func:`fivid.cli.main`)
+    settled: bool = False
 
     @classmethod
     def raise_if_received(cls) -> None:
         """Raise at a safe point if a signal arrived whose exception was swallowed (a bare ``except:``)."""
         if cls.received is not None:
             raise cls(cls.received)
+
+    @classmethod
+    def settle(cls) -> None:
+        """Mark the running command's outcome as final: every output is written and its exit status decided.
+
+        Called by :func:`fivid.pipeline.run_pipeline` once ``summary.json`` is written (and by the CLI when a
+        command returns). A signal after this point cannot make the run "interrupted" any more: its outputs and
+        summary are complete, so the process keeps the run's exit status instead of 128 + the signal.
+        """
+        cls.settled = True
 
     def __init__(self, signum: int, detail: str = ""):
         import signal

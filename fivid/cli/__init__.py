@@ -8,7 +8,9 @@ other file. Command modules import heavy libraries inside their ``func``, so ``f
 Exit codes, for schedulers: 0 success; 2 bad input or configuration (one clear line per problem on
 stderr, no traceback); 3 the pipeline ran but scores are below their thresholds; 1 an unexpected
 failure (traceback on stderr); 130 interrupted by SIGINT (Ctrl-C), 143 by SIGTERM (what schedulers send to
-stop a job): 128 + the signal number, as a shell reports it.
+stop a job): 128 + the signal number, as a shell reports it. A signal that comes after the command has
+finished (``fivid run``: after summary.json is written, e.g. during dask's shutdown at exit) does not change
+the status: the process ends at once with the command's own (:class:`_SignalPolicy`).
 """
 
 from __future__ import annotations
@@ -135,34 +137,103 @@ def exit_status_of_signal(signum: int) -> int:
     return exit_status(Interrupted(signum))
 
 
-@contextlib.contextmanager
-def _signals_interrupt():
-    """While a command runs, SIGINT and SIGTERM raise :class:`~fivid.errors.Interrupted` (a KeyboardInterrupt).
+class _SignalPolicy:
+    """SIGINT and SIGTERM over a command's whole life, from parsing to the process's exit.
 
-    The default SIGTERM action kills the process on the spot (no summary, lock file left, exit -15); as an
-    exception, the command cleans up like on Ctrl-C. The signal is also recorded in ``Interrupted.received``
-    so that a pipeline notices it at its next task even if a library swallowed the exception. Only the main
-    thread can install handlers.
+    While the command works, a signal raises :class:`~fivid.errors.Interrupted` (a KeyboardInterrupt): the
+    default SIGTERM action kills the process on the spot (no summary, lock file left, exit -15); as an
+    exception, the command cleans up like on Ctrl-C and exits 128 + the signal (130, 143). The signal is also
+    recorded in ``Interrupted.received`` so that a pipeline notices it at its next task even if a library
+    swallowed the exception.
+
+    Once the outcome is settled (:meth:`~fivid.errors.Interrupted.settle`: ``fivid run`` wrote summary.json;
+    any command when its function returns) a signal no longer interrupts: every output is complete and the
+    exit status decided, so it is kept. Before :meth:`finish` the signal is only noted (the command ends its
+    last lines of output); after it, stdout and stderr are flushed and the process exits at once with that
+    status (``os._exit``: nothing is left to write, and a scheduler's SIGTERM asks for a prompt end).
+
+    In a process (``process`` true) the handler stays installed after :func:`main` returns, through the
+    threads' joins and the atexit clean-up (dask.distributed's among them). The interpreter's finalization
+    after atexit resets SIGINT/SIGTERM to their defaults before it collects the modules and runs the C
+    libraries' exit handlers -- ~1.5 s after a dask run, in which a scheduler's SIGTERM killed a passed run
+    with -15. So the process ends with ``os._exit(status)`` at the end of the atexit clean-up (a handler
+    registered when the command starts: it runs after those registered by what the command imported),
+    skipping that last part, which has nothing of fivid's left to do. In-process (``process`` false: tests,
+    notebooks) the previous handlers are restored on exit. Only the main thread can install handlers;
+    elsewhere nothing changes.
     """
-    import signal
-    import threading
 
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
+    def __init__(self, process: bool):
+        self.process = process
+        self.status: int | None = None
+        self.late: int | None = None
+        self.previous: dict = {}
 
-    def handler(signum, frame):
-        Interrupted.received = signum
-        raise Interrupted(signum)
+    def __enter__(self):
+        import atexit
+        import signal
+        import threading
 
-    Interrupted.received = None
-    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        yield
-    finally:
-        for s, h in previous.items():
+        Interrupted.received = None
+        Interrupted.settled = False
+        if threading.current_thread() is threading.main_thread():
+            self.previous = {s: signal.signal(s, self._handler) for s in (signal.SIGINT, signal.SIGTERM)}
+            if self.process:
+                atexit.register(self._end_process)
+        return self
+
+    def _end_process(self):
+        """Last atexit step of a finished command: end the process before the finalization that cannot handle
+        signals (see the class)."""
+        if self.status is not None and self.previous:
+            _exit_now(self.status, None)
+
+    def _handler(self, signum, frame):
+        if not Interrupted.settled:
+            Interrupted.received = signum
+            raise Interrupted(signum)
+        self.late = signum
+        if self.status is not None and self.process:
+            _exit_now(self.status, signum)
+
+    def finish(self, status: int) -> int:
+        """The command's exit status is final; in a process, a signal noted since the outcome was settled ends it
+        now (see the class). Returns ``status``."""
+        Interrupted.settle()
+        self.status = status
+        if self.late is not None and self.process:
+            _exit_now(status, self.late)
+        return status
+
+    def __exit__(self, *exc):
+        import signal
+
+        if self.process and self.status is not None:
+            return False  # the handler covers the interpreter's shutdown too
+        for s, h in self.previous.items():
             signal.signal(s, h)
         Interrupted.received = None
+        Interrupted.settled = False
+        return False
+
+
+def _exit_now(status: int, signum: int | None) -> None:
+    """End the process with ``status`` once the command has finished (see :class:`_SignalPolicy`): stdio
+    flushed, no interpreter finalization; after a signal ``signum``, one line on stderr saying so."""
+    import signal
+
+    if signum is not None:
+        try:
+            print(f"fivid: {signal.Signals(signum).name} after the command had finished (outputs complete); "
+                  f"exit status {status}", file=sys.stderr)
+        except BaseException:  # noqa: BLE001 -- a reentrant print from a handler: the status matters, not the line
+            pass
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except BaseException:  # noqa: BLE001 -- a closed pipe: nothing more to deliver
+            pass
+    os._exit(status)
 
 
 def _missing_optional(exc: BaseException) -> str | None:
@@ -179,7 +250,12 @@ EXIT_BROKEN_PIPE = 141
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the ``fivid`` command; returns the exit status."""
+    """Run the ``fivid`` command; returns the exit status.
+
+    ``argv`` None (the ``fivid`` console script, ``python -m fivid``): the command line of the process, which
+    this call then ends: SIGINT/SIGTERM stay handled until the process exits (see :class:`_SignalPolicy`). A
+    list: an in-process call (tests, notebooks); the signal handlers are restored when it returns.
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -190,9 +266,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help(sys.stderr)
         return EXIT_BAD_INPUT
+    with _logging_to_stderr(_verbosity(args)), _SignalPolicy(process=argv is None) as signals:
+        return signals.finish(_run_command(args))
+
+
+def _run_command(args) -> int:
+    """Run the parsed command; its exit status, every failure mapped to its status and message."""
     try:
-        with _logging_to_stderr(_verbosity(args)), _signals_interrupt():
-            status = args.func(args)
+        status = args.func(args)
+        Interrupted.settle()  # the command returned: its outputs are written
     except FividError as exc:
         print(f"fivid {args.command}: error: {exc}", file=sys.stderr)
         return exit_status(exc)

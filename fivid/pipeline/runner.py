@@ -5,7 +5,9 @@ logs to ``<output>/fivid-run.log``, runs each stage's tasks that are not already
 :mod:`fivid.pipeline.cache`), evaluates the scores against the configured thresholds and writes
 ``<output>/summary.json``. The exit status is for schedulers: 0 pass, 3 scores below thresholds,
 2 bad input or configuration, 1 unexpected failure, 130/143 interrupted by SIGINT/SIGTERM (the
-summary says ``interrupted`` with the signal and the stage; finished tasks stay in the cache).
+summary says ``interrupted`` with the signal and the stage; finished tasks stay in the cache). Once
+``summary.json`` is written the outcome is settled (:meth:`~fivid.errors.Interrupted.settle`): a signal after
+it (while the CLI prints, during the dask shutdown at exit) no longer changes the exit status.
 
 Before the lock is taken the output folder is checked (:mod:`fivid.pipeline.output`): a folder of
 unrelated files is refused unless ``force``; every task's outputs must lie inside the folder.
@@ -284,6 +286,7 @@ def run_pipeline(plan: Plan, *, workers: int = 2, scheduler: str | None = None, 
         summary["interrupted"] = interrupted
         try:
             write_json(out / "summary.json", summary)
+            Interrupted.settle()  # outputs and summary complete: a later signal keeps this status (fivid.cli.main)
             log.info("summary: %s (exit %d), %.1f s", summary["status"], status, summary["seconds"])
         finally:
             flog.removeHandler(handler)

@@ -63,7 +63,8 @@ from fivid.contact._layout_kernels import (
 from fivid.friction._curve_kernels import friction_coefficient, friction_now
 from fivid.solver._kernels import GS_CAPPED, GS_MAX, GS_SWEEPS, kernel
 
-__all__ = ["contact_solve", "contact_step", "contact_work", "finish_contact_record", "CANDIDATE_MARGIN", "SLEEP_MARGINS"]
+__all__ = ["contact_solve", "contact_step", "contact_work", "contact_reactions", "slave_force", "finish_contact_record",
+           "CANDIDATE_MARGIN", "SLEEP_MARGINS"]
 
 #: an open slave whose predicted gap exceeds this fraction of its master segment's length sits out the Gauss-Seidel
 #: sweeps of the step until the corrections have moved its nodes by half that gap (see :func:`contact_solve`)
@@ -717,6 +718,51 @@ def contact_work(v, npd, slave_node, slave_pair, master_ptr, master_nodes, seg, 
         rec_contact_r[p, REC_TANGENTIAL] += lam[k, 1]
         rec_contact_r[p, REC_STICK - 1 + cstate[k]] += 1.0
     return wcn, wct, wdr
+
+
+@kernel
+def slave_force(lam, geo, k):
+    """The contact force ``(fx, fy)`` [N] on slave ``k``: ``lam_n n + lam_t t`` (its master nodes get ``-N_j`` times
+    it)."""
+    return (lam[k, 0] * geo[k, GEO_NX] + lam[k, 1] * geo[k, GEO_TX],
+            lam[k, 0] * geo[k, GEO_NY] + lam[k, 1] * geo[k, GEO_TY])
+
+
+@kernel
+def contact_reactions(v, npd, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par, geo, lam, cstate,
+                      cnode_slot, vold_c, con_cnode, con_react):
+    """The part of the constraint reactions that holds contact nodes on constrained dofs against their contact
+    forces: their power over the step [W] (mid-step velocities, as :func:`contact_work`) and the transducer sums
+    [N]. Returns ``(wext, rt, rn)``.
+
+    A constrained dof has zero inverse mass, so the contact force on it (the slave's ``lam`` along ``n``, ``t``;
+    a master node's ``-N_j`` times it) moves nothing: the constraint takes it, ``R = m a + f + alpha m v - F_c``.
+    :func:`contact_work` counts that force's work (a driven slave's friction is dissipated), so the imposed
+    motion's work must include ``-F_c . v``. ``con_cnode[slot] = (c_x, c_y)``: the constraint index (rows of
+    ``con_react``) of a contact node's x and y dof, -1 if free."""
+    wext = 0.0
+    rt = 0.0
+    rn = 0.0
+    for k in range(slave_node.shape[0]):
+        if cstate[k] == 0:
+            continue
+        sn, a, b = _segment_nodes(k, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par)
+        fx, fy = slave_force(lam, geo, k)
+        n_nodes = 3 if pair_par[slave_pair[k], MASTER] == MASTER_EDGE else 1  # a rigid master has no nodes
+        for i in range(n_nodes):
+            nd = sn if i == 0 else (a if i == 1 else b)
+            weight = 1.0 if i == 0 else -geo[k, GEO_N0] if i == 1 else -geo[k, GEO_N1]
+            q = cnode_slot[nd]
+            for comp in range(2):
+                c = con_cnode[q, comp]
+                if c < 0:
+                    continue
+                force = weight * (fx if comp == 0 else fy)
+                vm = 0.5 * (vold_c[q, CNODE_V_STEP + comp] + v[nd + comp * npd])
+                wext -= force * vm
+                rt -= con_react[c, 0] * force
+                rn -= con_react[c, 1] * force
+    return wext, rt, rn
 
 
 @kernel

@@ -13,7 +13,7 @@ import numpy as np
 from numba import uint64
 
 from fivid.contact._layout_kernels import CNODE_V_PREDICTED, CNODE_V_STEP
-from fivid.solver._contact_kernels import contact_step, contact_work, finish_contact_record
+from fivid.solver._contact_kernels import contact_reactions, contact_step, contact_work, finish_contact_record
 from fivid.solver._kernels import (
     D_ALPHA,
     NAN,
@@ -55,8 +55,9 @@ __all__ = ["Structure", "Motions", "Loads", "ContactSet", "MuSeries", "ContactSt
 #: Rayleigh)
 Structure = namedtuple("Structure", ["mass", "minv", "active", "spr_dof", "spr_kc", "alpha", "beta", "a_filt"])
 #: constrained dofs ``con_dof`` in motion groups ``con_grp`` with ``grp_par[g] = (kind, amplitude, t_start,
-#: ramp_time)``; ``con_react[c] = (tangential, normal)`` transducer weights; ``grp_v`` (n_groups, 2) scratch
-Motions = namedtuple("Motions", ["con_dof", "con_grp", "grp_par", "con_react", "grp_v"])
+#: ramp_time)``; ``con_react[c] = (tangential, normal)`` transducer weights; ``grp_v`` (n_groups, 2) scratch;
+#: ``con_cnode[slot] = (c of the x dof, c of the y dof)`` of the contact nodes (-1 free; empty: none constrained)
+Motions = namedtuple("Motions", ["con_dof", "con_grp", "grp_par", "con_react", "grp_v", "con_cnode"])
 #: pressure loads: dofs ``ld_dof``, full nodal forces ``ld_force`` [N], load ``ld_grp``, ``ld_par[g] = (t_start,
 #: ramp_time)``; ``ld_scale`` (n_loads,) and ``ld_vold`` (n_loaded_dofs,) scratch
 Loads = namedtuple("Loads", ["ld_dof", "ld_force", "ld_grp", "ld_par", "ld_scale", "ld_vold"])
@@ -339,6 +340,14 @@ def _step(t, dt, stencil, structure, motions, loads, contact, friction, cs, stat
     if contact.slave_node.shape[0] > 0:
         wint, dal, wcn, wct, wdr = _contact_correction(t, dt, npd, structure, contact, friction, cs, state,
                                                        rec_contact_r, no_wmat, wint, dal)
+        if motions.con_cnode.shape[0] > 0:  # contact nodes on constrained dofs: their reactions take the contact force
+            dwext, drt, drn = contact_reactions(v, npd, contact.slave_node, contact.slave_pair, contact.master_ptr,
+                                                contact.master_nodes, cs.seg, contact.pair_par, cs.geo, cs.lam,
+                                                cs.cstate, contact.cnode_slot, cs.vold_c, motions.con_cnode,
+                                                motions.con_react)
+            wext += dwext
+            state.react_acc[0] += drt
+            state.react_acc[1] += drn
     # ---- load work with the final mid-step velocities; wint summed (K w - F) v, so add F v back
     wld = _load_work(loads, v)
     wint += wld

@@ -64,7 +64,8 @@ def loop_arguments(model, st, ka, fric, dt: float, gs_max_iterations: int, gs_to
     structure = L.Structure(ka.mass, ka.minv, massive_ranges(ka.mass), ka.spr_dof, ka.spr_kc,
                             float(model.rayleigh_alpha), float(model.rayleigh_beta),
                             velocity_filter_gain(model.damping_cutoff, dt))
-    motions = L.Motions(ka.con_dof, ka.con_grp, ka.grp_par, ka.con_react, np.zeros((ka.grp_par.shape[0], 2)))
+    motions = L.Motions(ka.con_dof, ka.con_grp, ka.grp_par, ka.con_react, np.zeros((ka.grp_par.shape[0], 2)),
+                        ka.con_cnode)
     loads = L.Loads(ka.ld_dof, ka.ld_force, ka.ld_grp, ka.ld_par, np.zeros(ka.ld_par.shape[0]),
                     np.zeros(ka.ld_dof.size))
     contact = L.ContactSet(ka.X, ka.slave_node, ka.slave_pair, ka.master_ptr, ka.master_nodes, ka.pair_sign,
