@@ -283,8 +283,8 @@ def block_forces(w, f, stencil):
         (the xy couplings with the axis neighbours vanish and are skipped: 13 terms), 2: per-node stencils
         ``c_map[:, coefficients + row*columns + column]`` in difference form (:func:`_mapped_component`), 3: rows
         that are rotations of one stencil, in the column frames ``c_uni[coefficients + row]``, the block's column
-        angles at ``rot[:, angles + column]`` from its first x-index ``block start`` (:func:`_rotated_patch`). Neighbours outside a block have zero
-        coefficients (the padding keeps their indices in bounds).
+        angles at ``rot[:, angles + column]`` from its first x-index ``block start`` (:func:`_rotated_patch`).
+        Neighbours outside a block have zero coefficients (the padding keeps their indices in bounds).
     c_uni : ndarray (n_uniform, 36)
         Shared stencils [N m-1].
     c_map : float32 ndarray (32, n_mapped)
