@@ -31,7 +31,10 @@ to run at 1-minute load 0.3-1), hence the medians. Prints one JSON line:
   (``fine_sim_steps``, ``coarse_sim_steps``: the fine rig's reduced step is 1.44 x the coarse one's, band-limited
   damping against classic Rayleigh), the reduced system's size and boundary nodes (``fine_reduced_size``,
   ``fine_reduced_boundary_nodes``, ``coarse_...``; means over the tasks, the boundary growing with the velocity's
-  sliding range); these per-job figures are the median-wall warm job's (for an even N the lower median's);
+  sliding range); ``fine_sim_tasks_s`` / ``coarse_sim_tasks_s`` every task's wall time by name, and
+  ``fine_simulate_worker_busy`` / ``coarse_...`` the tasks' summed time over 2 workers x the simulate stage's wall
+  (1: no worker idle; below it, the idle tail of an uneven split of the 12 tasks on the 2 workers); these per-job
+  figures are the median-wall warm job's (for an even N the lower median's);
 - ``load_average_1min`` at the start (the benchmark refuses to run above the core count unless ``--force``) and
   ``load_average_1min_end`` after the last job.
 
@@ -57,6 +60,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _load_guard import parse_guarded  # noqa: E402  (benchmarks/, this script's folder)
+
+#: dask workers of the jobs (``fivid run``'s default ``--workers``)
+WORKERS = 2
 
 
 def _config(tmp: Path, model: str, quick: bool) -> Path:
@@ -91,7 +97,9 @@ def _simulate_tasks(out: Path) -> dict:
             with xr.open_dataset(item["path"]) as ds:
                 attrs.append(dict(ds.attrs))
     mean = lambda key: (sum(float(a.get(key, 0)) for a in attrs) / len(attrs)) if attrs else None  # noqa: E731
-    return {"task_mean_s": (sum(r["seconds"] for r in records) / len(records)) if records else None,
+    seconds = {r["task"]: float(r["seconds"]) for r in records}
+    return {"task_mean_s": (sum(seconds.values()) / len(seconds)) if seconds else None,
+            "task_sum_s": sum(seconds.values()), "tasks_s": seconds,
             "steps": mean("steps"), "reduced_size": mean("reduced_size"),
             "boundary_nodes": mean("reduced_boundary_nodes")}
 
@@ -100,7 +108,7 @@ def _job(config: Path, out: Path, cache: Path) -> dict:
     """Wall and CPU time of one pipeline run in a fresh process, and what its report says."""
     env = {**os.environ, "FIVID_CACHE_DIR": str(cache)}
     cmd = [sys.executable, "-m", "fivid", "run", str(ROOT / "pipelines/calibration.yaml"), "--config", str(config),
-           "-o", str(out), "--no-progress"]
+           "-o", str(out), "--no-progress", "--workers", str(WORKERS)]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -196,6 +204,10 @@ def main(argv=None) -> int:
         "fine_sim_task_mean_s": fine["task_mean_s"],
         "coarse_sim_task_mean_s": coarse["task_mean_s"],
         "fine_vs_coarse_sim_task_ratio": _ratio(fine["task_mean_s"], coarse["task_mean_s"]),
+        "fine_sim_tasks_s": fine["tasks_s"],
+        "coarse_sim_tasks_s": coarse["tasks_s"],
+        "fine_simulate_worker_busy": _ratio(fine["task_sum_s"], WORKERS * (fine["simulate_stage_s"] or 0.0)),
+        "coarse_simulate_worker_busy": _ratio(coarse["task_sum_s"], WORKERS * (coarse["simulate_stage_s"] or 0.0)),
         "fine_sim_steps": fine["steps"],
         "coarse_sim_steps": coarse["steps"],
         "fine_reduced_boundary_nodes": fine["boundary_nodes"],
