@@ -31,7 +31,7 @@ from fivid.signal.levels import VELOCITY_REFERENCE, bin_weights
 from fivid.signal.steady import steady_part
 
 __all__ = ["LV_REFERENCE", "LV_BAND", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level",
-           "band_vibration_level", "detect_shocks",
+           "band_vibration_level", "subwindow_levels", "detect_shocks",
            "friction_power", "vibratory_power", "impact_power", "dissipation_rate", "roughness_metrics",
            "friction_coefficient_statistics", "steady_record"]
 
@@ -110,6 +110,71 @@ def band_vibration_level(ds, band=LV_BAND, *, start=None, reference: float = LV_
     power = float(np.mean(np.mean(v * v, axis=0) * share))
     vrms = float(np.sqrt(power))
     return (20.0 * np.log10(vrms / reference) if vrms > 0 else -np.inf), vrms
+
+
+def subwindow_levels(ds, length: float, *, band=None, start=None, reference: float = LV_REFERENCE) -> dict:
+    """Lv over successive sub-windows of ``length`` [s] of the steady record, and what their scatter says about
+    the whole window's Lv: has the window settled, and how precise is its level.
+
+    The record from ``start`` (as :func:`steady_record`) is cut into ``K = floor(N / n)`` sub-windows of
+    ``n = round(length fs)`` samples (a trailing remainder is dropped); sub-window ``k``'s level is
+    :func:`vibration_level` of it (``band`` None) or :func:`band_vibration_level` of it in ``band``, each sensor's
+    mean removed per sub-window. From their mean squares ``s_k = (reference 10^(L_k / 20))^2``:
+    ``level_of_mean = 10 log10(mean(s_k) / reference^2)`` (the whole window's level but for the per-sub-window
+    mean removal) and its standard error ``standard_error_db = (10 / ln 10) std(s_k, ddof=1) / (sqrt(K) mean(s_k))``
+    (first-order propagation of the sample mean's standard error), a fair estimate when the sub-windows are
+    longer than the time over which the back face's mean square stays correlated (the band modes' ringing: a
+    shock's energy decays with time constant ``1 / (2 zeta omega)``, ~0.4-0.9 ms in 4.5-20 kHz at 2 % and less,
+    docs/roughness.md); shorter, correlated sub-windows make it an underestimate.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A rough-pair run with ``sensor_velocity`` [m s-1] (``time`` x ``sensor``, or ``time``).
+    length : float
+        Sub-window length [s]; with ``band`` at least ``1 / (2 f_lo)`` (:func:`band_vibration_level`).
+    band : (float, float), optional
+        ``(f_lo, f_hi)`` [Hz] (e.g. :data:`LV_BAND`); None: all frequencies (seed 003's Lv).
+    start : float, optional
+        Start of the steady record [s].
+    reference : float
+        Velocity reference [m s-1] (seed 003: 1e-9).
+
+    Returns
+    -------
+    dict
+        ``start``, ``stop`` [s] (arrays, each sub-window's first and one-past-last sample time), ``level`` [dB]
+        (array), ``mean_square`` [m2 s-2] (array), ``level_of_mean`` [dB], ``standard_error_db`` [dB] (NaN for one
+        sub-window), ``count``.
+
+    Raises
+    ------
+    fivid.errors.ConfigError
+        If ``length`` is not positive or the record holds no whole sub-window (and as
+        :func:`band_vibration_level` for a sub-window too short for ``band``).
+    """
+    part = steady_record(ds, start)
+    t = np.asarray(part["time"].values, float)
+    fs = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else np.nan
+    n = int(round(float(length) * fs)) if length > 0 and np.isfinite(fs) else 0
+    count = t.size // n if n > 0 else 0
+    if count < 1:
+        raise ConfigError(f"sub-window length {length!r} s: needs 0 < length <= the steady record "
+                          f"({t.size} samples at {fs:g} Hz)", key="length")
+    levels, starts, stops = np.empty(count), np.empty(count), np.empty(count)
+    for k in range(count):
+        piece = part.isel(time=slice(k * n, (k + 1) * n))
+        a = float(t[k * n])
+        levels[k] = (vibration_level(piece, start=a, reference=reference) if band is None else
+                     band_vibration_level(piece, band, start=a, reference=reference))[0]
+        starts[k], stops[k] = a, a + n / fs
+    ms = (reference * 10.0 ** (levels / 20.0)) ** 2
+    mean = float(np.mean(ms))
+    se = (10.0 / np.log(10.0)) * float(np.std(ms, ddof=1)) / (np.sqrt(count) * mean) if count > 1 and mean > 0 \
+        else np.nan
+    return {"start": starts, "stop": stops, "level": levels, "mean_square": ms,
+            "level_of_mean": 10.0 * np.log10(mean / reference ** 2) if mean > 0 else -np.inf,
+            "standard_error_db": se, "count": count}
 
 
 #: shock detector defaults: closed-node rise and baseline window (docs/roughness.md)
