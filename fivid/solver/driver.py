@@ -16,7 +16,7 @@ from fivid.errors import ConfigError, SimulationDiverged
 from fivid.fe.build import load_model
 from fivid.fe.model import Model
 from fivid.fe.prestress import preload_ramp_end, prestress_state
-from fivid.fe.static import Preload, preload_state
+from fivid.fe.static import Preload
 from fivid.friction.curve import slave_coefficients
 from fivid.friction.injection import FrictionTable, friction_table
 from fivid.friction.inputs import FrictionInput, OperatingCondition
@@ -31,6 +31,7 @@ from fivid.solver.options import (
     RunSchedule,
     SimulationInputs,
 )
+from fivid.solver.preload_cache import cached_preload
 from fivid.solver.reduced import ReducedSystem, integrate_reduced, reduced_system
 from fivid.solver.reduced_error import DEFAULT_ERROR_BAND, band_error_estimate, scored_contact_switches
 from fivid.solver.setup import KernelArrays, LoadingSequence, kernel_arrays
@@ -258,7 +259,7 @@ def prepare_run(model, condition: OperatingCondition = _CONDITION, friction: Fri
 
     mu_slave = slave_coefficients(model, float(getattr(law, "mu0", 0.0)) if law is not None else mu)
     loading, signs, preload = _loading(model, sliding_velocity, normal_load,
-                                       replace(schedule, settle_time=settle_time), mu_slave)
+                                       replace(schedule, settle_time=settle_time), mu_slave, integration)
     total = loading.transient_end + duration
     n_out = max(1, math.ceil(total * sample_rate - 1e-9))
     n_int = n_out * oversample
@@ -431,8 +432,10 @@ def choice_attrs(choice) -> dict:
     return out
 
 
-def _loading(model, sliding_velocity, normal_load, schedule: RunSchedule, mu_slave):
-    """The loading sequence, the transducer signs and the preload (None without a target load)."""
+def _loading(model, sliding_velocity, normal_load, schedule: RunSchedule, mu_slave, integration: IntegrationOptions):
+    """The loading sequence, the transducer signs and the preload (None without a target load; solved once per
+    model, load and friction and kept in the basis cache, :mod:`fivid.solver.preload_cache`, unless
+    ``integration.basis_cache`` is False)."""
     preload_time, base_ramp_time, settle_time = schedule.preload_time, schedule.base_ramp_time, schedule.settle_time
     load = model.motion("load")
     base = model.motion("base")
@@ -444,7 +447,9 @@ def _loading(model, sliding_velocity, normal_load, schedule: RunSchedule, mu_sla
     preload = None
     load_disp = None
     if normal_load is not None:
-        preload = preload_state(model, normal_load, mu=mu_slave)
+        preload, source, _ = cached_preload(model, normal_load, mu=mu_slave, cache=integration.basis_cache,
+                                            folder=integration.cache_dir)
+        log.debug("static preload: %s", source)
         load_disp = direction * preload.displacement  # preload solved for u = delta * direction on the clamp
     base_start = (load_ramp + settle_time) if load is not None else 0.0
     base_velocity = None

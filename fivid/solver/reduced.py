@@ -45,7 +45,7 @@ from fivid.contact._layout_kernels import N_CNODE, N_GEO
 
 from fivid.errors import ConfigError, SimulationDiverged
 from fivid.fe.assembly import lumped_mass, stiffness_matrix
-from fivid.solver.basis_cache import basis_key, cached_basis
+from fivid.solver.basis_cache import basis_key, cached_basis, content_key, model_key
 from fivid.solver.integrate import RUNAWAY_FACTOR, RawRecords, chunked, shortest_master_segment, velocity_filter_gain
 from fivid.solver.setup import KIND_FIXED
 from fivid.solver.timestep import stable_step_of
@@ -194,6 +194,10 @@ def _master_range(model, pair, slave_x, comp, reach):
     return m[i0:i1 + 1]
 
 
+#: basis keys of the (model content, run) pairs this process keyed already (:func:`reduced_system`)
+_BASIS_KEYS: dict[str, str] = {}
+
+
 def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_modes: int | None = None,
                    cutoff: float | None = None, mass_scaling=None, cache: bool = True,
                    cache_dir=None) -> ReducedSystem:
@@ -240,12 +244,22 @@ def reduced_system(model, ka, *, sliding_distance: float, band_top: float, n_mod
                           "of them are constrained (clamp or motion); run the full model")
     f_cut = float(cutoff) if cutoff is not None else 3.0 * float(band_top)
     target = float(mass_scaling) if mass_scaling is not None and float(mass_scaling) > 0.0 else 0.0
-    K = stiffness_matrix(model, include_springs=True).tocsr()
-    m = lumped_mass(model)
-    key = basis_key(K, m, nodes, g_dofs, ka.con_global, None if n_modes is None else int(n_modes), f_cut, target,
-                    float(model.rayleigh_alpha), float(model.rayleigh_beta), float(model.damping_cutoff))
+    parts = (nodes, g_dofs, ka.con_global, None if n_modes is None else int(n_modes), f_cut, target,
+             float(model.rayleigh_alpha), float(model.rayleigh_beta), float(model.damping_cutoff))
+    # the key hashes the assembled K and m; they are functions of the model's content, so a process that keyed this
+    # model and run before (a pipeline worker's next task) takes the key from _BASIS_KEYS without assembling them
+    memo = content_key("basis key of", model_key(model), *parts)
+    matrices = []
+    key = _BASIS_KEYS.get(memo)
+    if key is None:
+        matrices = [stiffness_matrix(model, include_springs=True).tocsr(), lumped_mass(model)]
+        key = basis_key(*matrices, *parts)
+        if len(_BASIS_KEYS) >= 64:
+            _BASIS_KEYS.clear()
+        _BASIS_KEYS[memo] = key
 
     def build():
+        K, m = matrices or (stiffness_matrix(model, include_springs=True).tocsr(), lumped_mass(model))
         return _build_basis(K, m, bdofs, ka.con_global, g_dofs, n_modes, f_cut, target)
 
     summary = {"model": model.describe(), "source": str(getattr(model, "source", "")), "boundary_nodes": int(nodes.size),

@@ -38,7 +38,8 @@ POSITIVE = {
     "bench_pipeline.py": ["fine_wall_s", "coarse_wall_s", "fine_vs_coarse_wall_ratio", "fine_cold_wall_s",
                           "coarse_cold_wall_s", "fine_cpu_s", "fine_cold_cpu_s", "fine_vs_coarse_simulate_stage_ratio",
                           "fine_sim_task_mean_s", "coarse_sim_task_mean_s", "fine_vs_coarse_sim_task_ratio",
-                          "fine_sim_steps", "coarse_sim_steps", "fine_reduced_boundary_nodes"],
+                          "fine_sim_steps", "coarse_sim_steps", "fine_reduced_boundary_nodes", "fine_wall_min_s",
+                          "fine_wall_max_s", "coarse_wall_min_s", "coarse_wall_max_s"],
     "bench_prestress.py": ["ring_dofs", "rig_dofs", "steps", "step_s", "prestress_step_s", "steps_rig", "step_s_rig",
                            "prestress_step_s_rig", "cpu_step_s", "prestress_cpu_step_s", "cpu_step_s_rig",
                            "prestress_cpu_step_s_rig", "sample_seconds"],
@@ -53,7 +54,7 @@ EXACT = {
     "bench_ingest.py": {"benchmark": "ingest", "rows": 300_000, "columns": 5},
     "bench_update.py": {"benchmark": "update", "quick": True, "update_converged": True},
     "bench_prestress.py": {"benchmark": "prestress", "quick": True, "rounds": 2, "target_max_overhead": 0.2},
-    "bench_pipeline.py": {"benchmark": "pipeline", "quick": True},
+    "bench_pipeline.py": {"benchmark": "pipeline", "quick": True, "repeats": 2},
 }
 
 
@@ -108,3 +109,13 @@ def test_benchmark_quick_run_prints_one_json_line(name):
         assert math.isfinite(value) and value > 0.0, (key, value)
     for key, value in EXACT.get(name, {}).items():
         assert out[key] == value, (key, out[key], value)
+    if name == "bench_pipeline.py":  # the repeats: medians, ranges and per-repeat ratios of the interleaved jobs
+        import statistics
+
+        for model in ("fine", "coarse"):
+            walls = out[f"{model}_walls_s"]
+            assert len(walls) == out["repeats"] and out[f"{model}_wall_s"] == statistics.median(walls)
+            assert out[f"{model}_wall_min_s"] == min(walls) and out[f"{model}_wall_max_s"] == max(walls)
+        assert out["fine_vs_coarse_wall_ratio"] == out["fine_wall_s"] / out["coarse_wall_s"]
+        assert out["wall_ratios"] == [f / c for f, c in zip(out["fine_walls_s"], out["coarse_walls_s"])]
+        assert 0.0 <= out["load_average_1min_end"] < 1000.0

@@ -73,10 +73,14 @@ def test_cache_command_lists_and_clears(tmp_path, capsys, coarse):
     prepare_run(coarse, **run_inputs(1e-3, reduced="reduced", cache_dir=tmp_path))
     assert main(["cache", "info", "--cache-dir", str(tmp_path), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert len(info["entries"]) == 1 and info["entries"][0]["boundary_nodes"] > 0 and info["total_bytes"] > 0
+    kinds = {e["kind"]: e for e in info["entries"]}
+    assert len(info["entries"]) == 2 and sorted(kinds) == ["basis", "preload"] and info["total_bytes"] > 0
+    assert kinds["basis"]["boundary_nodes"] > 0 and kinds["preload"]["normal_load_n"] == 5.0
+    assert main(["cache", "info", "--cache-dir", str(tmp_path)]) == 0
+    assert "1 basis(es), 1 preload(s)" in capsys.readouterr().out
     assert main(["cache", "clear", "--cache-dir", str(tmp_path), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["removed"] == 1
-    assert not list(tmp_path.glob("*.npz"))
+    assert json.loads(capsys.readouterr().out)["removed"] == 2
+    assert not list(tmp_path.rglob("*.npz"))
 
 
 def test_truncation_shift_predicts_the_reduced_frequency_error(coarse):
