@@ -31,7 +31,7 @@ from fivid.signal.levels import VELOCITY_REFERENCE, bin_weights
 from fivid.signal.steady import steady_part
 
 __all__ = ["LV_REFERENCE", "LV_BAND", "SHOCK_MIN_CLOSING", "SHOCK_BASELINE", "vibration_level",
-           "band_vibration_level", "subwindow_levels", "detect_shocks",
+           "band_vibration_level", "subwindow_levels", "tip_following_speed", "detect_shocks",
            "friction_power", "vibratory_power", "impact_power", "dissipation_rate", "roughness_metrics",
            "friction_coefficient_statistics", "steady_record"]
 
@@ -175,6 +175,54 @@ def subwindow_levels(ds, length: float, *, band=None, start=None, reference: flo
     return {"start": starts, "stop": stops, "level": levels, "mean_square": ms,
             "level_of_mean": 10.0 * np.log10(mean / reference ** 2) if mean > 0 else -np.inf,
             "standard_error_db": se, "count": count}
+
+
+def tip_following_speed(lower, upper, normal_load: float, mass: float, *, tip_quantile: float = 0.9) -> dict:
+    """The sliding speed up to which a dead-loaded slider can stay seated while its supporting asperity pair
+    passes tip over tip: ``V* = sqrt(a / kappa)``, ``a = normal_load / mass`` the load's acceleration and
+    ``kappa`` the gap's curvature at the passage, the two tips' curvatures added. Faster, ``V^2 kappa > a``: the
+    slider leaves the tips and flies (its bouncing is physics, not a start-up artefact; docs/roughness.md,
+    "Lv convergence: the slider's bouncing is physical").
+
+    A tip is a local maximum of a profile whose height is above the profile's ``tip_quantile`` quantile; its
+    curvature ``-z''`` is the central second difference (relative error ``(k h)^2 / 12`` for a wavenumber ``k``
+    sampled at ``h``); ``kappa`` is the sum of the two profiles' median tip curvatures.
+
+    Parameters
+    ----------
+    lower, upper : xarray.DataArray
+        Height profiles [m] over a uniformly sampled ``x`` [m].
+    normal_load : float
+        Dead load [N].
+    mass : float
+        The slider's mass [kg].
+    tip_quantile : float
+        Height quantile above which a local maximum counts as a tip, in (0, 1).
+
+    Returns
+    -------
+    dict
+        ``following_speed`` [m s-1], ``load_acceleration`` [m s-2], ``tip_curvature`` [m-1] (lower, upper),
+        ``rms_curvature`` [m-1] (lower, upper: the RMS of ``z''`` over each profile), ``gap_curvature`` [m-1]
+        (the sum of the tips').
+    """
+    if not (normal_load > 0 and mass > 0 and 0 < tip_quantile < 1):
+        raise ConfigError(f"tip_following_speed: needs normal_load > 0 N, mass > 0 kg and 0 < tip_quantile < 1; "
+                          f"got {normal_load!r}, {mass!r}, {tip_quantile!r}", key="normal_load")
+    rms, tips = [], []
+    for prof in (lower, upper):
+        x = np.asarray(prof["x"].values, float)
+        z = np.asarray(prof.values, float)
+        h = float(np.median(np.diff(x)))
+        zpp = (z[2:] - 2.0 * z[1:-1] + z[:-2]) / h ** 2
+        mid = z[1:-1]
+        tip = (mid > z[:-2]) & (mid >= z[2:]) & (mid > np.quantile(z, tip_quantile))
+        rms.append(float(np.sqrt(np.mean(zpp ** 2))))
+        tips.append(float(np.median(-zpp[tip])) if np.any(tip) else np.nan)
+    kappa = tips[0] + tips[1]
+    a = float(normal_load) / float(mass)
+    return {"following_speed": float(np.sqrt(a / kappa)) if kappa > 0 else np.inf, "load_acceleration": a,
+            "tip_curvature": tuple(tips), "rms_curvature": tuple(rms), "gap_curvature": kappa}
 
 
 #: shock detector defaults: closed-node rise and baseline window (docs/roughness.md)

@@ -114,27 +114,70 @@ def _boundary_motion(phib, q, qd, qb, qdb):
 def _boundary_step(phib, qd, qb, qdb, dt):
     """``qdb = Phi_b qd[:nf]`` and ``qb += dt qdb``: the boundary motion of a central-difference step from the
     previous step's ``qb`` (``q' = q + dt qd'`` holds for the modes, so for ``Phi_b q``), one product instead of
-    :func:`_boundary_motion`'s two (reassociated: the inner loop vectorises)."""
-    nf = phib.shape[1]
-    for j in range(phib.shape[0]):
-        sd = 0.0
-        for i in range(nf):
-            sd += phib[j, i] * qd[i]
-        qdb[j] = sd
-        qb[j] += dt * sd
+    :func:`_boundary_motion`'s two. Four rows per pass, each modal velocity loaded once for the four
+    (reassociated: the loop vectorises, each row's sum in the order of a one-row loop, so the values are the
+    one-row loop's bit for bit; the fine rig's 92 x 268 block measured 0.75 times its time, same run)."""
+    nr = phib.shape[0]
+    j = 0
+    while j + 4 <= nr:
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        s3 = 0.0
+        for i in range(phib.shape[1]):
+            x = qd[i]
+            s0 += phib[j, i] * x
+            s1 += phib[j + 1, i] * x
+            s2 += phib[j + 2, i] * x
+            s3 += phib[j + 3, i] * x
+        qdb[j] = s0
+        qdb[j + 1] = s1
+        qdb[j + 2] = s2
+        qdb[j + 3] = s3
+        j += 4
+    for r in range(j, nr):  # the last rows (fewer than four), one at a time
+        s = 0.0
+        for i in range(phib.shape[1]):
+            s += phib[r, i] * qd[i]
+        qdb[r] = s
+    for r in range(nr):
+        qb[r] += dt * qdb[r]
 
 
 @kernel
-def _modal_impulse(phib, cimp, gimp):
-    """``gimp = Phi_b^T cimp`` over the nonzero entries of ``cimp`` (the nodes in contact)."""
-    nf = phib.shape[1]
-    for i in range(nf):
-        gimp[i] = 0.0
+def _modal_impulse(phib, cimp, gimp, rows):
+    """``gimp = Phi_b^T cimp`` over the nonzero entries of ``cimp`` (the nodes in contact; their rows into the work
+    array ``rows``, length ``2 nb``), added row by row in ascending order as a one-row loop would, four rows per
+    pass over ``gimp`` (each entry loaded and stored once for the four: the same operations in the same order,
+    so the same values bit for bit)."""
+    nz = 0
     for j in range(phib.shape[0]):
+        if cimp[j] != 0.0:
+            rows[nz] = j
+            nz += 1
+    for i in range(phib.shape[1]):
+        gimp[i] = 0.0
+    k = 0
+    while k + 4 <= nz:
+        j0 = rows[k]
+        j1 = rows[k + 1]
+        j2 = rows[k + 2]
+        j3 = rows[k + 3]
+        c0 = cimp[j0]
+        c1 = cimp[j1]
+        c2 = cimp[j2]
+        c3 = cimp[j3]
+        for i in range(phib.shape[1]):
+            g = gimp[i] + phib[j0, i] * c0
+            g = g + phib[j1, i] * c1
+            g = g + phib[j2, i] * c2
+            gimp[i] = g + phib[j3, i] * c3
+        k += 4
+    for r in range(k, nz):
+        j = rows[r]
         c = cimp[j]
-        if c != 0.0:
-            for i in range(nf):
-                gimp[i] += phib[j, i] * c
+        for i in range(phib.shape[1]):
+            gimp[i] += phib[j, i] * c
 
 
 @kernel
@@ -535,6 +578,7 @@ def run_modal_steps(
     applied = np.zeros((ns, 2))
     closed = np.zeros(ns, dtype=np.int64)
     dmat = np.zeros((2 * min(ns, EXACT_MAX_CLOSED), 2 * min(ns, EXACT_MAX_CLOSED) + 1))
+    nz_rows = np.zeros(2 * nb, dtype=np.int64)  # the contact impulse's nonzero boundary rows (_modal_impulse)
     for r in range(n_out):
         start_record(react_acc, rec_contact[r])
         for sub in range(n_sub):
@@ -579,7 +623,7 @@ def run_modal_steps(
                                        closed, dmat)
                 contact_impulse(cimp, nb, slave_node, slave_pair, master_ptr, master_nodes, seg, pair_par, geo, lam_c,
                                 cstate)
-                _modal_impulse(phib, cimp, gimp)
+                _modal_impulse(phib, cimp, gimp, nz_rows)
                 for i in range(nf):
                     qd[i] += dt * gimp[i]
                     q[i] += dt * dt * gimp[i]

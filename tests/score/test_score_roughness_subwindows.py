@@ -101,3 +101,30 @@ def test_a_subwindow_longer_than_the_record_or_too_short_for_the_band_is_refused
         subwindow_levels(ds, 0.0, start=0.2e-3)
     with pytest.raises(ConfigError, match="1/\\(2T\\)"):
         subwindow_levels(ds, 0.25e-3, band=LV_BAND, start=0.2e-3)
+
+
+def _cosine_profile(amplitude, wavelength, step, length=2e-3, phase=0.0):
+    """Synthetic profile ``A cos(2 pi x / lambda + phase)`` sampled every ``step`` [m] (generator of the test
+    below): its tips are its crests, of curvature ``A k^2`` exactly."""
+    x = np.arange(0.0, length, step)
+    return xr.DataArray(amplitude * np.cos(2 * np.pi * x / wavelength + phase), coords={"x": x}, dims="x")
+
+
+def test_tip_following_speed_is_the_closed_form_of_two_cosine_profiles():
+    """Two cosines (synthetic): crest curvatures A1 k1^2 + A2 k2^2, so V* = sqrt((F / m) / kappa); the central
+    second difference reads A k^2 * 2 (1 - cos(k h)) / (k h)^2, within (k h)^2 / 12 of it."""
+    from fivid.score.roughness import tip_following_speed
+    a1, l1, a2, l2, h = 20e-6, 400e-6, 10e-6, 250e-6, 400e-6 / 24
+    lower = _cosine_profile(a1, l1, h)
+    upper = _cosine_profile(a2, l2, h, phase=0.3)
+    r = tip_following_speed(lower, upper, 1.0, 0.0749)
+    k1, k2 = 2 * np.pi / l1, 2 * np.pi / l2
+    assert r["tip_curvature"][0] == pytest.approx(a1 * k1 ** 2, rel=(k1 * h) ** 2 / 12)
+    # the phase-shifted cosine's sampled crests sit up to h / 2 off its true crest: cos(k h / 2) more
+    assert r["tip_curvature"][1] == pytest.approx(a2 * k2 ** 2, rel=(k2 * h) ** 2 / 12 + (k2 * h) ** 2 / 8)
+    assert r["rms_curvature"][0] == pytest.approx(a1 * k1 ** 2 / np.sqrt(2), rel=(k1 * h) ** 2 / 12 + 0.02)
+    kappa = a1 * k1 ** 2 + a2 * k2 ** 2
+    assert r["load_acceleration"] == pytest.approx(1.0 / 0.0749, rel=1e-12)
+    assert r["following_speed"] == pytest.approx(np.sqrt(1.0 / 0.0749 / kappa), rel=(k2 * h) ** 2 / 8)
+    with pytest.raises(ConfigError, match="tip_quantile"):
+        tip_following_speed(lower, upper, 1.0, 0.0749, tip_quantile=1.0)

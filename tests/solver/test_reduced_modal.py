@@ -129,3 +129,70 @@ def test_delassus_contact_solve_reaches_the_shared_solves_multipliers(coarse):
     np.testing.assert_allclose(lb, la, rtol=1e-9)
     assert np.abs(ub - ua).max() <= 1e-9 * np.abs(ua - u0).max()
     assert np.abs(vb - va).max() <= 1e-9 * np.abs(va - v0).max()
+
+
+@pytest.mark.parametrize("rows, nf", [(104, 279), (34, 276), (7, 13), (1, 5), (0, 4)])
+def test_boundary_step_is_the_one_row_loop_bit_for_bit(rows, nf):
+    """The blocked boundary product of the modal loop (``_boundary_step``: four rows of ``Phi_b`` per pass) gives
+    the one-row loop's values bit for bit (each row's sum vectorised in the same order), on the fine rig's block
+    size (104 x 279), the coarse one's and row counts that leave remainders; the one-row loop (the kernel before
+    the blocking) compiled here with the same reassociation. Equal values make the records of a run equal too:
+    the blocking changes no other operation (``_boundary_motion``, once per output interval, is unchanged)."""
+    from numba import njit
+
+    from fivid.solver._reduced_kernels import _boundary_step
+
+    @njit(cache=False, fastmath={"contract", "reassoc"})
+    def one_row_step(phib, qd, qb, qdb, dt):
+        for j in range(phib.shape[0]):
+            sd = 0.0
+            for i in range(phib.shape[1]):
+                sd += phib[j, i] * qd[i]
+            qdb[j] = sd
+            qb[j] += dt * sd
+
+    rng = np.random.default_rng(rows)
+    phib = rng.standard_normal((rows, nf)) * np.exp(rng.uniform(-20.0, 0.0, nf))  # modal scales spread over 1e9
+    qd = rng.standard_normal(nf)
+    qb0 = rng.standard_normal(rows)
+    got = [qb0.copy(), np.zeros(rows)]
+    want = [qb0.copy(), np.zeros(rows)]
+    _boundary_step(phib, qd, got[0], got[1], 5e-7)
+    one_row_step(phib, qd, want[0], want[1], 5e-7)
+    np.testing.assert_array_equal(got, want)
+    # and it is the product (not vacuous): within the summation's round-off bound nf eps sum |phi_ji qd_i|
+    assert np.all(np.abs(got[1] - phib @ qd) <= nf * EPS * (np.abs(phib) @ np.abs(qd)))
+
+
+@pytest.mark.parametrize("rows, nf, closed", [(104, 279, 1), (104, 279, 5), (34, 276, 2), (8, 13, 0)])
+def test_modal_impulse_is_the_one_row_loop_bit_for_bit(rows, nf, closed):
+    """The contact impulse on the modes ``Phi_b^T c`` (``_modal_impulse``: four nonzero rows per pass over the modes)
+    gives the one-row loop's values bit for bit (the same additions in the same order), for ``closed`` slaves'
+    worth of nonzero rows (six each: a slave and its two master nodes, x and y; adjacent slaves share master
+    nodes) on the fine and coarse rigs' block sizes; the one-row loop (the kernel before) compiled here alike."""
+    from numba import njit
+
+    from fivid.solver._reduced_kernels import _modal_impulse
+
+    @njit(cache=False)
+    def one_row(phib, cimp, gimp):
+        for i in range(phib.shape[1]):
+            gimp[i] = 0.0
+        for j in range(phib.shape[0]):
+            c = cimp[j]
+            if c != 0.0:
+                for i in range(phib.shape[1]):
+                    gimp[i] += phib[j, i] * c
+
+    rng = np.random.default_rng(rows + closed)
+    phib = rng.standard_normal((rows, nf)) * np.exp(rng.uniform(-20.0, 0.0, nf))
+    nb = rows // 2
+    cimp = np.zeros(rows)
+    for k in range(closed):
+        for node in (nb // 2 + k, k, k + 1):  # slave, master nodes a and b
+            cimp[[node, node + nb]] += rng.standard_normal(2)
+    got, want = np.full(nf, np.nan), np.full(nf, np.nan)
+    _modal_impulse(phib, cimp, got, np.zeros(rows, dtype=np.int64))
+    one_row(phib, cimp, want)
+    np.testing.assert_array_equal(got, want)
+    assert np.all(np.abs(got - phib.T @ cimp) <= rows * EPS * (np.abs(phib.T) @ np.abs(cimp)))  # not vacuous
