@@ -141,7 +141,7 @@ def linearise_contact(model, *, velocities: dict[str, np.ndarray] | None = None,
 
 
 def linearise_preloaded_contact(model, normal_load: float | None, *, velocities: dict[str, np.ndarray] | None = None,
-                                mu=None):
+                                mu=None, state=None):
     """Linearise the contact about the preloaded sliding equilibrium: springs only at the closed slave nodes.
 
     The closed set comes from the static contact solve under the transducer normal force ``normal_load``
@@ -157,6 +157,9 @@ def linearise_preloaded_contact(model, normal_load: float | None, *, velocities:
         Body name -> rigid velocity [m s-1] setting the sliding direction (default from the base motion).
     mu : float, optional
         Friction coefficient during the preload.
+    state : Preload, optional
+        That static state already solved (``preload_state(model, normal_load, mu=mu)``, e.g. from a cache);
+        default: solved here.
 
     Returns
     -------
@@ -173,6 +176,7 @@ def linearise_preloaded_contact(model, normal_load: float | None, *, velocities:
     if normal_load is None and not pressed_by_itself(model):
         raise ConfigError("linearising the contact needs the normal load: only the slave nodes closed under it "
                           "carry contact springs (give normal_load [N], e.g. --load '5 N')", key="normal_load")
-    state = preload_state(model, normal_load, mu=mu)
+    if state is None:
+        state = preload_state(model, normal_load, mu=mu)
     return linearise_contact(model, velocities=velocities, closed=state.active,
                              penetration=state.penetration), state

@@ -146,7 +146,7 @@ def _eigen_pairs(K, M, k, sigma):
 
 def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", include_contact: bool = False,
                    normal_load: float | None = None, sigma: float | None = None, prestress: bool | None = None,
-                   interface_scale: float = 1.0):
+                   interface_scale: float = 1.0, preload=None):
     """Natural frequencies and mass-normalised mode shapes of ``model`` with its constraints.
 
     Parameters
@@ -178,6 +178,10 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
         interface). A large factor gives the rigid-interface limit: a frequency's deficit from that limit falls as
         ``1 / interface_scale`` (the springs are in series with the bodies), e.g. seed 002's rigid inner disc of
         the transient against the deformable one of the CEA (``interface: rigid`` targets of ``fivid update``).
+    preload : Preload, optional
+        With ``include_contact``: the static state under ``normal_load`` already solved
+        (:func:`fivid.fe.static.preload_state` with each pair's ``mu``, e.g. read from the pipeline's cache,
+        :func:`fivid.solver.preload_cache.cached_preload`); default: solved here.
 
     Returns
     -------
@@ -191,7 +195,7 @@ def modal_analysis(model, n_modes: int = 30, *, mass: str = "consistent", includ
 
     contact = state = None
     if include_contact and model.contacts:
-        contact, state = linearise_preloaded_contact(model, normal_load)
+        contact, state = linearise_preloaded_contact(model, normal_load, state=preload)
         if interface_scale != 1.0:
             if not (interface_scale > 0 and np.isfinite(interface_scale)):
                 raise ConfigError(f"interface_scale must be a positive finite factor, got {interface_scale!r}",

@@ -39,6 +39,7 @@ from fivid.pipeline.scoring import score_condition
 from fivid.pipeline.sweep import run_simulations, simulation_inputs
 from fivid.report import render_report
 from fivid.schema import new_history
+from fivid.solver.preload_cache import cached_preload
 from fivid.storage import write_json, write_netcdf
 
 __all__ = ["STAGES", "condition_name", "evaluate_thresholds", "solver_path"]
@@ -182,14 +183,20 @@ class Modal:
     def execute(self, ctx, tasks) -> None:
         model = load_model(ctx.config.model)
         for task in tasks:
-            _timed(ctx, task, lambda t=task: write_netcdf(
-                modal_analysis(model, n_modes=ctx.config.n_modes, include_contact=True,
-                               normal_load=t.params["normal_load"]), t.outputs["modes"]))
+            _timed(ctx, task, lambda t=task: write_netcdf(_modes(model, ctx.config.n_modes, t.params["normal_load"]),
+                                                          t.outputs["modes"]))
 
     def collect(self, ctx, tasks) -> None:
         # the report shows one modal analysis: that of the lowest load (all of them when the loads agree)
         ctx.data["modal_path"] = tasks[0].outputs["modes"] if tasks else None
         ctx.data["modal_paths"] = {t.params["normal_load"]: t.outputs["modes"] for t in tasks}
+
+
+def _modes(model, n_modes: int, normal_load: float):
+    """The modal analysis about the contact state under ``normal_load`` [N], that state read from the preload cache
+    when an earlier run solved it (:func:`fivid.solver.preload_cache.cached_preload`, each pair's ``mu``)."""
+    preload = cached_preload(model, normal_load)[0] if model.contacts else None
+    return modal_analysis(model, n_modes=n_modes, include_contact=True, normal_load=normal_load, preload=preload)
 
 
 def envelope_samples(config) -> int:
