@@ -448,13 +448,13 @@ def landing_transfer(ds, mass: float, *, band=LV_BAND, start=None, min_flight=No
     the flight after it -- windows of :data:`LANDING_FIT` (``guard_before`` off the landing's start,
     ``guard_after`` off the previous contact; ``guard_after`` off the landing's end, ``guard_before`` off the
     next) -- and both lines are evaluated at the landing's force centroid ``t_c``:
-    ``E = e_after(t_c) - e_before(t_c)``. The default ``min_flight`` is the shortest flight that leaves both
-    windows ``min_fit`` (``guard_before + guard_after + min_fit``, 0.29 ms): landings closer than that are one
-    episode, its impulse the sum.
-    The ringing before thus counts with its own decay, the landing's energy with its decay since ``t_c``. For a
-    single mode kicked while its velocity is zero, ``E = J**2 / (2 m)`` exactly; kicked at another phase, the
-    cross term ``v J`` (``v`` the modal velocity at the kick) adds, zero on average over uniform phases -- on the
-    rough pair many modes and sensors average it further, and what is left is per-landing scatter, not bias.
+    ``E = e_after(t_c) - e_before(t_c)``: the ringing before counts with its own decay, the landing's energy with
+    its decay since ``t_c``. For a single mode kicked while its velocity is zero, ``E = J**2 / (2 m)`` exactly;
+    kicked at another phase, the cross term ``v J`` (``v`` the modal velocity at the kick) adds, zero on average
+    over uniform phases -- on the rough pair many modes and sensors average it further, and what is left is
+    per-landing scatter, not bias. The default ``min_flight`` is the shortest flight that leaves both windows
+    ``min_fit`` (``guard_before + guard_after + min_fit``, 0.29 ms): landings closer than that are one episode,
+    its impulse the sum.
 
     Parameters
     ----------
