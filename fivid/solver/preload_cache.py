@@ -21,6 +21,7 @@ import numpy as np
 
 from fivid import __version__
 from fivid.fe.static import ContactGeometry, Preload, preload_state
+from fivid.friction.curve import slave_coefficients
 from fivid.solver.basis_cache import cached_arrays, content_key, model_key
 
 __all__ = ["PRELOAD_FORMAT", "preload_key", "cached_preload"]
@@ -36,8 +37,12 @@ _SCALARS = {"displacement": float, "normal_load": float, "iterations": int}
 def preload_key(model, normal_load, mu) -> str:
     """sha256 (hex) of what :func:`fivid.fe.static.preload_state` solves from: the model's content
     (:func:`fivid.solver.basis_cache.model_key`), the normal load [N] (None: the model's own loads) and the slaves'
-    friction coefficients ``mu`` [-] (scalar or per slave), with fivid's version and :data:`PRELOAD_FORMAT`."""
-    mu = None if mu is None else np.asarray(mu, dtype=float)
+    friction coefficients ``mu`` [-] (scalar or per slave), with fivid's version and :data:`PRELOAD_FORMAT`.
+
+    ``mu`` enters as the per-slave coefficients the solve uses (:func:`fivid.friction.curve.slave_coefficients`,
+    as :func:`fivid.fe.static.preload_state` resolves it): None (each pair's own), a scalar and the equal per-slave
+    array are one entry."""
+    mu = np.asarray(mu if (mu is not None and np.ndim(mu) == 1) else slave_coefficients(model, mu), dtype=float)
     return content_key(f"fivid {__version__} preload format {PRELOAD_FORMAT}", model_key(model),
                        None if normal_load is None else float(normal_load), mu)
 

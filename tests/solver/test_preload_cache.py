@@ -75,6 +75,23 @@ def test_a_change_of_load_friction_or_model_misses_the_cache(coarse, tmp_path):
     assert len(keys) == 4 and len(list((tmp_path / "preloads").glob("*.npz"))) == 4
 
 
+def test_equal_friction_given_three_ways_is_one_entry(coarse, tmp_path):
+    """None (each pair's own mu), that mu as a scalar and as the per-slave array: the solve is the same
+    (preload_state resolves all three to one array), so the key and the entry are one; the read equals the solve."""
+    from fivid.fe.static import preload_state
+    from fivid.friction.curve import slave_coefficients
+    from fivid.solver.preload_cache import cached_preload, preload_key
+
+    own = float(coarse.contacts[0].mu)
+    assert all(c.mu == own for c in coarse.contacts)
+    ways = [None, own, slave_coefficients(coarse, own)]
+    assert len({preload_key(coarse, 5.0, m) for m in ways}) == 1
+    assert preload_key(coarse, 5.0, own) != preload_key(coarse, 5.0, own + 0.1)
+    sources = [cached_preload(coarse, 5.0, mu=m, folder=tmp_path)[1] for m in ways]
+    assert sources == ["built", "cache", "cache"]
+    _assert_same_preload(cached_preload(coarse, 5.0, folder=tmp_path)[0], preload_state(coarse, 5.0))
+
+
 _SOLVE = """
 import json, sys
 from fivid.fe import load_model
